@@ -1,0 +1,263 @@
+"""Run configuration: YAML layers plus ``key=value`` overrides, validated key by key.
+
+Layers, later winning: ``configs/default.yaml`` < ``configs/algo/<algo>.yaml`` < ``configs/task/<task>.yaml``
+(after the task files it names in ``base``) < the task's ``by_device.<cpu|cuda>`` < its ``by_algo.<algo>`` <
+command-line overrides. Task and algo files hold deltas only.
+
+Keys are validated where they are consumed: ``env.*`` against the task's env cfg dataclass, ``actor.*``,
+``critic.*`` and ``algorithm.*`` against the constructor of the class their ``class_name`` selects, and every other
+key against ``default.yaml``. An unknown key is an error that names the closest valid one.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import inspect
+import os
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from refpo_warp.errors import ConfigError, unknown
+
+CONFIG_DIR = Path(os.environ.get("REFPO_WARP_CONFIGS", Path(__file__).resolve().parents[1] / "configs"))
+CLASS_SECTIONS = ("actor", "critic", "algorithm")
+PROFILE_KEYS = ("base", "by_device", "by_algo")
+
+
+def load_yaml(path: Path) -> dict:
+    with open(path) as f:
+        data = yaml.safe_load(f) or {}
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: expected a mapping at the top level")
+    return data
+
+
+def merge(base: dict, delta: dict) -> dict:
+    """Deep-merge ``delta`` into a copy of ``base`` (mappings merge, everything else replaces)."""
+    out = copy.deepcopy(base)
+    for key, value in delta.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict) and key not in ("obs_groups",):
+            out[key] = merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def parse_overrides(args: list[str]) -> dict[str, Any]:
+    """Parse ``key=value`` strings (values are YAML: numbers, bools, lists) into a flat dotted-key dict."""
+    out: dict[str, Any] = {}
+    for arg in args:
+        if "=" not in arg:
+            raise ConfigError(f"Expected key=value, got '{arg}' (example: task=gridworld seed=3 num_envs=256)")
+        key, raw = arg.split("=", 1)
+        key = key.strip().lstrip("-").replace("-", "_") if key.startswith("--") else key.strip()
+        try:
+            out[key] = yaml.safe_load(raw) if raw != "" else ""
+        except yaml.YAMLError:
+            out[key] = raw
+    return out
+
+
+def _choices(kind: str) -> list[str]:
+    return sorted(p.stem for p in (CONFIG_DIR / kind).glob("*.yaml") if not p.stem.startswith("_"))
+
+
+def _task_layers(task: str, seen: tuple[str, ...] = ()) -> dict:
+    path = CONFIG_DIR / "task" / f"{task}.yaml"
+    if not path.exists():
+        return {}
+    data = load_yaml(path)
+    merged: dict = {}
+    for base in [data.get("base")] if isinstance(data.get("base"), str) else data.get("base") or []:
+        if base in seen:
+            raise ConfigError(f"{path}: circular 'base' chain {' -> '.join(seen + (base,))}")
+        merged = merge(merged, _task_layers(base, seen + (task,)))
+    return merge(merged, data)
+
+
+def _set_dotted(cfg: dict, key: str, value: Any) -> None:
+    node = cfg
+    parts = key.split(".")
+    for part in parts[:-1]:
+        node = node.setdefault(part, {})
+        if not isinstance(node, dict):
+            raise ConfigError(f"Cannot set '{key}': '{part}' is not a section")
+    node[parts[-1]] = value
+
+
+def _coerce(value: Any, default: Any, key: str) -> Any:
+    """Coerce a value to the type of its default (YAML reads '3e-4' as a string, '1' as an int)."""
+    if default is None or value is None:
+        return value
+    if isinstance(default, bool):
+        if isinstance(value, bool):
+            return value
+        if isinstance(value, str) and value.lower() in ("true", "false", "yes", "no", "1", "0"):
+            return value.lower() in ("true", "yes", "1")
+    elif isinstance(default, int):
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+        if isinstance(value, float) and value.is_integer():
+            return int(value)
+        if isinstance(value, str) and value.strip().lstrip("-").isdigit():
+            return int(value)
+    elif isinstance(default, float):
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)
+        if isinstance(value, str):
+            try:
+                return float(value)
+            except ValueError:
+                pass
+    elif isinstance(default, (list, tuple)):
+        if isinstance(value, (list, tuple)):
+            return list(value)
+    elif isinstance(default, str):
+        if isinstance(value, (str, int, float)) and not isinstance(value, bool):
+            return str(value)
+    else:
+        return value
+    raise ConfigError(f"'{key}' expects a {type(default).__name__} (like {default!r}), got {value!r}")
+
+
+def class_parameters(class_name: str) -> dict[str, Any]:
+    """Constructor keyword parameters (with defaults) of ``class_name`` and of the bases it forwards to."""
+    from rsl_rl.utils import resolve_callable
+
+    try:
+        cls = resolve_callable(class_name)
+    except (ImportError, AttributeError, ValueError) as err:
+        raise ConfigError(f"Cannot resolve class_name '{class_name}': {err}") from err
+    params: dict[str, Any] = {}
+    for klass in inspect.getmro(cls) if inspect.isclass(cls) else [cls]:
+        init = klass.__init__ if inspect.isclass(klass) else klass
+        if init is object.__init__:
+            continue
+        sig = inspect.signature(init)
+        has_var_kw = False
+        for name, p in sig.parameters.items():
+            if p.kind is p.VAR_KEYWORD:
+                has_var_kw = True
+            elif p.kind is not p.VAR_POSITIONAL and name != "self":
+                params.setdefault(name, None if p.default is p.empty else p.default)
+        if not has_var_kw:  # a class that does not forward **kwargs ends the chain
+            break
+    return params
+
+
+# Constructor arguments that rsl_rl itself passes positionally; a config must not set them.
+_POSITIONAL = {"actor": ("obs", "obs_groups", "obs_set", "output_dim"),
+               "critic": ("obs", "obs_groups", "obs_set", "output_dim"),
+               "algorithm": ("actor", "critic", "storage", "device", "multi_gpu_cfg")}  # fmt: skip
+
+
+def _validate_class_section(section: str, values: dict) -> dict:
+    if "class_name" not in values:
+        raise ConfigError(f"Section '{section}' needs a class_name (e.g. refpo_warp.models:FlowActor)")
+    params = class_parameters(values["class_name"])
+    for pos in _POSITIONAL[section]:
+        params.pop(pos, None)
+    if section == "algorithm":
+        params["share_cnn_encoders"] = None  # consumed by rsl_rl's construct_algorithm
+    out = {"class_name": values["class_name"]}
+    for key, value in values.items():
+        if key == "class_name":
+            continue
+        if key not in params:
+            raise unknown(f"key '{section}.{key}' for {values['class_name']}", f"{section}.{key}",
+                          [f"{section}.{k}" for k in params])
+        out[key] = _coerce(value, params[key], f"{section}.{key}")
+    return out
+
+
+def _validate_env_section(task: str, values: dict) -> dict:
+    from refpo_warp.registry import get_task
+
+    cfg_class = get_task(task).env_class().cfg_class
+    fields = {f.name: f for f in dataclasses.fields(cfg_class)}
+    out = {}
+    for key, value in values.items():
+        if key not in fields:
+            raise unknown(f"env option for task '{task}'", f"env.{key}", [f"env.{k}" for k in fields])
+        f = fields[key]
+        default = f.default if f.default is not dataclasses.MISSING else None
+        out[key] = _coerce(value, default, f"env.{key}")
+    return out
+
+
+def _validate_plain(cfg: dict, schema: dict, prefix: str = "") -> None:
+    """Check every key of ``cfg`` against ``schema`` (default.yaml) and coerce values to the default's type."""
+    for key, value in cfg.items():
+        dotted = f"{prefix}{key}"
+        if key not in schema:
+            raise unknown("config key", dotted, _flatten_keys(schema, prefix))
+        if isinstance(schema[key], dict) and schema[key] and isinstance(value, dict) and key != "obs_groups":
+            _validate_plain(value, schema[key], dotted + ".")
+        else:
+            cfg[key] = _coerce(value, schema[key], dotted)
+
+
+def _flatten_keys(schema: dict, prefix: str = "") -> list[str]:
+    keys = []
+    for key, value in schema.items():
+        keys.append(prefix + key)
+        if isinstance(value, dict) and value:
+            keys += _flatten_keys(value, f"{prefix}{key}.")
+    return keys
+
+
+def resolve_config(overrides: list[str] | dict[str, Any] | None = None, device_type: str | None = None) -> dict:
+    """Build and validate the full run config from the YAML layers and ``key=value`` overrides.
+
+    Args:
+        overrides: ``["task=dmc_cheetah_run", "algorithm.reflow_coef=0.1", ...]`` or an equivalent dotted dict.
+        device_type: ``"cpu"`` or ``"cuda"`` profile to apply; default: from the resolved ``device``.
+    """
+    flat = parse_overrides(overrides) if isinstance(overrides, list) else dict(overrides or {})
+    defaults = load_yaml(CONFIG_DIR / "default.yaml")
+    task = str(flat.pop("task", defaults.get("task")))
+    algo = str(flat.pop("algo", defaults.get("algo")))
+
+    from refpo_warp.registry import list_tasks
+
+    if task not in list_tasks():
+        raise unknown("task", task, list_tasks())
+    if algo not in _choices("algo"):
+        raise unknown("algo", algo, _choices("algo"))
+
+    task_cfg = _task_layers(task)
+    cfg = merge(defaults, load_yaml(CONFIG_DIR / "algo" / f"{algo}.yaml"))
+    cfg = merge(cfg, {k: v for k, v in task_cfg.items() if k not in PROFILE_KEYS})
+    cfg["task"], cfg["algo"] = task, algo
+
+    if device_type is None:
+        from refpo_warp.device import resolve_device
+
+        device_type = resolve_device(str(flat.get("device", cfg.get("device", "auto")))).split(":")[0]
+    cfg = merge(cfg, (task_cfg.get("by_device") or {}).get(device_type, {}))
+    cfg = merge(cfg, (task_cfg.get("by_algo") or {}).get(algo, {}))
+    for key, value in flat.items():
+        if key in PROFILE_KEYS:
+            raise ConfigError(f"'{key}' is a config-file key, not a run option")
+        _set_dotted(cfg, key, value)
+
+    # Validate: class sections against constructors, env against the task, the rest against default.yaml.
+    for section in CLASS_SECTIONS:
+        cfg[section] = _validate_class_section(section, cfg.get(section) or {})
+    cfg["env"] = _validate_env_section(task, cfg.get("env") or {})
+    plain = {k: v for k, v in cfg.items() if k not in CLASS_SECTIONS + ("env",)}
+    _validate_plain(plain, {k: v for k, v in defaults.items() if k not in CLASS_SECTIONS + ("env",)})
+    cfg.update(plain)
+    return cfg
+
+
+def dump_config(cfg: dict, path: Path) -> None:
+    """Write the resolved config as YAML (atomically), so a run can be reproduced and resumed from it."""
+    path = Path(path)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    with open(tmp, "w") as f:
+        yaml.safe_dump(cfg, f, sort_keys=False)
+    os.replace(tmp, path)

@@ -1,0 +1,196 @@
+"""Base class of every refpo_warp environment: an rsl_rl ``VecEnv`` whose per-step work runs in Warp kernels.
+
+A subclass allocates its state in ``_build`` and launches its kernels in ``_step_impl`` (action, physics,
+reward/termination, auto-reset and observations for all envs at once) and ``_reset_impl`` (reset the envs selected
+by a boolean mask and write their observations). The base class owns the buffers rsl_rl sees, exposed to the
+kernels as zero-copy Warp views, and replays the whole step as one captured graph after a warm-up step (a CUDA
+graph on GPU, a Warp CPU graph on CPU).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import torch
+import warp as wp
+from rsl_rl.env import VecEnv
+from tensordict import TensorDict
+
+from refpo_warp.device import init_warp, resolve_device
+
+
+@dataclass
+class EnvCfg:
+    """Options shared by every environment; task cfgs subclass this."""
+
+    max_episode_length: int = 1000
+    graph_capture: bool = True
+    """Replay the step as a captured graph after one eager warm-up step (CUDA graph or Warp CPU graph)."""
+
+
+@dataclass
+class EnvBuffers:
+    """Zero-copy Warp views of the torch buffers that kernels write (built once, never reallocated)."""
+
+    actions: object
+    rewards: object
+    terminated: object
+    truncated: object
+    episode_length: object
+    rng: object
+    obs: dict
+    metrics: dict
+
+
+class WarpVecEnv(VecEnv):
+    """rsl_rl ``VecEnv`` over Warp kernels; see the module docstring for the subclass contract."""
+
+    cfg_class: ClassVar[type] = EnvCfg
+    episode_metrics: ClassVar[tuple[str, ...]] = ()
+    """Per-episode values a subclass writes at termination (e.g. ``success``); logged and used by evaluation."""
+
+    def __init__(self, cfg: EnvCfg, num_envs: int, device: str = "auto", seed: int = 0) -> None:
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be >= 1, got {num_envs}")
+        init_warp()
+        self.cfg = cfg
+        self.num_envs = int(num_envs)
+        self.device = resolve_device(device)
+        self.wp_device = wp.get_device(self.device)
+        self.seed = int(seed)
+        self.max_episode_length = int(cfg.max_episode_length)
+
+        self.num_actions, obs_dims = self._spaces()
+        n, dev = self.num_envs, self.device
+        self._actions = torch.zeros(n, self.num_actions, device=dev)
+        self._rewards = torch.zeros(n, device=dev)
+        self._terminated = torch.zeros(n, dtype=torch.bool, device=dev)
+        self._truncated = torch.zeros(n, dtype=torch.bool, device=dev)
+        self._episode_length = torch.zeros(n, dtype=torch.int32, device=dev)
+        self._obs = {name: torch.zeros(n, dim, device=dev) for name, dim in obs_dims.items()}
+        self._metrics = {name: torch.zeros(n, device=dev) for name in self.episode_metrics}
+        # rsl_rl keeps the observation of step t while step t+1 runs: hand out alternating copies.
+        self._obs_out = [TensorDict({k: v.clone() for k, v in self._obs.items()}, batch_size=[n]) for _ in range(2)]
+        self._obs_parity = 0
+
+        rng = torch.zeros(n, dtype=torch.int32, device=dev)
+        self.buffers = EnvBuffers(
+            actions=wp.from_torch(self._actions),
+            rewards=wp.from_torch(self._rewards),
+            terminated=wp.from_torch(self._terminated, dtype=wp.bool),
+            truncated=wp.from_torch(self._truncated, dtype=wp.bool),
+            episode_length=wp.from_torch(self._episode_length),
+            rng=wp.from_torch(rng, dtype=wp.uint32),
+            obs={k: wp.from_torch(v) for k, v in self._obs.items()},
+            metrics={k: wp.from_torch(v) for k, v in self._metrics.items()},
+        )
+        self._rng_torch = rng
+        self._seed_rng(self.seed)
+        self._graph = None
+        self._steps_taken = 0
+
+        with wp.ScopedDevice(self.wp_device):
+            self._build()
+        self.reset()
+
+    # ----------------------------------------------------------------------------------------- subclass contract
+    def _spaces(self) -> tuple[int, dict[str, int]]:
+        """Return ``(num_actions, {obs_group: dim})``; called before any buffer exists."""
+        raise NotImplementedError
+
+    def _build(self) -> None:
+        """Allocate task state (models, Warp arrays) on ``self.wp_device``."""
+        raise NotImplementedError
+
+    def _step_impl(self) -> None:
+        """Launch the kernels of one env step for all envs (must be graph-capturable: no host syncs)."""
+        raise NotImplementedError
+
+    def _reset_impl(self, mask) -> None:
+        """Reset the envs where the Warp bool array ``mask`` is true and write their observations."""
+        raise NotImplementedError
+
+    # ----------------------------------------------------------------------------------------- rsl_rl VecEnv API
+    @property
+    def episode_length_buf(self) -> torch.Tensor:
+        return self._episode_length
+
+    @episode_length_buf.setter
+    def episode_length_buf(self, value: torch.Tensor) -> None:
+        # rsl_rl reassigns this attribute (random initial episode lengths); kernels alias the buffer, so copy.
+        self._episode_length.copy_(value.to(self._episode_length.dtype))
+
+    def get_observations(self) -> TensorDict:
+        return self._publish_obs()
+
+    def reset(self) -> TensorDict:
+        """Reset every env (eagerly) and return the first observations."""
+        mask = torch.ones(self.num_envs, dtype=torch.bool, device=self.device)
+        self.reset_envs(mask)
+        return self._publish_obs()
+
+    def reset_envs(self, mask: torch.Tensor) -> None:
+        """Reset the envs selected by a boolean mask, leaving the others untouched."""
+        with wp.ScopedDevice(self.wp_device):
+            self._reset_impl(wp.from_torch(mask.to(self.device, torch.bool).contiguous(), dtype=wp.bool))
+        keep = ~mask.to(self.device, torch.bool)
+        self._terminated &= keep
+        self._truncated &= keep
+
+    def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
+        self._actions.copy_(actions)
+        self._run_step()
+        dones = self._terminated | self._truncated
+        extras = {"time_outs": self._truncated.clone()}
+        if self._metrics and bool(dones.any()):
+            extras["log"] = {f"Episode/{name}": buf[dones] for name, buf in self._metrics.items()}
+        return self._publish_obs(), self._rewards.clone(), dones, extras
+
+    @property
+    def episode_metric_buffers(self) -> dict[str, torch.Tensor]:
+        """Per-env values of ``episode_metrics``, valid for the envs whose episode ended at the last step."""
+        return self._metrics
+
+    @property
+    def unwrapped(self) -> WarpVecEnv:
+        return self
+
+    @property
+    def step_dt(self) -> float:
+        """Control period in seconds (1 for grid tasks); used by rsl_rl's RND extension."""
+        return 1.0
+
+    # ----------------------------------------------------------------------------------------- internals
+    def _run_step(self) -> None:
+        with wp.ScopedDevice(self.wp_device):
+            if self._graph is not None:
+                wp.capture_launch(self._graph)
+            else:
+                self._step_impl()
+                self._steps_taken += 1
+                # Capture after the eager warm-up step: every module is loaded and lazy buffers exist.
+                if self.cfg.graph_capture and self._steps_taken == 1 and self._can_capture():
+                    with wp.ScopedCapture(device=self.wp_device) as capture:
+                        self._step_impl()
+                    self._graph = capture.graph
+
+    def _can_capture(self) -> bool:
+        return self.wp_device.is_cpu or self.wp_device.is_mempool_enabled
+
+    def _publish_obs(self) -> TensorDict:
+        out = self._obs_out[self._obs_parity]
+        self._obs_parity ^= 1
+        for name, buf in self._obs.items():
+            out[name].copy_(buf)
+        return out
+
+    def _seed_rng(self, seed: int) -> None:
+        wp.launch(_seed_streams, dim=self.num_envs, inputs=[seed, self.buffers.rng], device=self.wp_device)
+
+
+@wp.kernel
+def _seed_streams(seed: int, rng: wp.array(dtype=wp.uint32)):
+    # Independent counter-based random stream per env; kernels advance rng[i] in place.
+    i = wp.tid()
+    rng[i] = wp.rand_init(seed, i)

@@ -1,0 +1,80 @@
+"""Policy evaluation on a vectorised env: every env plays a fixed number of episodes; per-episode results come back.
+
+Returns, lengths and the env's ``episode_metrics`` (success, MPJPE, ...) are recorded at each env's episode ends;
+episodes beyond ``episodes_per_env`` are ignored, so every env contributes the same number of episodes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import torch
+from tensordict import TensorDict
+
+
+@torch.inference_mode()
+def run_episodes(
+    policy: Callable[[TensorDict], torch.Tensor],
+    env,
+    episodes_per_env: int = 1,
+    max_steps: int | None = None,
+    reset: bool = True,
+) -> dict[str, torch.Tensor]:
+    """Roll ``policy`` in ``env`` until every env finished ``episodes_per_env`` episodes (or ``max_steps`` passed).
+
+    Args:
+        policy: Maps the observation TensorDict to actions (e.g. a FlowActor with a fixed number of flow steps).
+        env: A ``WarpVecEnv``.
+        episodes_per_env: Episodes recorded per env.
+        max_steps: Step cap (default: ``episodes_per_env * env.max_episode_length``); unfinished episodes are
+            dropped from the result and counted in ``"unfinished"``.
+        reset: Reset all envs first so every recorded episode starts from a fresh initial state.
+
+    Returns:
+        Flat tensors over recorded episodes: ``return``, ``length`` and one entry per env episode metric, plus the
+        scalar count ``unfinished``.
+    """
+    n = env.num_envs
+    obs = env.reset() if reset else env.get_observations()
+    max_steps = max_steps or episodes_per_env * int(env.max_episode_length)
+    running_return = torch.zeros(n, device=env.device)
+    running_length = torch.zeros(n, device=env.device)
+    finished = torch.zeros(n, dtype=torch.long, device=env.device)
+    records: dict[str, list[torch.Tensor]] = {"return": [], "length": []}
+    metric_names = list(env.episode_metric_buffers)
+    for name in metric_names:
+        records[name] = []
+
+    for _ in range(max_steps):
+        actions = policy(obs)
+        obs, rewards, dones, _ = env.step(actions)
+        running_return += rewards
+        running_length += 1
+        keep = dones & (finished < episodes_per_env)
+        if keep.any():
+            records["return"].append(running_return[keep].clone())
+            records["length"].append(running_length[keep].clone())
+            for name in metric_names:
+                records[name].append(env.episode_metric_buffers[name][keep].clone())
+        finished += dones.long()
+        running_return[dones] = 0.0
+        running_length[dones] = 0.0
+        if bool((finished >= episodes_per_env).all()):
+            break
+
+    out = {k: torch.cat(v) if v else torch.zeros(0, device=env.device) for k, v in records.items()}
+    out["unfinished"] = torch.tensor(int((episodes_per_env - finished.clamp(max=episodes_per_env)).sum()))
+    return out
+
+
+def summarize(episodes: dict[str, torch.Tensor]) -> dict[str, float]:
+    """Means (and the return's std) of a ``run_episodes`` result, as plain floats for JSON."""
+    out: dict[str, float] = {"episodes": int(episodes["return"].numel())}
+    for key, values in episodes.items():
+        if key == "unfinished":
+            out[key] = int(values)
+        elif values.numel():
+            out[f"{key}_mean"] = float(values.float().mean())
+    if episodes["return"].numel() > 1:
+        out["return_std"] = float(episodes["return"].float().std())
+    return out
