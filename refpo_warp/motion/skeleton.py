@@ -106,3 +106,14 @@ CONDITIONED_BODIES = {
 def body_index(name: str) -> int:
     """Index of a body in BODY_NAMES order."""
     return BODY_NAMES.index(name)
+
+
+# Foot joints and the height of each joint centre above a flat sole in the rest pose. The sole is TOE_SOLE_DEPTH
+# below the toe joint (the reference model's foot boxes; ProtoMotions' 0.015 m toe offset); the ankle is higher by
+# its rest offset to the toe. Motion clips are grounded so the lowest sole point at the clip start is at z = 0.
+TOE_SOLE_DEPTH = 0.015
+FOOT_BODIES: tuple[str, ...] = ("L_Ankle", "L_Toe", "R_Ankle", "R_Toe")
+FOOT_SOLE_DEPTH = np.array(
+    [TOE_SOLE_DEPTH + (0.0 if name.endswith("Toe") else -REST_OFFSETS[BODY_NAMES.index(name[0] + "_Toe"), 2])
+     for name in FOOT_BODIES]
+)  # fmt: skip
