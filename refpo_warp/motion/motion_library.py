@@ -1,0 +1,203 @@
+"""The motion library: many clips at one frame rate, concatenated in Warp arrays with per-clip offsets, and a
+graph-capturable kernel that samples each env's reference state at (clip, time) with interpolation.
+
+Frames are in the simulator's z-up world, bodies in skeleton order; body 0 (Pelvis) is the root. ``dof_pos``
+holds the 23 non-root joints' local rotations as intrinsic x-y-z Euler angles (the humanoid's three hinges per
+joint, x then y then z); ``dof_vel`` their rates. See ``docs/motion.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from refpo_warp.device import configure_warp, init_warp, resolve_device
+from refpo_warp.errors import MotionDataError
+from refpo_warp.motion.clip import MotionClip
+from refpo_warp.motion.library_file import FRAME_ARRAYS, is_library_file, load_library, save_library
+from refpo_warp.motion.skeleton import NUM_BODIES, NUM_DOFS
+from refpo_warp.motion.sources import load_amass_clips
+
+wp = configure_warp()  # before this module defines kernels
+
+_WARP_DTYPES = {"body_pos": wp.vec3, "body_rot": wp.quat, "body_vel": wp.vec3, "body_angvel": wp.vec3,
+                "dof_pos": float, "dof_vel": float}  # fmt: skip
+
+
+@dataclass
+class MotionFrames:
+    """Per-env reference states written by ``MotionLibrary.sample`` (Warp arrays, first axis = env)."""
+
+    body_pos: wp.array2d  # (N, 24) vec3
+    body_rot: wp.array2d  # (N, 24) quat xyzw
+    body_vel: wp.array2d  # (N, 24) vec3
+    body_angvel: wp.array2d  # (N, 24) vec3
+    dof_pos: wp.array2d  # (N, 69) float
+    dof_vel: wp.array2d  # (N, 69) float
+
+
+class MotionLibrary:
+    """Clips concatenated on a Warp device; build with ``load`` (or ``from_clips``)."""
+
+    def __init__(self, frames: dict[str, np.ndarray], clip_frames: np.ndarray, fps: float, clip_names: list[str],
+                 sources: list[str] | None = None, device: str = "cpu") -> None:  # fmt: skip
+        init_warp()
+        self.device = resolve_device(device)
+        self.fps = float(fps)
+        self.clip_names = list(clip_names)
+        self.num_clips = len(self.clip_names)
+        self.sources = list(sources or [])
+        self.clip_num_frames = np.asarray(clip_frames, dtype=np.int64)
+        self.clip_duration = (self.clip_num_frames - 1) / self.fps
+        self.num_frames = int(self.clip_num_frames.sum())
+        self.frames = {key: np.ascontiguousarray(frames[key], dtype=np.float32) for key in FRAME_ARRAYS}
+        start = np.concatenate([[0], np.cumsum(self.clip_num_frames)[:-1]])
+        dev = self.device
+        self.clip_start = wp.array(start.astype(np.int32), dtype=int, device=dev)
+        self.clip_frames = wp.array(self.clip_num_frames.astype(np.int32), dtype=int, device=dev)
+        self.clip_duration_device = wp.array(self.clip_duration.astype(np.float32), dtype=float, device=dev)
+        for key, dtype in _WARP_DTYPES.items():
+            setattr(self, key, wp.array(self.frames[key], dtype=dtype, device=dev))
+
+    # ------------------------------------------------------------------------------------------------ building
+    @classmethod
+    def load(cls, source: str | Path, device: str = "cpu", fps: float = 30.0) -> MotionLibrary:
+        """Load an AMASS npz file, a folder of them (recursive), or a converted library file (*.motionlib.npz).
+
+        AMASS input is converted on the fly at ``fps``; a library file keeps the frame rate it was converted at
+        (``sample`` interpolates at any time, so any control rate can use it). Raises ``MotionDataError`` naming
+        the file and the problem; nothing is built from a partly read source.
+        """
+        path = Path(source).expanduser()
+        if not path.exists():
+            raise MotionDataError(f"{path}: motion source not found (expected an AMASS .npz file, a folder of "
+                                  f"them, or a *.motionlib.npz library)")  # fmt: skip
+        if path.is_file() and is_library_file(path):
+            frames, clip_frames, meta = load_library(path)
+            return cls(frames, clip_frames, meta["fps"], meta["clip_names"], meta["sources"], device)
+        if not (np.isfinite(fps) and fps > 0):
+            raise ValueError(f"MotionLibrary.load: fps must be a positive number, got {fps}")
+        clips, sources = load_amass_clips(path, float(fps))
+        return cls.from_clips(clips, device=device, sources=sources)
+
+    @classmethod
+    def from_clips(cls, clips: list[MotionClip], device: str = "cpu", sources: list[str] | None = None):
+        """Concatenate clips that share one frame rate."""
+        if not clips:
+            raise ValueError("MotionLibrary.from_clips needs at least one clip")
+        rates = {clip.fps for clip in clips}
+        if len(rates) != 1:
+            raise ValueError(f"MotionLibrary.from_clips: clips have different frame rates {sorted(rates)}")
+        frames = {key: np.concatenate([getattr(c, key) for c in clips]) for key in FRAME_ARRAYS}
+        clip_frames = np.array([c.num_frames for c in clips])
+        return cls(frames, clip_frames, rates.pop(), [c.name for c in clips], sources, device)
+
+    def save(self, path: str | Path) -> None:
+        """Write the converted library file (``*.motionlib.npz``)."""
+        save_library(path, self.frames, self.clip_num_frames, self.fps, self.clip_names, self.sources)
+
+    def clip(self, index: int) -> dict[str, np.ndarray]:
+        """Host copies of one clip's frame arrays (for tools and tests)."""
+        start = int(np.sum(self.clip_num_frames[:index]))
+        stop = start + int(self.clip_num_frames[index])
+        return {key: value[start:stop] for key, value in self.frames.items()}
+
+    # ------------------------------------------------------------------------------------------------ sampling
+    def allocate_frames(self, num_envs: int) -> MotionFrames:
+        """Output buffers for ``sample`` (allocate once, reuse every step)."""
+        dev = self.device
+
+        def zeros(dtype, width):
+            return wp.zeros((num_envs, width), dtype=dtype, device=dev)
+
+        return MotionFrames(
+            body_pos=zeros(wp.vec3, NUM_BODIES),
+            body_rot=zeros(wp.quat, NUM_BODIES),
+            body_vel=zeros(wp.vec3, NUM_BODIES),
+            body_angvel=zeros(wp.vec3, NUM_BODIES),
+            dof_pos=zeros(float, NUM_DOFS),
+            dof_vel=zeros(float, NUM_DOFS),
+        )
+
+    def sample(self, clip_ids: wp.array, times: wp.array, out: MotionFrames) -> None:
+        """Reference states at ``times`` seconds into each env's clip (one launch over (env, body); no host sync).
+
+        Times are clamped to [0, clip duration] and clip ids to [0, num_clips - 1]. Positions, velocities and
+        joint angles are interpolated linearly between the two bracketing frames (angles along the shorter way
+        round), rotations by slerp.
+        """
+        wp.launch(
+            _sample_kernel,
+            dim=(out.body_pos.shape[0], NUM_BODIES),
+            inputs=[self.clip_start, self.clip_frames, self.num_clips, self.fps, self.body_pos, self.body_rot,
+                    self.body_vel, self.body_angvel, self.dof_pos, self.dof_vel, clip_ids, times],  # fmt: skip
+            outputs=[out.body_pos, out.body_rot, out.body_vel, out.body_angvel, out.dof_pos, out.dof_vel],
+            device=self.device,
+        )
+
+    def __repr__(self) -> str:
+        return (f"MotionLibrary({self.num_clips} clips, {self.num_frames} frames at {self.fps:g} fps, "
+                f"{float(self.clip_duration.sum()):.1f} s, device={self.device})")  # fmt: skip
+
+
+@wp.func
+def _slerp(q0: wp.quat, q1: wp.quat, a: float) -> wp.quat:
+    d = wp.dot(q0, q1)
+    q_end = q1
+    if d < 0.0:  # q and -q are one rotation: take the shorter arc
+        q_end = q1 * -1.0
+        d = -d
+    if d > 0.9995:  # nearly equal: normalised lerp avoids dividing by sin(theta) ~ 0
+        return wp.normalize(q0 * (1.0 - a) + q_end * a)
+    theta = wp.acos(d)
+    s = wp.sin(theta)
+    return wp.normalize(q0 * (wp.sin((1.0 - a) * theta) / s) + q_end * (wp.sin(a * theta) / s))
+
+
+@wp.func
+def _wrap(x: float) -> float:
+    return x - 2.0 * wp.pi * wp.floor((x + wp.pi) / (2.0 * wp.pi))
+
+
+@wp.kernel
+def _sample_kernel(
+    clip_start: wp.array(dtype=int),
+    clip_frames: wp.array(dtype=int),
+    num_clips: int,
+    fps: float,
+    body_pos: wp.array2d(dtype=wp.vec3),
+    body_rot: wp.array2d(dtype=wp.quat),
+    body_vel: wp.array2d(dtype=wp.vec3),
+    body_angvel: wp.array2d(dtype=wp.vec3),
+    dof_pos: wp.array2d(dtype=float),
+    dof_vel: wp.array2d(dtype=float),
+    clip_ids: wp.array(dtype=int),
+    times: wp.array(dtype=float),
+    out_body_pos: wp.array2d(dtype=wp.vec3),
+    out_body_rot: wp.array2d(dtype=wp.quat),
+    out_body_vel: wp.array2d(dtype=wp.vec3),
+    out_body_angvel: wp.array2d(dtype=wp.vec3),
+    out_dof_pos: wp.array2d(dtype=float),
+    out_dof_vel: wp.array2d(dtype=float),
+):
+    env, body = wp.tid()
+    clip = wp.clamp(clip_ids[env], 0, num_clips - 1)
+    last = clip_frames[clip] - 1
+    f = wp.clamp(times[env] * fps, 0.0, float(last))
+    k0 = wp.clamp(int(f), 0, last)  # the clamp also guards the index against a NaN time
+    a = f - float(k0)
+    g0 = clip_start[clip] + k0
+    g1 = clip_start[clip] + wp.min(k0 + 1, last)
+
+    out_body_pos[env, body] = wp.lerp(body_pos[g0, body], body_pos[g1, body], a)
+    out_body_rot[env, body] = _slerp(body_rot[g0, body], body_rot[g1, body], a)
+    out_body_vel[env, body] = wp.lerp(body_vel[g0, body], body_vel[g1, body], a)
+    out_body_angvel[env, body] = wp.lerp(body_angvel[g0, body], body_angvel[g1, body], a)
+    if body > 0:  # the joint of body b (> 0) owns dofs 3(b-1) .. 3(b-1)+2
+        for axis in range(3):
+            d = 3 * (body - 1) + axis
+            x0 = dof_pos[g0, d]
+            out_dof_pos[env, d] = _wrap(x0 + a * _wrap(dof_pos[g1, d] - x0))
+            out_dof_vel[env, d] = wp.lerp(dof_vel[g0, d], dof_vel[g1, d], a)
