@@ -136,11 +136,11 @@ def wrap_angle(x: np.ndarray) -> np.ndarray:
 def quat_make_continuous(q: np.ndarray, axis: int = 0) -> np.ndarray:
     """Flip signs along ``axis`` (time) so consecutive quaternions lie in the same hemisphere (q and -q are the
     same rotation; interpolation needs neighbours with a positive dot product)."""
-    q = np.moveaxis(np.array(q, dtype=np.float64), axis, 0)
-    for t in range(1, q.shape[0]):
-        flip = np.sum(q[t] * q[t - 1], axis=-1, keepdims=True) < 0.0
-        q[t] = np.where(flip, -q[t], q[t])
-    return np.moveaxis(q, 0, axis)
+    q = np.moveaxis(np.asarray(q, dtype=np.float64), axis, 0)
+    # Frame t keeps its sign iff an even number of sign changes happened between frames 0..t.
+    changes = np.sum(q[1:] * q[:-1], axis=-1, keepdims=True) < 0.0
+    parity = np.concatenate([np.zeros_like(changes[:1]), np.cumsum(changes, axis=0) % 2 == 1])
+    return np.moveaxis(np.where(parity, -q, q), 0, axis)
 
 
 def quat_slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -1,10 +1,10 @@
 """Procedural AMASS-format clips (walk, turn, stand with sway, arm waves), so the project needs no mocap data.
 
-Joint angles are smooth periodic functions of time, written in the model frame (x forward, y left, z up):
-hip flexion is a negative rotation about y, knee flexion positive about y, the ankle keeps the foot parallel to
-the ground, the arms hang 1.25 rad below the T-pose. The root turns with the clip's heading (and turn rate). The
-root translation is not scripted: each frame the lowest foot sole point stays fixed in the horizontal plane and
-sits on the ground, so walking speed emerges from the legs and the stance foot never slides.
+Everything is written in the model frame (x forward, y left, z up) and converted to AMASS's template-frame
+axis-angle at the end. Walks and turns place footprints along a straight or circular path and solve the legs by
+inverse kinematics (``synthetic_gait``). Standing clips are smooth periodic joint angles (sway through hips,
+ankles and spine; a raised arm whose elbow waves); their root translation is not scripted: each frame the lowest
+foot sole point stays fixed horizontally and sits on the ground, so the feet do not slide.
 """
 
 from __future__ import annotations
@@ -92,7 +92,7 @@ def generate_motion(spec: ClipSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     if spec.duration <= 0 or spec.fps <= 0:
         raise ValueError(f"Clip '{spec.name}': duration and fps must be positive, got {spec.duration}, {spec.fps}")
     t = np.arange(int(np.floor(spec.duration * spec.fps + 1e-6)) + 1) / spec.fps
-    euler = np.zeros((t.size, NUM_BODIES, 3))  # per-body local (x, y, z) angles, composed as Rx Ry Rz
+    euler = np.zeros((t.size, NUM_BODIES, 3))  # per-body local (x, y, z) angles, composed as Rx Ry Rz; 0 = root
     if spec.kind in ("walk", "turn"):
         _walk_upper_body(euler)
         return walk_motion(t, replace(spec, turn_rate=spec.turn_rate if spec.kind == "turn" else 0.0), euler)
@@ -101,12 +101,7 @@ def generate_motion(spec: ClipSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]
         _wave_angles(euler, t, spec)
     local_rot = rot.quat_from_euler_xyz(euler)
     local_rot[:, 0] = rot.quat_identity()
-    yaw = spec.heading + euler[:, 0, 2]
-    pitch_roll = euler[:, 0, :2]
-    root_rot = rot.quat_mul(
-        rot.quat_from_axis_angle(yaw[:, None] * np.array([0.0, 0.0, 1.0])),
-        rot.quat_from_euler_xyz(np.concatenate([pitch_roll, np.zeros((t.size, 1))], axis=1)),
-    )
+    root_rot = np.repeat(rot.quat_from_axis_angle(np.array([0.0, 0.0, spec.heading]))[None], t.size, axis=0)
     return _anchor_root(root_rot, local_rot), root_rot, local_rot
 
 
@@ -150,9 +145,9 @@ def _wave_angles(euler: np.ndarray, t: np.ndarray, spec: ClipSpec) -> None:
     wave = np.sin(2.0 * np.pi * spec.wave_freq * t + spec.phase)
     raise_in = np.clip(t / 0.5, 0.0, 1.0)  # lift the arm during the first half second
     raise_in = raise_in * raise_in * (3.0 - 2.0 * raise_in)
-    arms = ("L", "R") if spec.wave_arm == "both" else (spec.wave_arm[0].upper(),)
     if spec.wave_arm not in ("left", "right", "both"):
         raise ValueError(f"Clip '{spec.name}': wave_arm must be 'left', 'right' or 'both', got '{spec.wave_arm}'")
+    arms = ("L", "R") if spec.wave_arm == "both" else (spec.wave_arm[0].upper(),)
     for side in arms:
         sign = 1.0 if side == "L" else -1.0
         euler[:, BODY_NAMES.index(f"{side}_Shoulder"), 0] = sign * (-ARM_DOWN + raise_in * (ARM_DOWN + 0.3))

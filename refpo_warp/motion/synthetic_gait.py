@@ -1,10 +1,12 @@
 """Walking (straight or turning) by foot placement and leg inverse kinematics.
 
-The pelvis follows a straight or circular path at the clip's speed. Each foot alternates a stance phase, flat and
-fixed on a footprint placed beside the pelvis at mid-stance, and a swing phase that moves it to the next footprint
-along a raised arc. Hips and knees are solved analytically to reach the ankle targets, ankles keep the feet flat
-and turned to their footprint's heading, and the arms and spine swing against the legs. The pelvis height is a
-smooth minimum of the standing height and what the legs can reach (which gives the vertical bob of a walk).
+The pelvis follows a straight or circular path at the clip's speed. Each foot alternates a stance phase on a
+footprint placed beside the pelvis at mid-stance (landing toe-up and rolling down about the heel, flat, then
+lifting the heel and rolling about the toe joint) and a swing phase that carries it to the next footprint along a
+raised arc. Hips and knees are solved analytically to reach the ankle targets; ankles set the foot's heading and
+pitch; arms and spine swing against the legs. The pelvis height is the highest that keeps every foot on the
+ground within reach, smoothed over time from below (which gives the vertical bob of a walk); a swinging foot rises
+where that height would pull its leg straight.
 """
 
 from __future__ import annotations
