@@ -243,3 +243,9 @@ def test_convert_amass_tool(amass_dir, library, tmp_path, capsys):
     assert tool.main([str(tmp_path / "bad"), str(tmp_path / "no.motionlib.npz")]) == 2
     assert "x_poses.npz: cannot be read as an npz archive" in capsys.readouterr().err
     assert not (tmp_path / "no.motionlib.npz").exists()
+
+
+def test_sample_rejects_mismatched_sizes(library):
+    out = library.allocate_frames(4)
+    with pytest.raises(ValueError, match="3 clip ids and 4 times for 4 output rows"):
+        library.sample(wp.zeros(3, dtype=int), wp.zeros(4, dtype=float), out)

@@ -126,11 +126,15 @@ class MotionLibrary:
 
         Times are clamped to [0, clip duration] and clip ids to [0, num_clips - 1]. Positions, velocities and
         joint angles are interpolated linearly between the two bracketing frames (angles along the shorter way
-        round), rotations by slerp.
+        round), rotations by slerp. ``clip_ids`` and ``times`` hold one entry per row of ``out``.
         """
+        num_envs = out.body_pos.shape[0]
+        if clip_ids.shape[0] != num_envs or times.shape[0] != num_envs:
+            raise ValueError(f"MotionLibrary.sample: {clip_ids.shape[0]} clip ids and {times.shape[0]} times for "
+                             f"{num_envs} output rows; they must match")  # fmt: skip
         wp.launch(
             _sample_kernel,
-            dim=(out.body_pos.shape[0], NUM_BODIES),
+            dim=(num_envs, NUM_BODIES),
             inputs=[self.clip_start, self.clip_frames, self.num_clips, self.fps, self.body_pos, self.body_rot,
                     self.body_vel, self.body_angvel, self.dof_pos, self.dof_vel, clip_ids, times],  # fmt: skip
             outputs=[out.body_pos, out.body_rot, out.body_vel, out.body_angvel, out.dof_pos, out.dof_vel],
