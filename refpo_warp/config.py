@@ -25,6 +25,7 @@ from refpo_warp.errors import ConfigError, unknown
 CONFIG_DIR = Path(os.environ.get("REFPO_WARP_CONFIGS", Path(__file__).resolve().parents[1] / "configs"))
 CLASS_SECTIONS = ("actor", "critic", "algorithm")
 PROFILE_KEYS = ("base", "by_device", "by_algo")
+# Top-level keys of a task file starting with "_" are YAML anchors for reuse inside that file, not options.
 
 
 def load_yaml(path: Path) -> dict:
@@ -230,7 +231,7 @@ def resolve_config(overrides: list[str] | dict[str, Any] | None = None, device_t
 
     task_cfg = _task_layers(task)
     cfg = merge(defaults, load_yaml(CONFIG_DIR / "algo" / f"{algo}.yaml"))
-    cfg = merge(cfg, {k: v for k, v in task_cfg.items() if k not in PROFILE_KEYS})
+    cfg = merge(cfg, {k: v for k, v in task_cfg.items() if k not in PROFILE_KEYS and not k.startswith("_")})
     cfg["task"], cfg["algo"] = task, algo
 
     if device_type is None:
@@ -248,6 +249,8 @@ def resolve_config(overrides: list[str] | dict[str, Any] | None = None, device_t
     for section in CLASS_SECTIONS:
         cfg[section] = _validate_class_section(section, cfg.get(section) or {})
     cfg["env"] = _validate_env_section(task, cfg.get("env") or {})
+    if isinstance(cfg.get("eval"), dict):
+        cfg["eval"]["env"] = _validate_env_section(task, cfg["eval"].get("env") or {})
     plain = {k: v for k, v in cfg.items() if k not in CLASS_SECTIONS + ("env",)}
     _validate_plain(plain, {k: v for k, v in defaults.items() if k not in CLASS_SECTIONS + ("env",)})
     cfg.update(plain)

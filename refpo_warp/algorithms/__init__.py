@@ -1,0 +1,6 @@
+"""On-policy algorithms selected by rsl_rl ``class_name``: ReFPO (FPO with reflow_coef=0) and Gaussian PPO."""
+
+from refpo_warp.algorithms.ppo import PPO
+from refpo_warp.algorithms.refpo import ReFPO
+
+__all__ = ["PPO", "ReFPO"]

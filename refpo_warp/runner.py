@@ -1,0 +1,128 @@
+"""rsl_rl's OnPolicyRunner, extended (not forked) for long unattended runs.
+
+- checkpoints are written atomically (temp file + rename), so a crash never leaves a truncated ``model_*.pt``;
+- one progress line per iteration (rsl_rl's full report with ``log_full``), plus ``progress.jsonl`` holding
+  every logged number, which the plotting tools read;
+- a NaN/inf loss stops training before the next checkpoint, so the last checkpoint on disk stays good;
+- an ``on_iteration`` hook (periodic evaluation) whose numbers go to TensorBoard and ``progress.jsonl``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import os
+import re
+import statistics
+from collections.abc import Callable
+from pathlib import Path
+
+import torch
+from rsl_rl.runners import OnPolicyRunner
+from rsl_rl.utils.logger import Logger
+
+from refpo_warp.errors import NonFiniteLossError
+
+CHECKPOINT_PATTERN = re.compile(r"model_(\d+)\.pt$")
+
+
+def latest_checkpoint(run_dir: str | Path) -> Path | None:
+    """The checkpoint with the highest iteration in ``run_dir`` (temp files of interrupted writes are ignored)."""
+    found = [(int(m.group(1)), p) for p in Path(run_dir).glob("model_*.pt") if (m := CHECKPOINT_PATTERN.search(p.name))]
+    return max(found)[1] if found else None
+
+
+def _episode_means(ep_extras: list[dict]) -> dict[str, float]:
+    """Per-key means of the env's logged episode values over one iteration (what rsl_rl logs under Episode/)."""
+    values: dict[str, list[torch.Tensor]] = {}
+    for info in ep_extras:
+        for key, value in info.items():
+            values.setdefault(key, []).append(torch.as_tensor(value, dtype=torch.float32).reshape(-1).cpu())
+    return {k if "/" in k else f"Episode/{k}": float(torch.cat(v).mean()) for k, v in values.items() if v}
+
+
+class ProgressLogger(Logger):
+    """rsl_rl's Logger (TensorBoard) plus a one-line console report, ``progress.jsonl`` and a non-finite check."""
+
+    def __init__(self, *args, log_full: bool = False, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.log_full = log_full
+        self.on_iteration: Callable[[int, bool], dict[str, float]] | None = None
+
+    def log(self, it: int, start_it: int, total_it: int, collect_time: float, learn_time: float,
+            loss_dict: dict, **kwargs) -> None:  # fmt: skip
+        bad = {k: v for k, v in loss_dict.items() if not math.isfinite(float(v))}
+        if bad:
+            raise NonFiniteLossError(f"Non-finite training statistics at iteration {it}: {bad}")
+        if self.writer is None:
+            return
+        episode = _episode_means(self.ep_extras)
+        sink = contextlib.nullcontext() if self.log_full else contextlib.redirect_stdout(io.StringIO())
+        with sink:
+            super().log(it, start_it, total_it, collect_time, learn_time, loss_dict, **kwargs)
+        row = {
+            "iteration": it,
+            "env_steps": self.tot_timesteps,
+            "time_s": round(self.tot_time, 3),
+            "steps_per_s": int(self.cfg["num_steps_per_env"] * self.num_envs / max(collect_time + learn_time, 1e-9)),
+        }
+        if self.rewbuffer:
+            row["reward_mean"] = statistics.mean(self.rewbuffer)
+            row["episode_length_mean"] = statistics.mean(self.lenbuffer)
+        row.update(episode)
+        row.update({f"loss/{k}": float(v) for k, v in loss_dict.items()})
+        if self.on_iteration is not None:
+            evaluated = self.on_iteration(it, it == total_it - 1)
+            for key, value in evaluated.items():
+                self.writer.add_scalar(key, value, it)
+            row.update(evaluated)
+        with open(Path(self.log_dir) / "progress.jsonl", "a") as f:
+            f.write(json.dumps(row) + "\n")
+        if not self.log_full:
+            print(self._progress_line(it, total_it, row), flush=True)
+
+    @staticmethod
+    def _progress_line(it: int, total_it: int, row: dict) -> str:
+        parts = [f"[{it + 1:>5}/{total_it}]", f"steps {row['env_steps']:>11,}", f"{row['steps_per_s']:>8,} sps"]
+        if "reward_mean" in row:
+            parts.append(f"return {row['reward_mean']:9.2f}")
+            parts.append(f"len {row['episode_length_mean']:6.1f}")
+        for key in ("Episode/success", "loss/ratio_max", "loss/clip_fraction", "loss/explosion_rate",
+                    "loss/straightness_error"):  # fmt: skip
+            if key in row:
+                parts.append(f"{key.split('/')[-1]} {row[key]:.3g}")
+        parts += [f"{k.split('/')[-1]} {v:.1f}" for k, v in row.items() if k.startswith("eval/return")]
+        return "  ".join(parts)
+
+
+class Runner(OnPolicyRunner):
+    """OnPolicyRunner with atomic checkpoints, a progress line per iteration and an evaluation hook."""
+
+    def __init__(self, env, train_cfg: dict, log_dir: str | None = None, device: str = "cpu",
+                 log_full: bool = False) -> None:  # fmt: skip
+        super().__init__(env, train_cfg, log_dir=log_dir, device=device)
+        old = self.logger
+        self.logger = ProgressLogger(
+            log_dir=log_dir, cfg=self.cfg, env_cfg=env.cfg, num_envs=env.num_envs,
+            is_distributed=self.is_distributed, gpu_world_size=self.gpu_world_size,
+            gpu_global_rank=self.gpu_global_rank, device=device, log_full=log_full,
+        )  # fmt: skip
+        self.logger.git_status_repos = old.git_status_repos + [__file__]
+
+    def save(self, path: str, infos: dict | None = None) -> None:
+        """Write the checkpoint atomically: a reader never sees a partial file, a crash keeps the previous one."""
+        saved = self.alg.save()
+        saved["iter"] = self.current_learning_iteration
+        saved["infos"] = infos
+        tmp = f"{path}.tmp"
+        torch.save(saved, tmp)
+        os.replace(tmp, path)
+        self.logger.save_model(path, self.current_learning_iteration)
+
+    def resume_from(self, path: str | Path) -> int:
+        """Load a checkpoint and continue after the iteration it was written at; returns that next iteration."""
+        self.load(str(path), map_location=self.device)
+        self.current_learning_iteration += 1
+        return self.current_learning_iteration

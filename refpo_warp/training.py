@@ -1,0 +1,131 @@
+"""Train a policy from a resolved config: the implementation behind ``tools/train.py``.
+
+``train(["task=gridworld", "algo=refpo", "seed=1"])`` builds the env and rsl_rl's runner (extended in
+``refpo_warp.runner``), writes the resolved config next to the checkpoints, trains (or resumes), evaluates at the
+end and returns the evaluation results (also written to ``eval.json`` in the run dir).
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from refpo_warp.config import dump_config, load_yaml, resolve_config
+from refpo_warp.device import resolve_device
+from refpo_warp.errors import ConfigError
+from refpo_warp.registry import make_env
+from refpo_warp.runner import Runner, latest_checkpoint
+
+RUN_CONFIG = "config.yaml"
+
+
+def seed_everything(seed: int) -> None:
+    random.seed(seed)
+    np.random.seed(seed)
+    torch.manual_seed(seed)
+
+
+def rsl_rl_config(cfg: dict) -> dict:
+    """The train_cfg dict rsl_rl's OnPolicyRunner expects, built from a resolved refpo_warp config."""
+    runner = cfg["runner"]
+    return {
+        "num_steps_per_env": runner["num_steps_per_env"],
+        "save_interval": runner["save_interval"],
+        "logger": runner["logger"],
+        "check_for_nan": runner["check_for_nan"],
+        "torch_compile_mode": runner["torch_compile_mode"],
+        "obs_groups": {k: list(v) for k, v in runner["obs_groups"].items()},
+        "run_name": f"{cfg['task']}/{cfg['algo']}",
+        "actor": dict(cfg["actor"]),
+        "critic": dict(cfg["critic"]),
+        "algorithm": dict(cfg["algorithm"]),
+    }
+
+
+def num_iterations(cfg: dict) -> int:
+    """Training iterations: ``max_iterations`` if set, else the env-step budget over the batch size."""
+    if cfg["max_iterations"]:
+        return int(cfg["max_iterations"])
+    batch = cfg["num_envs"] * cfg["runner"]["num_steps_per_env"]
+    return max(1, math.ceil(cfg["total_env_steps"] / batch))
+
+
+def default_run_dir(cfg: dict) -> Path:
+    return Path("runs") / cfg["task"] / f"{cfg['algo']}_seed{cfg['seed']}"
+
+
+def flatten(cfg: dict, prefix: str = "") -> dict[str, Any]:
+    """Dotted-key view of a nested config (class sections and obs_groups stay whole where needed)."""
+    out: dict[str, Any] = {}
+    for key, value in cfg.items():
+        if isinstance(value, dict) and value and key not in ("obs_groups", "distribution_cfg"):
+            out.update(flatten(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
+    """The saved config of a run with ``overrides`` applied on top (used to resume and to evaluate)."""
+    saved = run_dir / RUN_CONFIG
+    if not saved.exists():
+        raise ConfigError(f"{saved} not found: '{run_dir}' is not a refpo_warp run directory")
+    flat = flatten(load_yaml(saved))
+    flat.update(overrides)
+    return resolve_config(flat)
+
+
+def build_runner(cfg: dict, log_dir: Path | None, num_envs: int | None = None, env_overrides: dict | None = None):
+    """Env + rsl_rl runner (with our extensions) for a resolved config."""
+    device = resolve_device(cfg["device"])
+    env = make_env(cfg["task"], num_envs=num_envs or cfg["num_envs"], device=device, seed=cfg["seed"],
+                   **{**cfg["env"], **(env_overrides or {})})  # fmt: skip
+    runner = Runner(env, rsl_rl_config(cfg), log_dir=str(log_dir) if log_dir else None, device=device,
+                    log_full=cfg["runner"]["log_full"])  # fmt: skip
+    return env, runner
+
+
+def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
+    """Train (or resume) a run and evaluate it; returns the evaluation results (``{}`` if ``eval.at_end`` is off)."""
+    from refpo_warp.config import parse_overrides
+    from refpo_warp.report import evaluate_run, periodic_evaluator
+
+    flat = parse_overrides(overrides) if isinstance(overrides, list) else dict(overrides or {})
+    resume = bool(flat.get("resume", False))
+    if resume and flat.get("run_dir") and (Path(flat["run_dir"]) / RUN_CONFIG).exists():
+        cfg = load_run_config(Path(flat["run_dir"]), flat)
+    else:
+        cfg = resolve_config(flat)
+    run_dir = Path(cfg["run_dir"] or default_run_dir(cfg))
+    cfg["run_dir"] = str(run_dir)
+    checkpoint = latest_checkpoint(run_dir) if run_dir.exists() else None
+    if checkpoint is not None and not resume:
+        raise ConfigError(
+            f"{run_dir} already holds checkpoints ({checkpoint.name}); pass resume=true to continue that run, "
+            "or choose another run_dir"
+        )
+    run_dir.mkdir(parents=True, exist_ok=True)
+    if not resume:
+        for stale in ("progress.jsonl", "eval.json"):
+            (run_dir / stale).unlink(missing_ok=True)
+
+    seed_everything(cfg["seed"])
+    env, runner = build_runner(cfg, run_dir)
+    dump_config(cfg, run_dir / RUN_CONFIG)
+    start = runner.resume_from(checkpoint) if (resume and checkpoint is not None) else 0
+    total = num_iterations(cfg)
+    print(f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs, "
+          f"iterations {start}..{total - 1} ({total * env.num_envs * cfg['runner']['num_steps_per_env']:,} env "
+          f"steps), run dir {run_dir}", flush=True)  # fmt: skip
+    if cfg["eval"]["interval"] > 0:
+        runner.logger.on_iteration = periodic_evaluator(cfg, runner)
+    if total > start:
+        runner.learn(total - start, init_at_random_ep_len=cfg["runner"]["init_at_random_ep_len"])
+    if not cfg["eval"]["at_end"]:
+        return {}
+    return evaluate_run(run_dir, cfg=cfg, runner=runner)
