@@ -86,7 +86,7 @@ class WarpVecEnv(VecEnv):
             metrics={k: wp.from_torch(v) for k, v in self._metrics.items()},
         )
         self._rng_torch = rng
-        self._seed_rng(self.seed)
+        self.reseed(self.seed)
         self._graph = None
         self._steps_taken = 0
 
@@ -185,7 +185,8 @@ class WarpVecEnv(VecEnv):
             out[name].copy_(buf)
         return out
 
-    def _seed_rng(self, seed: int) -> None:
+    def reseed(self, seed: int) -> None:
+        """Restart every env's random stream from ``seed`` (gymnasium's ``reset(seed=...)``)."""
         wp.launch(_seed_streams, dim=self.num_envs, inputs=[seed, self.buffers.rng], device=self.wp_device)
 
 
