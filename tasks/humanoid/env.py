@@ -1,0 +1,172 @@
+"""SMPL humanoid motion tracking (ReFPO paper §4.3): a Newton-simulated humanoid follows reference clips.
+
+Per control step (30 Hz), all in Warp kernels and captured as one graph: PD targets from the actions, 4 physics
+substeps, the reference at the new time, reward / termination / episode metrics, new episodes for finished envs
+(reference-state initialisation: the simulator is set to the reference at the episode's start time), and the
+observation against the reference one control step ahead. Details: ``docs/humanoid.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from refpo_warp.device import configure_warp
+from refpo_warp.envs import EnvCfg, WarpVecEnv
+from refpo_warp.motion import skeleton as sk
+from tasks.humanoid import motions
+from tasks.humanoid.model import EFFORT_LIMIT, HumanoidSim, SimOptions
+from tasks.humanoid.obs_layout import OBS_DIM, conditioning_mask
+from tasks.humanoid.observations import observation_kernel
+from tasks.humanoid.tracking_kernels import (
+    advance_time_kernel,
+    apply_actions_kernel,
+    evaluate_step_kernel,
+    start_episodes_kernel,
+    write_reference_state_kernel,
+)
+
+wp = configure_warp()
+
+
+@dataclass
+class HumanoidTrackingCfg(EnvCfg):
+    conditioning: str = "all"
+    """Goal conditioning of the policy observation: all | root_hands | root (set by the task id)."""
+    motion_file: str = ""
+    """AMASS npz file, folder of them, or *.motionlib.npz; "" = the shipped synthetic clips."""
+    eval_mode: bool = False
+    """Env i plays clip i from its start (no random init); termination on the mean body distance."""
+    max_episode_length: int = 300
+    """Training episode cap in control steps (the reference crops clips to 300 frames); unused in eval mode."""
+    termination_distance: float = 0.25
+    """Training: the episode ends when any body is farther than this (m) from the reference."""
+    eval_termination_distance: float = 0.5
+    """Eval mode: the episode ends when the mean distance of the 20 non-hand/toe bodies exceeds this (m)."""
+    power_coef: float = 0.0005
+    freeze_hands_toes: bool = True
+    max_joint_speed: float = 100.0
+    """A hinge rate above this (rad/s) is a numerical blow-up: the episode ends as a failure."""
+    substeps: int = 4
+    nconmax: int = 64
+    njmax: int = 320
+    solver_iterations: int = 100
+    solver_ls_iterations: int = 50
+
+
+class HumanoidTrackingEnv(WarpVecEnv):
+    """Motion tracking with 69 PD-controlled hinges; observation groups ``policy`` (masked) and ``critic`` (full)."""
+
+    cfg_class = HumanoidTrackingCfg
+    episode_metrics = ("success", "mpjpe_mm", "alive_steps")
+
+    @classmethod
+    def eval_num_envs(cls, cfg: HumanoidTrackingCfg) -> int:
+        """Evaluation plays every clip once: one env per clip."""
+        return motions.num_clips(cfg.motion_file)
+
+    def _spaces(self):
+        self.obs_mask = conditioning_mask(self.cfg.conditioning)
+        return sk.NUM_DOFS, {"policy": OBS_DIM, "critic": OBS_DIM}
+
+    @property
+    def step_dt(self) -> float:
+        return 1.0 / 30.0
+
+    # ------------------------------------------------------------------------------------------------ building
+    def _build(self) -> None:
+        c, n, dev = self.cfg, self.num_envs, self.wp_device
+        self.motion = motions.load_motions(c.motion_file, self.device)
+        steps_per_clip = np.floor(self.motion.clip_duration / self.step_dt + 1e-6).astype(int)
+        if c.eval_mode:
+            # Episodes end only at a clip's end or on failure; the cap covers the longest clip.
+            self.max_episode_length = int(steps_per_clip.max()) + 1
+        options = SimOptions(substeps=c.substeps, control_dt=self.step_dt, nconmax=c.nconmax, njmax=c.njmax,
+                             iterations=c.solver_iterations, ls_iterations=c.solver_ls_iterations)  # fmt: skip
+        self.sim = HumanoidSim(n, dev, options)
+        self.ref = self.motion.allocate_frames(n)
+
+        scale = sk.ACTION_SCALE.astype(np.float32).copy()
+        if c.freeze_hands_toes:
+            for name in sk.FROZEN_HAND_TOE:
+                body = sk.body_index(name)
+                scale[3 * (body - 1) : 3 * body] = 0.0
+        gains = np.repeat(sk.PD_GAINS[1:], 3, axis=0).astype(np.float32)
+        eval_body = np.array([n_ in sk.EVAL_TERMINATION_BODIES for n_ in sk.BODY_NAMES], dtype=np.float32)
+        self.action_scale = wp.array(scale, dtype=float, device=dev)
+        self.kp = wp.array(gains[:, 0], dtype=float, device=dev)
+        self.kd = wp.array(gains[:, 1], dtype=float, device=dev)
+        self.eval_body = wp.array(eval_body, dtype=float, device=dev)
+        self.mask = wp.array(self.obs_mask, dtype=float, device=dev)
+        self.root_com = wp.vec3(*self.sim.body_com.numpy()[0])
+
+        self.clip_id = wp.zeros(n, dtype=int, device=dev)
+        self.start_time = wp.zeros(n, dtype=float, device=dev)
+        self.ref_time = wp.zeros(n, dtype=float, device=dev)
+        self.obs_time = wp.zeros(n, dtype=float, device=dev)
+        self.mpjpe_sum = wp.zeros(n, dtype=float, device=dev)
+
+    # ------------------------------------------------------------------------------------------------ stepping
+    def _step_impl(self) -> None:
+        b, c, s, n = self.buffers, self.cfg, self.sim, self.num_envs
+        wp.launch(apply_actions_kernel, dim=(n, sk.NUM_DOFS), inputs=[b.actions, self.action_scale],
+                  outputs=[s.joint_target])  # fmt: skip
+        s.simulate()
+        wp.launch(advance_time_kernel, dim=n, inputs=[self.start_time, b.episode_length, self.step_dt],
+                  outputs=[self.ref_time])  # fmt: skip
+        self.motion.sample(self.clip_id, self.ref_time, self.ref)
+        r = self.ref
+        wp.launch(
+            evaluate_step_kernel,
+            dim=n,
+            inputs=[s.body_q, s.body_qd, s.body_com, s.joint_q, s.joint_qd, s.joint_target, self.kp, self.kd,
+                    EFFORT_LIMIT, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, self.eval_body, self.clip_id,
+                    self.ref_time, self.motion.clip_duration_device, b.episode_length, self.max_episode_length,
+                    int(c.eval_mode), c.termination_distance, c.eval_termination_distance, c.max_joint_speed,
+                    c.power_coef, self.mpjpe_sum],
+            outputs=[b.rewards, b.terminated, b.truncated, s.reset_mask, b.metrics["success"],
+                     b.metrics["mpjpe_mm"], b.metrics["alive_steps"]],
+        )  # fmt: skip
+        self._start_episodes(s.reset_mask)
+
+    def _reset_impl(self, mask) -> None:
+        self._start_episodes(mask)
+
+    def _start_episodes(self, mask) -> None:
+        """New episodes where ``mask`` is set (simulator set to the reference), then every env's observation."""
+        b, s, n, r = self.buffers, self.sim, self.num_envs, self.ref
+        wp.launch(
+            start_episodes_kernel,
+            dim=n,
+            inputs=[mask, b.rng, self.motion.num_clips, self.motion.clip_duration_device, self.step_dt,
+                    int(self.cfg.eval_mode)],
+            outputs=[self.clip_id, self.start_time, self.ref_time, b.episode_length, self.mpjpe_sum, s.reset_mask],
+        )  # fmt: skip
+        self.motion.sample(self.clip_id, self.ref_time, r)
+        wp.launch(write_reference_state_kernel, dim=n,
+                  inputs=[s.reset_mask, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, r.dof_pos, r.dof_vel,
+                          self.root_com],
+                  outputs=[s.joint_q, s.joint_qd])  # fmt: skip
+        s.finish_reset()
+        wp.launch(_shift_time_kernel, dim=n, inputs=[self.ref_time, self.step_dt], outputs=[self.obs_time])
+        self.motion.sample(self.clip_id, self.obs_time, r)
+        wp.launch(observation_kernel, dim=(n, sk.NUM_BODIES),
+                  inputs=[s.body_q, s.body_qd, s.body_com, r.body_pos, r.body_rot, r.body_vel, r.body_angvel,
+                          self.mask],
+                  outputs=[b.obs["critic"], b.obs["policy"]])  # fmt: skip
+
+    # ------------------------------------------------------------------------------------------------ inspection
+    def reference_at(self, times: torch.Tensor | None = None):
+        """Reference frames of every env at ``times`` (default: the current reference time); for tests and tools."""
+        out = self.motion.allocate_frames(self.num_envs)
+        t = self.ref_time if times is None else wp.from_torch(times.to(self.device, torch.float32).contiguous())
+        self.motion.sample(self.clip_id, t, out)
+        return out
+
+
+@wp.kernel
+def _shift_time_kernel(ref_time: wp.array(dtype=float), dt: float, obs_time: wp.array(dtype=float)):
+    i = wp.tid()
+    obs_time[i] = ref_time[i] + dt

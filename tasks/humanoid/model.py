@@ -1,0 +1,144 @@
+"""The simulated SMPL humanoid on Newton + MuJoCo Warp: ``num_envs`` worlds of ``smpl_humanoid.xml`` on a ground plane.
+
+Joint PD control uses Newton's joint target gains (target mode POSITION, the reference's per-joint kp/kd, effort
+limit 500 N m); the MJCF carries no stiffness, so there are no passive springs. Self-collision follows MuJoCo's rule
+(every pair of geoms of one humanoid except parent-child pairs); every geom touches the ground (friction 1).
+
+Time stepping: 120 Hz physics with 4 substeps per 30 Hz control step (as ProtoMotions' Newton backend). At 60 Hz
+the reference gains on the light distal bodies (armature 0.02, kp up to 500) sit at the stability edge of the
+integrator: the PD-held standing pose tips over within 3 s, while at 120 Hz it holds (see docs/humanoid.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from refpo_warp.device import configure_warp
+from refpo_warp.motion import skeleton as sk
+from tasks.humanoid.mjcf_builder import MJCF_PATH
+
+wp = configure_warp()
+
+FREE_COORDS = 7  # root position (3) + quaternion xyzw (4)
+FREE_DOFS = 6  # root linear (COM) velocity (3) + angular velocity (3), world frame
+EFFORT_LIMIT = 500.0
+GROUND_FRICTION = 1.0
+
+
+@dataclass(frozen=True)
+class SimOptions:
+    """Physics options of the humanoid worlds."""
+
+    substeps: int = 4
+    control_dt: float = 1.0 / 30.0
+    nconmax: int = 64  # contact points per world
+    njmax: int = 320  # constraint rows per world (4 per pyramidal contact + joint limits)
+    iterations: int = 100
+    ls_iterations: int = 50
+    integrator: str = "implicitfast"
+
+    @property
+    def physics_dt(self) -> float:
+        return self.control_dt / self.substeps
+
+
+class HumanoidSim:
+    """Newton model, MuJoCo solver, state and control of ``num_envs`` humanoid worlds, with per-world 2-D views.
+
+    Views (first axis = world): ``joint_q`` (N, 76) root pose then 69 hinge angles; ``joint_qd`` (N, 75) root COM
+    velocity and angular velocity then 69 hinge rates; ``body_q`` (N, 24) transforms; ``body_qd`` (N, 24) twists
+    (COM linear velocity, angular velocity); ``joint_target`` (N, 76) PD targets (only the hinge entries are used).
+    """
+
+    def __init__(self, num_envs: int, device, options: SimOptions = SimOptions(), mjcf: Path = MJCF_PATH) -> None:
+        import newton
+
+        if options.substeps < 2 or options.substeps % 2:
+            raise ValueError(f"substeps must be even and >= 2 (state buffers swap each substep), got "
+                             f"{options.substeps}")  # fmt: skip
+        self.options = options
+        self.num_envs = num_envs
+        self.device = device
+        self.model = build_model(num_envs, device, mjcf)
+        self.solver = newton.solvers.SolverMuJoCo(
+            self.model, njmax=options.njmax, nconmax=options.nconmax, iterations=options.iterations,
+            ls_iterations=options.ls_iterations, integrator=options.integrator,
+        )  # fmt: skip
+        self.state, self._scratch = self.model.state(), self.model.state()
+        self.control = self.model.control()
+        n = num_envs
+        self.joint_q = self.state.joint_q.reshape((n, -1))
+        self.joint_qd = self.state.joint_qd.reshape((n, -1))
+        self.body_q = self.state.body_q.reshape((n, -1))
+        self.body_qd = self.state.body_qd.reshape((n, -1))
+        self.joint_target = self.control.joint_target_q.reshape((n, -1))
+        per_world = self.model.body_count // n
+        self.body_com = wp.array(self.model.body_com.numpy()[:per_world], dtype=wp.vec3, device=device)
+        # The solver's reset takes a (worlds + 1) mask (the last entry is the global world); kernels write the first N.
+        self._world_mask = wp.zeros(n + 1, dtype=wp.bool, device=device)
+        self.reset_mask = self._world_mask[:n]
+
+    def simulate(self) -> None:
+        """Advance one control step (graph-capturable; an even number of substeps leaves the result in ``state``)."""
+        dt = self.options.physics_dt
+        a, b = self.state, self._scratch
+        for _ in range(self.options.substeps):
+            self.solver.step(a, b, self.control, None, dt)
+            a, b = b, a
+
+    def finish_reset(self) -> None:
+        """After writing joint coordinates of the worlds in ``reset_mask``: recompute their body poses and clear the
+        solver's carried-over buffers (warm start) so a diverged world cannot poison its next episode."""
+        import newton
+
+        newton.eval_fk(self.model, self.state.joint_q, self.state.joint_qd, self.state, mask=self.reset_mask)
+        self.solver.reset(self.state, world_mask=self._world_mask, flags=0)
+
+    def constraint_usage(self) -> tuple[int, int]:
+        """(largest constraint-row count of any world, total contacts) after the last substep (host sync; tests)."""
+        data = self.solver.mjw_data
+        return int(data.nefc.numpy().max()), int(data.nacon.numpy()[0])
+
+
+def build_model(num_envs: int, device, mjcf: Path = MJCF_PATH):
+    """Finalized Newton model of ``num_envs`` humanoid worlds with PD target gains and a shared ground plane."""
+    import newton
+
+    robot = newton.ModelBuilder()
+    newton.solvers.SolverMuJoCo.register_custom_attributes(robot)
+    robot.default_shape_cfg.gap = 0.0  # Newton's default 0.1 m gap only adds inactive contact candidates
+    robot.add_mjcf(str(mjcf), floating=True, enable_self_collisions=True)
+    _check_layout(robot, mjcf)
+    for body in range(1, sk.NUM_BODIES):
+        kp, kd = sk.PD_GAINS[body]
+        for axis in range(3):
+            dof = robot.joint_qd_start[body] + axis
+            robot.joint_target_ke[dof] = float(kp)
+            robot.joint_target_kd[dof] = float(kd)
+            robot.joint_target_mode[dof] = int(newton.JointTargetMode.POSITION)
+            robot.joint_effort_limit[dof] = EFFORT_LIMIT
+
+    scene = newton.ModelBuilder()
+    newton.solvers.SolverMuJoCo.register_custom_attributes(scene)
+    scene.replicate(robot, num_envs)
+    ground = newton.ModelBuilder.ShapeConfig(mu=GROUND_FRICTION, gap=0.0)
+    scene.add_ground_plane(cfg=ground)
+    return scene.finalize(device=device)
+
+
+def _check_layout(robot, mjcf: Path) -> None:
+    """The importer must give body i = skeleton body i, a free root and one 3-hinge joint per body."""
+    names = [label.rsplit("/", 1)[-1] for label in robot.body_label]
+    if tuple(names) != sk.BODY_NAMES:
+        raise ValueError(f"{mjcf}: body order {names} differs from skeleton.BODY_NAMES")
+    if robot.joint_coord_count != FREE_COORDS + sk.NUM_DOFS or robot.joint_dof_count != FREE_DOFS + sk.NUM_DOFS:
+        raise ValueError(f"{mjcf}: expected {FREE_COORDS + sk.NUM_DOFS} coordinates and {FREE_DOFS + sk.NUM_DOFS} "
+                         f"DoF, got {robot.joint_coord_count} and {robot.joint_dof_count}")  # fmt: skip
+    expected = FREE_DOFS + 3 * np.arange(sk.NUM_JOINTS)
+    if list(robot.joint_qd_start[1:]) != expected.tolist():
+        raise ValueError(f"{mjcf}: joint DoF starts {robot.joint_qd_start} are not one 3-DoF joint per body")
+    if any(robot.joint_target_ke[d] != 0.0 for d in range(robot.joint_dof_count)):
+        raise ValueError(f"{mjcf}: the MJCF must not author actuators; PD gains are set in code")

@@ -1,0 +1,33 @@
+"""The tracking env's motion source: the ``motion_file`` option resolved and loaded once per process."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from refpo_warp.motion.motion_library import MotionLibrary
+
+SHIPPED_MOTIONS = Path(__file__).resolve().parent / "data" / "synthetic"
+LIBRARY_FPS = 30.0  # AMASS input is converted at the control rate
+
+
+def resolve_motion_file(motion_file: str) -> Path:
+    """``""`` selects the shipped synthetic clips; anything else is a path (``~`` expanded)."""
+    return SHIPPED_MOTIONS if not motion_file else Path(motion_file).expanduser().resolve()
+
+
+@lru_cache(maxsize=4)
+def _host_library(path: Path) -> MotionLibrary:
+    return MotionLibrary.load(path, device="cpu", fps=LIBRARY_FPS)
+
+
+def load_motions(motion_file: str, device: str) -> MotionLibrary:
+    """The motion library of ``motion_file`` on ``device`` (an AMASS folder is converted only once per process)."""
+    host = _host_library(resolve_motion_file(motion_file))
+    if device == "cpu":
+        return host
+    return MotionLibrary(host.frames, host.clip_num_frames, host.fps, host.clip_names, host.sources, device)
+
+
+def num_clips(motion_file: str) -> int:
+    return _host_library(resolve_motion_file(motion_file)).num_clips
