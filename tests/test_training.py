@@ -18,7 +18,10 @@ QUICK = ["task=gridworld", "algo=refpo", "num_envs=8", "runner.num_steps_per_env
 
 
 def test_rsl_rl_runner_trains_flow_policy_from_plain_dict():
-    """An existing rsl_rl config switches to ReFPO by changing only class_name strings (and flow options)."""
+    """An existing rsl_rl config switches to ReFPO by changing only class_name strings (and flow options).
+
+    The algorithm dict carries every key Isaac Lab's RslRlPpoAlgorithmCfg sends, plus the flow options.
+    """
     torch.manual_seed(0)
     env = make_env("gridworld", num_envs=16, device="cpu", seed=1)
     cfg = {
@@ -32,6 +35,7 @@ def test_rsl_rl_runner_trains_flow_policy_from_plain_dict():
                       "lam": 0.98, "learning_rate": 1e-3, "entropy_coef": 0.0, "desired_kl": 0.01,
                       "schedule": "fixed", "max_grad_norm": 0.5, "value_loss_coef": 1.0,
                       "use_clipped_value_loss": False, "normalize_advantage_per_mini_batch": False,
+                      "optimizer": "adam", "use_mixed_precision": False, "share_cnn_encoders": False,
                       "rnd_cfg": None, "symmetry_cfg": None},
     }  # fmt: skip
     runner = OnPolicyRunner(env, cfg, log_dir=None, device="cpu")

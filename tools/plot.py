@@ -1,0 +1,34 @@
+#!/usr/bin/env python
+"""Training curves: python tools/plot.py run_dir=PATH [run_dir=PATH2 ...] [out=DIR]
+
+Reads progress.jsonl of each run and writes curves_return.png (evaluation returns at 10 and 1 flow steps with the
+gap shaded, or the training return) and curves_diagnostics.png (max ratio, clip fraction, Explosion Rate,
+Straightness Error). Several run dirs share one figure, e.g. FPO vs ReFPO on the same task.
+"""
+
+import sys
+
+from refpo_warp.plots import plot_runs
+
+
+def main(argv: list[str]) -> int:
+    if not argv or any(a in ("-h", "--help") for a in argv):
+        print(__doc__)
+        return 0 if argv else 2
+    runs = [a.split("=", 1)[1] for a in argv if a.startswith("run_dir=")]
+    out = next((a.split("=", 1)[1] for a in argv if a.startswith("out=")), None)
+    unknown = [a for a in argv if not a.startswith(("run_dir=", "out="))]
+    if unknown or not runs:
+        print(f"error: expected run_dir=PATH [out=DIR], got {unknown or argv}", file=sys.stderr)
+        return 2
+    try:
+        for path in plot_runs(runs, out):
+            print(path)
+    except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
