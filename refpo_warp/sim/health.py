@@ -1,0 +1,26 @@
+"""Detect worlds whose physics state stopped being finite (a diverged MuJoCo step), so they can be reset."""
+
+from __future__ import annotations
+
+import warp as wp
+
+
+@wp.func
+def world_state_finite(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float), world: int) -> bool:
+    """True when every generalized position and velocity of ``world`` is finite (no NaN or inf)."""
+    for i in range(joint_q.shape[1]):
+        if not wp.isfinite(joint_q[world, i]):
+            return False
+    for i in range(joint_qd.shape[1]):
+        if not wp.isfinite(joint_qd[world, i]):
+            return False
+    return True
+
+
+@wp.kernel
+def flag_nonfinite_worlds(
+    joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float), nonfinite: wp.array(dtype=wp.bool)
+):
+    """``nonfinite[w]`` = the state of world ``w`` holds a NaN or an inf."""
+    w = wp.tid()
+    nonfinite[w] = not world_state_finite(joint_q, joint_qd, w)

@@ -1,0 +1,113 @@
+"""Cheetah run (Playground ``CheetahRun``): run forward as fast as possible.
+
+Observation (17): joint positions without the root x (8), joint velocities (9).
+Reward: tolerance(v, bounds=(10, inf), margin=10, value 0 at margin, linear) = clip(v / 10, 0, 1), where v is the
+x velocity of the centre of mass (the torso's subtree linear velocity).
+Reset: root at zero, the six leg joints U(joint range), then 200 physics steps at zero control let the model settle
+(as in Playground and dm_control). Settling in the middle of a captured step is impossible, so ``prepare`` settles
+``reset_bank_size`` such states once and resets draw one of them uniformly.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+import warp as wp
+
+from refpo_warp.sim import world_com_velocity
+from tasks.dmc.rewards import LINEAR, tolerance
+from tasks.dmc.task import DmcTask
+
+RUN_SPEED = wp.constant(10.0)
+SETTLE_STEPS = 200
+NUM_ROOT = 3  # rootx, rootz, rooty
+
+
+@wp.kernel
+def sample_leg_angles(
+    rng: wp.array(dtype=wp.uint32),
+    lower: wp.array(dtype=float),
+    upper: wp.array(dtype=float),
+    joint_q: wp.array2d(dtype=float),
+    joint_qd: wp.array2d(dtype=float),
+):
+    i = wp.tid()
+    s = rng[i]
+    for j in range(joint_q.shape[1]):
+        joint_q[i, j] = wp.where(j < NUM_ROOT, 0.0, wp.randf(s, lower[j], upper[j]))
+        joint_qd[i, j] = 0.0
+    rng[i] = s
+
+
+@wp.kernel
+def reset_from_bank(
+    mask: wp.array(dtype=wp.bool),
+    rng: wp.array(dtype=wp.uint32),
+    bank_q: wp.array2d(dtype=float),
+    bank_qd: wp.array2d(dtype=float),
+    joint_q: wp.array2d(dtype=float),
+    joint_qd: wp.array2d(dtype=float),
+):
+    i = wp.tid()
+    if mask[i]:
+        s = rng[i]
+        k = wp.randi(s, 0, bank_q.shape[0])
+        rng[i] = s
+        for j in range(joint_q.shape[1]):
+            joint_q[i, j] = bank_q[k, j]
+            joint_qd[i, j] = bank_qd[k, j]
+
+
+@wp.kernel
+def cheetah_reward(body_qd: wp.array2d(dtype=wp.spatial_vector), body_mass: wp.array2d(dtype=float),
+                   rewards: wp.array(dtype=float)):  # fmt: skip
+    i = wp.tid()
+    speed = world_com_velocity(body_qd, body_mass, i)[0]
+    rewards[i] = tolerance(speed, RUN_SPEED, wp.inf, RUN_SPEED, LINEAR, 0.0)
+
+
+@wp.kernel
+def cheetah_obs(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float), obs: wp.array2d(dtype=float)):
+    i = wp.tid()
+    nq = joint_q.shape[1]
+    for j in range(1, nq):
+        obs[i, j - 1] = joint_q[i, j]
+    for j in range(joint_qd.shape[1]):
+        obs[i, nq - 1 + j] = joint_qd[i, j]
+
+
+class CheetahRun(DmcTask):
+    name = "cheetah_run"
+    model_file = "cheetah.xml"
+    substeps = 1  # ctrl_dt = sim_dt = 0.01
+    num_obs = 17
+    num_actions = 6
+
+    def prepare(self) -> None:
+        """Settle ``reset_bank_size`` random leg poses for SETTLE_STEPS physics steps at zero control."""
+        n, v, sim = self.num_envs, self.views, self.sim
+        size = self.cfg.reset_bank_size or max(n, 256)
+        rounds = math.ceil(size / n)
+        bank_q = torch.zeros(rounds * n, v.joint_q.shape[1], device=wp.device_to_torch(self.device))
+        bank_qd = torch.zeros(rounds * n, v.joint_qd.shape[1], device=bank_q.device)
+        everyone = wp.ones(n, dtype=wp.bool, device=self.device)
+        wp.to_torch(v.ctrl).zero_()
+        for r in range(rounds):
+            self.launch(sample_leg_angles, [self.rng, v.limit_lower, v.limit_upper, v.joint_q, v.joint_qd])
+            sim.after_reset(everyone)
+            for _ in range(SETTLE_STEPS // self.substeps):
+                sim.simulate()
+            bank_q[r * n : (r + 1) * n] = wp.to_torch(v.joint_q)
+            bank_qd[r * n : (r + 1) * n] = wp.to_torch(v.joint_qd)
+        self.bank_q, self.bank_qd = wp.from_torch(bank_q[:size]), wp.from_torch(bank_qd[:size])
+
+    def reset(self, mask) -> None:
+        v = self.views
+        self.launch(reset_from_bank, [mask, self.rng, self.bank_q, self.bank_qd, v.joint_q, v.joint_qd])
+
+    def reward(self, rewards) -> None:
+        self.launch(cheetah_reward, [self.views.body_qd, self.views.body_mass, rewards])
+
+    def observe(self, obs, reset_mask) -> None:
+        self.launch(cheetah_obs, [self.views.joint_q, self.views.joint_qd, obs])

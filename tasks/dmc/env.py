@@ -1,0 +1,146 @@
+"""DMC-style control tasks (MuJoCo Playground's DM Control Suite) on Newton's MuJoCo solver, one world per env.
+
+One control step: clip actions to [-1, 1] into the MuJoCo actuator controls, run the task's physics substeps, compute
+the reward from the new state, end episodes (a time-out after ``max_episode_length`` steps, reported as truncated so
+the value is bootstrapped; a non-finite physics state, reported as terminated with reward 0 and counted in the
+``nonfinite_resets`` episode metric), re-initialise finished envs, and write observations. Everything runs in Warp
+kernels over the env index and is replayed as one captured graph after the first step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+import warp as wp
+
+from refpo_warp.envs import EnvCfg, WarpVecEnv
+from refpo_warp.errors import unknown
+from refpo_warp.sim import MuJoCoWorlds, world_state_finite
+from tasks.dmc.suite import TASKS
+
+
+@dataclass
+class DmcCfg(EnvCfg):
+    task: str = "cartpole_balance"
+    """Suite task name (set by the registered task id, e.g. dmc_cheetah_run -> cheetah_run)."""
+    solver_iterations: int = 0
+    """MuJoCo solver iterations; 0 keeps the model file's (Playground's deliberately low) value."""
+    solver_ls_iterations: int = 0
+    """MuJoCo line-search iterations; 0 keeps the model file's value."""
+    reset_bank_size: int = 0
+    """Settled initial states pre-computed by tasks whose reset lets the model settle first (cheetah);
+    0 means max(num_envs, 256)."""
+
+
+@wp.kernel
+def apply_actions(actions: wp.array2d(dtype=float), ctrl: wp.array2d(dtype=float)):
+    i, j = wp.tid()
+    ctrl[i, j] = wp.clamp(actions[i, j], -1.0, 1.0)
+
+
+@wp.kernel
+def finish_step(
+    joint_q: wp.array2d(dtype=float),
+    joint_qd: wp.array2d(dtype=float),
+    max_episode_length: int,
+    rewards: wp.array(dtype=float),
+    episode_length: wp.array(dtype=wp.int32),
+    terminated: wp.array(dtype=wp.bool),
+    truncated: wp.array(dtype=wp.bool),
+    reset_mask: wp.array(dtype=wp.bool),
+    nonfinite_resets: wp.array(dtype=float),
+):
+    i = wp.tid()
+    finite = world_state_finite(joint_q, joint_qd, i)
+    length = episode_length[i] + 1
+    timeout = finite and length >= max_episode_length
+    if not finite:
+        rewards[i] = 0.0  # the reward of a diverged state is meaningless (and may be NaN)
+    terminated[i] = not finite
+    truncated[i] = timeout
+    done = timeout or not finite
+    reset_mask[i] = done
+    nonfinite_resets[i] = wp.where(finite, 0.0, 1.0)
+    episode_length[i] = wp.where(done, 0, length)
+
+
+@wp.kernel
+def restart_episodes(mask: wp.array(dtype=wp.bool), episode_length: wp.array(dtype=wp.int32)):
+    i = wp.tid()
+    if mask[i]:
+        episode_length[i] = 0
+
+
+class DmcEnv(WarpVecEnv):
+    """A DMC task (``cfg.task``) over ``num_envs`` Newton worlds; see the module docstring for the step."""
+
+    cfg_class = DmcCfg
+    episode_metrics = ("nonfinite_resets",)
+
+    def _spaces(self):
+        if self.cfg.task not in TASKS:
+            raise unknown("DMC task (env.task)", self.cfg.task, TASKS)
+        self.task_class = TASKS[self.cfg.task]
+        return self.task_class.num_actions, {"policy": self.task_class.num_obs}
+
+    def _build(self) -> None:
+        cfg, task_class = self.cfg, self.task_class
+        options = {}
+        if cfg.solver_iterations < 0 or cfg.solver_ls_iterations < 0:
+            raise ValueError("env.solver_iterations and env.solver_ls_iterations must be >= 0 (0: model's value)")
+        if cfg.solver_iterations:
+            options["iterations"] = cfg.solver_iterations
+        if cfg.solver_ls_iterations:
+            options["ls_iterations"] = cfg.solver_ls_iterations
+        self.sim = MuJoCoWorlds(task_class.model_path(), self.num_envs, self.device, task_class.substeps, options)
+        ctrl = self.sim.views.ctrl
+        if ctrl is None or ctrl.shape[1] != task_class.num_actions:
+            raise ValueError(f"{task_class.model_file}: expected {task_class.num_actions} actuators, found "
+                             f"{0 if ctrl is None else ctrl.shape[1]}")  # fmt: skip
+        self._reset_mask_torch = torch.zeros(self.num_envs, dtype=torch.bool, device=self.device)
+        self._reset_mask = wp.from_torch(self._reset_mask_torch, dtype=wp.bool)
+        self.task = task_class(self.sim, cfg, self.buffers.rng)
+        self.task.prepare()
+
+    def _step_impl(self) -> None:
+        b, sim, task = self.buffers, self.sim, self.task
+        wp.launch(apply_actions, dim=(self.num_envs, self.num_actions), inputs=[b.actions, sim.views.ctrl])
+        sim.simulate()
+        task.after_physics()
+        task.reward(b.rewards)
+        wp.launch(finish_step, dim=self.num_envs,
+                  inputs=[sim.views.joint_q, sim.views.joint_qd, self.max_episode_length, b.rewards,
+                          b.episode_length, b.terminated, b.truncated, self._reset_mask,
+                          b.metrics["nonfinite_resets"]])  # fmt: skip
+        task.reset(self._reset_mask)
+        sim.after_reset(self._reset_mask)
+        task.observe(b.obs["policy"], self._reset_mask)
+
+    def _reset_impl(self, mask) -> None:
+        self.task.reset(mask)
+        wp.launch(restart_episodes, dim=self.num_envs, inputs=[mask, self.buffers.episode_length])
+        self.sim.after_reset(mask)
+        self.task.observe(self.buffers.obs["policy"], mask)
+
+    @property
+    def step_dt(self) -> float:
+        """Control period in seconds (physics timestep x substeps)."""
+        return self.sim.control_dt
+
+    @property
+    def joint_q(self) -> torch.Tensor:
+        """Generalized positions per env, shape (num_envs, coords), Newton convention (MuJoCo qpos - ref); live."""
+        return wp.to_torch(self.sim.views.joint_q)
+
+    @property
+    def joint_qd(self) -> torch.Tensor:
+        """Generalized velocities per env, shape (num_envs, dofs); a live view."""
+        return wp.to_torch(self.sim.views.joint_qd)
+
+    def refresh_observations(self) -> None:
+        """Recompute body poses and observations after ``joint_q``/``joint_qd`` were edited (tests, figures)."""
+        with wp.ScopedDevice(self.wp_device):
+            self.sim.forward_kinematics()
+            self._reset_mask.zero_()
+            self.task.observe(self.buffers.obs["policy"], self._reset_mask)

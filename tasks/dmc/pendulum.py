@@ -1,0 +1,72 @@
+"""Pendulum swing-up (Playground ``PendulumSwingup``).
+
+Observation (3): pole frame xz and zz (sin and cos of the angle from upright), hinge angular velocity.
+Reward: 1 when the pole is within 8 degrees of upright (tolerance(zz, bounds=(cos 8deg, 1)), margin 0), else 0.
+Reset: hinge angle U(0, pi) (Playground; dm_control uses U(-pi, pi)), zero velocity.
+"""
+
+from __future__ import annotations
+
+import math
+
+import warp as wp
+
+from tasks.dmc.rewards import GAUSSIAN, tolerance
+from tasks.dmc.task import DmcTask
+
+COS_8_DEG = wp.constant(math.cos(math.radians(8.0)))
+
+
+@wp.kernel
+def reset_pendulum(
+    mask: wp.array(dtype=wp.bool),
+    rng: wp.array(dtype=wp.uint32),
+    joint_q: wp.array2d(dtype=float),
+    joint_qd: wp.array2d(dtype=float),
+):
+    i = wp.tid()
+    if mask[i]:
+        s = rng[i]
+        joint_q[i, 0] = wp.randf(s) * wp.pi
+        joint_qd[i, 0] = 0.0
+        rng[i] = s
+
+
+@wp.kernel
+def pendulum_reward(body_q: wp.array2d(dtype=wp.transform), pole: int, rewards: wp.array(dtype=float)):
+    i = wp.tid()
+    zz = wp.quat_to_matrix(wp.transform_get_rotation(body_q[i, pole]))[2, 2]
+    rewards[i] = tolerance(zz, COS_8_DEG, 1.0, 0.0, GAUSSIAN, 0.1)
+
+
+@wp.kernel
+def pendulum_obs(
+    joint_qd: wp.array2d(dtype=float), body_q: wp.array2d(dtype=wp.transform), pole: int,
+    obs: wp.array2d(dtype=float),
+):  # fmt: skip
+    i = wp.tid()
+    r = wp.quat_to_matrix(wp.transform_get_rotation(body_q[i, pole]))
+    obs[i, 0] = r[0, 2]
+    obs[i, 1] = r[2, 2]
+    obs[i, 2] = joint_qd[i, 0]
+
+
+class PendulumSwingup(DmcTask):
+    name = "pendulum_swingup"
+    model_file = "pendulum.xml"
+    substeps = 2  # ctrl_dt 0.02, sim_dt 0.01
+    num_obs = 3
+    num_actions = 1
+
+    def __init__(self, sim, cfg, rng) -> None:
+        super().__init__(sim, cfg, rng)
+        self.pole = self.views.body_index("pole")
+
+    def reset(self, mask) -> None:
+        self.launch(reset_pendulum, [mask, self.rng, self.views.joint_q, self.views.joint_qd])
+
+    def reward(self, rewards) -> None:
+        self.launch(pendulum_reward, [self.views.body_q, self.pole, rewards])
+
+    def observe(self, obs, reset_mask) -> None:
+        self.launch(pendulum_obs, [self.views.joint_qd, self.views.body_q, self.pole, obs])

@@ -1,0 +1,105 @@
+"""Reacher easy (Playground ``ReacherEasy``): touch a randomly placed target with the tip of a two-link arm.
+
+Observation (6): shoulder and wrist angles, target minus fingertip (x, y), joint velocities.
+Reward: 1 when the fingertip-target distance is at most 0.05 + 0.01 (target radius + fingertip radius), else 0.
+Reset: shoulder U(-pi, pi), wrist U(-160, 160) deg, zero velocity; target at radius U(0.05, 0.2), angle U(0, 2 pi),
+position radius * (sin, cos). The target is a mocap body in the file; each env keeps its own target here.
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+from tasks.dmc.rewards import GAUSSIAN, tolerance
+from tasks.dmc.task import DmcTask
+
+TARGET_RADIUS = 0.05  # easy; hard would be 0.015
+FINGER_RADIUS = 0.01
+
+
+@wp.kernel
+def reset_reacher(
+    mask: wp.array(dtype=wp.bool),
+    rng: wp.array(dtype=wp.uint32),
+    wrist_lower: float,
+    wrist_upper: float,
+    joint_q: wp.array2d(dtype=float),
+    joint_qd: wp.array2d(dtype=float),
+    target: wp.array(dtype=wp.vec2),
+):
+    i = wp.tid()
+    if not mask[i]:
+        return
+    s = rng[i]
+    joint_q[i, 0] = wp.randf(s, -wp.pi, wp.pi)
+    joint_q[i, 1] = wp.randf(s, wrist_lower, wrist_upper)
+    joint_qd[i, 0] = 0.0
+    joint_qd[i, 1] = 0.0
+    angle = wp.randf(s) * 2.0 * wp.pi
+    radius = wp.randf(s, 0.05, 0.2)
+    target[i] = radius * wp.vec2(wp.sin(angle), wp.cos(angle))
+    rng[i] = s
+
+
+@wp.func
+def finger_to_target(body_q: wp.array2d(dtype=wp.transform), i: int, finger: int, target: wp.vec2) -> wp.vec2:
+    p = wp.transform_get_translation(body_q[i, finger])
+    return target - wp.vec2(p[0], p[1])
+
+
+@wp.kernel
+def reacher_reward(
+    body_q: wp.array2d(dtype=wp.transform),
+    target: wp.array(dtype=wp.vec2),
+    finger: int,
+    reach: float,
+    rewards: wp.array(dtype=float),
+):
+    i = wp.tid()
+    dist = wp.length(finger_to_target(body_q, i, finger, target[i]))
+    rewards[i] = tolerance(dist, 0.0, reach, 0.0, GAUSSIAN, 0.1)
+
+
+@wp.kernel
+def reacher_obs(
+    joint_q: wp.array2d(dtype=float),
+    joint_qd: wp.array2d(dtype=float),
+    body_q: wp.array2d(dtype=wp.transform),
+    target: wp.array(dtype=wp.vec2),
+    finger: int,
+    obs: wp.array2d(dtype=float),
+):
+    i = wp.tid()
+    to_target = finger_to_target(body_q, i, finger, target[i])
+    obs[i, 0] = joint_q[i, 0]
+    obs[i, 1] = joint_q[i, 1]
+    obs[i, 2] = to_target[0]
+    obs[i, 3] = to_target[1]
+    obs[i, 4] = joint_qd[i, 0]
+    obs[i, 5] = joint_qd[i, 1]
+
+
+class ReacherEasy(DmcTask):
+    name = "reacher_easy"
+    model_file = "reacher_easy.xml"
+    substeps = 4  # ctrl_dt 0.02, sim_dt 0.005
+    num_obs = 6
+    num_actions = 2
+
+    def __init__(self, sim, cfg, rng) -> None:
+        super().__init__(sim, cfg, rng)
+        self.finger = self.views.body_index("finger")
+        self.target = wp.zeros(self.num_envs, dtype=wp.vec2, device=self.device)
+        self.wrist_range = (float(self.views.limit_lower.numpy()[1]), float(self.views.limit_upper.numpy()[1]))
+
+    def reset(self, mask) -> None:
+        v = self.views
+        self.launch(reset_reacher, [mask, self.rng, *self.wrist_range, v.joint_q, v.joint_qd, self.target])
+
+    def reward(self, rewards) -> None:
+        self.launch(reacher_reward, [self.views.body_q, self.target, self.finger, TARGET_RADIUS + FINGER_RADIUS,
+                                     rewards])  # fmt: skip
+
+    def observe(self, obs, reset_mask) -> None:
+        v = self.views
+        self.launch(reacher_obs, [v.joint_q, v.joint_qd, v.body_q, self.target, self.finger, obs])

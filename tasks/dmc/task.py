@@ -1,0 +1,61 @@
+"""What one DMC task adds to the shared Newton env: its model file, sizes, and reset/reward/observation kernels.
+
+A task subclass sets the class attributes and launches its kernels over the env (= world) index. Kernels read the
+simulation through ``self.views`` (per-world views of joint coordinates, body poses, controls; see
+``refpo_warp.sim.WorldViews``) and write only the arrays they are given. All launches must be graph-capturable.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import ClassVar
+
+import warp as wp
+
+from refpo_warp.sim import MuJoCoWorlds
+
+MODELS_DIR = Path(__file__).resolve().parent / "models"
+
+
+class DmcTask:
+    """Base class of the ten DMC tasks (one instance per env, built after the simulation)."""
+
+    name: ClassVar[str]
+    model_file: ClassVar[str]  # file in tasks/dmc/models/
+    substeps: ClassVar[int]  # physics steps per control step (Playground ctrl_dt / sim_dt)
+    num_obs: ClassVar[int]
+    num_actions: ClassVar[int]
+
+    def __init__(self, sim: MuJoCoWorlds, cfg, rng) -> None:
+        self.sim = sim
+        self.views = sim.views
+        self.cfg = cfg
+        self.rng = rng  # per-env uint32 random streams, advanced in place
+        self.num_envs = sim.num_worlds
+        self.device = sim.model.device
+
+    @classmethod
+    def model_path(cls) -> Path:
+        return MODELS_DIR / cls.model_file
+
+    def launch(self, kernel, inputs) -> None:
+        wp.launch(kernel, dim=self.num_envs, inputs=inputs, device=self.device)
+
+    # ------------------------------------------------------------------------------------------ task contract
+    def prepare(self) -> None:
+        """One-time work after the simulation exists and before the first reset (e.g. a bank of settled states)."""
+
+    def reset(self, mask) -> None:
+        """Write initial joint coordinates/velocities (and task state) of the envs where ``mask`` is true."""
+        raise NotImplementedError
+
+    def after_physics(self) -> None:
+        """Read solver outputs that the reward or observation needs (e.g. contact forces), after ``simulate``."""
+
+    def reward(self, rewards) -> None:
+        """Write this control step's reward of every env (from the post-physics state and clipped controls)."""
+        raise NotImplementedError
+
+    def observe(self, obs, reset_mask) -> None:
+        """Write the observation of every env; ``reset_mask`` marks envs whose state was just re-initialised."""
+        raise NotImplementedError
