@@ -47,6 +47,9 @@ HEAD_RADIUS = 0.1
 HEAD_CENTER = (0.02, 0.0, 0.09)
 HAND_LENGTH = 0.08  # fingers continue along the wrist->hand bone
 HAND_RADIUS = 0.025
+# Non-adjacent body pairs kept out of self-collision (MuJoCo already skips parent-child pairs): the trunk's three
+# short segments overlap in every pose, so Torso and Chest would push each other apart all the time.
+EXCLUDED_PAIRS = (("Torso", "Chest"),)
 
 
 def _children(body: int) -> list[int]:
@@ -136,7 +139,8 @@ def build_mjcf() -> str:
         "  </default>",
         "  <worldbody>",
     ]
-    return "\n".join(header + _body_xml(0, 2) + ["  </worldbody>", "</mujoco>", ""])
+    contact = ["  <contact>"] + [f'    <exclude body1="{a}" body2="{b}"/>' for a, b in EXCLUDED_PAIRS] + ["  </contact>"]
+    return "\n".join(header + _body_xml(0, 2) + ["  </worldbody>"] + contact + ["</mujoco>", ""])
 
 
 def main() -> None:
