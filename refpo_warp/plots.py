@@ -84,12 +84,37 @@ def diagnostic_curves(runs: dict[str, list[dict]], path: Path) -> Path:
     return path
 
 
+def figure_grid(run_dirs: list[Path], path: Path) -> Path | None:
+    """Tile the evaluation figures of several runs (rows: runs, columns: figures listed in their eval.json)."""
+    names = []
+    for run_dir in run_dirs:
+        report = Path(run_dir) / "eval.json"
+        figures = json.loads(report.read_text()).get("figures", []) if report.exists() else []
+        names.append([Path(f).name for f in figures])
+    if not names[0] or any(n != names[0] for n in names):
+        return None
+    rows, cols = len(run_dirs), len(names[0])
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 3.3 * rows), squeeze=False)
+    for r, run_dir in enumerate(run_dirs):
+        for c, name in enumerate(names[0]):
+            axes[r, c].imshow(plt.imread(Path(run_dir) / name))
+            axes[r, c].axis("off")
+        axes[r, 0].text(-0.04, 0.5, _label(Path(run_dir)), transform=axes[r, 0].transAxes, rotation=90,
+                        va="center", ha="right", fontsize=10)  # fmt: skip
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path
+
+
 def plot_runs(run_dirs: list[str | Path], out_dir: str | Path | None = None) -> list[Path]:
-    """Write ``curves_return.png`` and (for flow runs) ``curves_diagnostics.png``; default out dir: the first run."""
+    """Write ``curves_return.png``, ``curves_diagnostics.png`` (flow runs) and, when every run has the same
+    evaluation figures, ``figures_grid.png`` tiling them; default out dir: the first run's."""
     runs = {_label(Path(d)): read_progress(d) for d in run_dirs}
     out = Path(out_dir or run_dirs[0])
     out.mkdir(parents=True, exist_ok=True)
     written = [return_curves(runs, out / "curves_return.png")]
     if any(key in row for rows in runs.values() for row in rows for key, _ in DIAGNOSTICS):
         written.append(diagnostic_curves(runs, out / "curves_diagnostics.png"))
-    return written
+    grid = figure_grid([Path(d) for d in run_dirs], out / "figures_grid.png")
+    return written + ([grid] if grid else [])
