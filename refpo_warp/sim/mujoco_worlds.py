@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import warp as wp
 
 from refpo_warp.sim.mjcf_worlds import build_mjcf_worlds, mjcf_timestep
@@ -57,12 +58,28 @@ class MuJoCoWorlds:
         self.solver = newton.solvers.SolverMuJoCo(self.model, **options)
         # MuJoCo Warp prints a line per step when the (deliberately low) iteration caps of the DMC models are hit.
         self.solver.mjw_model.opt.warn_overflow = 0
+        self._use_mujoco_c_inverse_weights()
         self.state = self.model.state()
         self._scratch = self.model.state()
         self.control = self.model.control()
         self.views = make_world_views(self.model, self.state, self.control)
         self._eval_fk = newton.eval_fk
         self.forward_kinematics()
+
+    def _use_mujoco_c_inverse_weights(self) -> None:
+        """Copy MuJoCo C's inverse-weight constants into the MuJoCo Warp model.
+
+        MuJoCo Warp's ``set_const_0`` (run by ``SolverMuJoCo``) replaces a zero translational body inverse weight by
+        the rotational one (e.g. a body spinning on a hinge through its centre of mass), where MuJoCo C keeps 0.
+        Contacts on such a body then come out ~60x softer than in MuJoCo C (finger spin). The C values, compiled from
+        the same exported model, make both libraries simulate the same constraints.
+        """
+        mj, mjw = self.solver.mj_model, self.solver.mjw_model
+        for name in ("body_invweight0", "dof_invweight0", "tendon_invweight0"):
+            target, source = getattr(mjw, name), np.asarray(getattr(mj, name), dtype=np.float32)
+            if target.size:
+                shape = target.numpy().shape
+                target.assign(np.ascontiguousarray(np.broadcast_to(source.reshape(shape[1:]), shape)))
 
     @property
     def num_worlds(self) -> int:
@@ -80,6 +97,21 @@ class MuJoCoWorlds:
         if self.substeps % 2 == 1:
             # An odd count ends in the scratch state; copy back (Python-side swaps are invisible to a graph).
             self.state.assign(self._scratch)
+
+    def simulate_many(self, control_steps: int) -> None:
+        """``control_steps`` calls of ``simulate`` (e.g. to let a model settle), replayed as a graph after the first."""
+        if control_steps < 1:
+            return
+        self.simulate()
+        device = wp.get_device(self.model.device)
+        if control_steps > 1 and (device.is_cpu or device.is_mempool_enabled):
+            with wp.ScopedCapture(device=device) as capture:
+                self.simulate()
+            for _ in range(control_steps - 1):
+                wp.capture_launch(capture.graph)
+        else:
+            for _ in range(control_steps - 1):
+                self.simulate()
 
     def forward_kinematics(self) -> None:
         """Recompute body poses and velocities of all worlds from ``state.joint_q``/``joint_qd``."""

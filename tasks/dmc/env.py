@@ -138,9 +138,34 @@ class DmcEnv(WarpVecEnv):
         """Generalized velocities per env, shape (num_envs, dofs); a live view."""
         return wp.to_torch(self.sim.views.joint_qd)
 
-    def refresh_observations(self) -> None:
-        """Recompute body poses and observations after ``joint_q``/``joint_qd`` were edited (tests, figures)."""
+    def set_state(self, qpos: torch.Tensor, qvel: torch.Tensor) -> None:
+        """Put every env in a MuJoCo state (``qpos`` as MuJoCo stores it, joint ``ref`` included; ``qvel``) and
+        recompute its observations; episode counters are kept (tests, figures, MuJoCo C comparisons)."""
+        v = self.sim.views
+        qpos = torch.as_tensor(qpos, dtype=torch.float32, device=self.device).reshape(v.joint_q.shape)
+        qvel = torch.as_tensor(qvel, dtype=torch.float32, device=self.device).reshape(v.joint_qd.shape)
+        self.joint_q.copy_(qpos - wp.to_torch(v.coord_ref))
+        self.joint_qd.copy_(qvel)
         with wp.ScopedDevice(self.wp_device):
-            self.sim.forward_kinematics()
-            self._reset_mask.zero_()
+            self._reset_mask.fill_(True)
+            self.sim.after_reset(self._reset_mask)
             self.task.observe(self.buffers.obs["policy"], self._reset_mask)
+            self._reset_mask.zero_()
+
+    @property
+    def qpos(self) -> torch.Tensor:
+        """MuJoCo generalized positions per env (joint ``ref`` included), shape (num_envs, nq); a copy."""
+        return self.joint_q + wp.to_torch(self.sim.views.coord_ref)
+
+    def compute_rewards(self, actions: torch.Tensor) -> torch.Tensor:
+        """Rewards of the current states under ``actions`` (clipped as in a step), without stepping.
+
+        Contact-based inputs (finger touch) keep their last values; use after ``set_state`` (tests, figures).
+        """
+        out = torch.zeros(self.num_envs, device=self.device)
+        actions = actions.to(self.device, torch.float32).reshape(self.num_envs, self.num_actions).contiguous()
+        with wp.ScopedDevice(self.wp_device):
+            wp.launch(apply_actions, dim=(self.num_envs, self.num_actions),
+                      inputs=[wp.from_torch(actions), self.sim.views.ctrl])  # fmt: skip
+            self.task.reward(wp.from_torch(out))
+        return out
