@@ -30,7 +30,8 @@ def sim_bodies(env):
 
 
 def frames(ref):
-    return [np.asarray(getattr(ref, k).numpy(), np.float64) for k in ("body_pos", "body_rot", "body_vel", "body_angvel")]
+    keys = ("body_pos", "body_rot", "body_vel", "body_angvel")
+    return [np.asarray(getattr(ref, k).numpy(), np.float64) for k in keys]
 
 
 def heading_inverse(q):
@@ -59,7 +60,8 @@ def numpy_observation(pos, rot, vel, omega, rpos, rrot, rvel, romega):
 def numpy_imitation_reward(pos, rot, vel, omega, rpos, rrot, rvel, romega):
     angle = np.linalg.norm(quat_to_axis_angle(quat_mul(rrot, quat_conjugate(rot))), axis=-1)
     return (0.5 * np.exp(-100 * np.mean((rpos - pos) ** 2)) + 0.3 * np.exp(-10 * np.mean(angle**2))
-            + 0.1 * np.exp(-0.1 * np.mean((rvel - vel) ** 2)) + 0.1 * np.exp(-0.1 * np.mean((romega - omega) ** 2)))  # fmt: skip
+            + 0.1 * np.exp(-0.1 * np.mean((rvel - vel) ** 2))
+            + 0.1 * np.exp(-0.1 * np.mean((romega - omega) ** 2)))
 
 
 def set_sim_to_reference(env, ref):

@@ -6,7 +6,7 @@ _ENV = "tasks.humanoid.env:HumanoidTrackingEnv"
 
 register_task("humanoid_all", _ENV, description="SMPL humanoid tracking, every body's targets observed",
               conditioning="all")
-register_task("humanoid_root_hands", _ENV, description="SMPL humanoid tracking, only pelvis and wrist positions observed",
-              conditioning="root_hands")
+register_task("humanoid_root_hands", _ENV,
+              description="SMPL humanoid tracking, only pelvis and wrist positions observed", conditioning="root_hands")
 register_task("humanoid_root", _ENV, description="SMPL humanoid tracking, only the pelvis position observed",
               conditioning="root")

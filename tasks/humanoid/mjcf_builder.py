@@ -139,7 +139,8 @@ def build_mjcf() -> str:
         "  </default>",
         "  <worldbody>",
     ]
-    contact = ["  <contact>"] + [f'    <exclude body1="{a}" body2="{b}"/>' for a, b in EXCLUDED_PAIRS] + ["  </contact>"]
+    excludes = [f'    <exclude body1="{a}" body2="{b}"/>' for a, b in EXCLUDED_PAIRS]
+    contact = ["  <contact>", *excludes, "  </contact>"]
     return "\n".join(header + _body_xml(0, 2) + ["  </worldbody>"] + contact + ["</mujoco>", ""])
 
 
