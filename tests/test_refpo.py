@@ -132,3 +132,12 @@ def test_unsupported_extensions_are_refused():
         ReFPO(actor, critic, storage, symmetry_cfg={"use_data_augmentation": True})
     with pytest.raises(TypeError, match="FlowActor"):
         ReFPO(critic, critic, storage)
+
+
+def test_clipped_value_loss_uses_its_own_clip_range():
+    alg, _ = make_refpo(clip_param=0.01, value_clip_param=0.2, use_clipped_value_loss=True)
+    old, ret = torch.tensor([0.0, 0.0]), torch.tensor([1.0, -1.0])
+    values = torch.tensor([0.5, 0.1])
+    # clipped values: 0.2 and 0.1 -> per-sample max of (0.25, 0.64) and (1.21, 1.21) -> mean 0.925
+    assert alg.value_loss(values, old, ret).item() == pytest.approx(0.925)
+    assert make_refpo(clip_param=0.3)[0].value_clip_param == 0.3  # default: rsl_rl's behaviour

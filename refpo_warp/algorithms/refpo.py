@@ -54,6 +54,8 @@ class ReFPO(PPO):
         ratio_mode: ``"mean"`` (average the K losses before the exp) or ``"per_sample"``.
         log_ratio_clip: Clamp for the log-ratio (None: no clamp).
         explosion_threshold: |L_new - L_old| above which a sample counts towards the Explosion Rate.
+        value_clip_param: Clip range of the clipped value loss (None: ``clip_param``, as in rsl_rl's PPO). The
+            reference humanoid setup clips the ratio at 0.01 but the value at 0.2.
         reward_scale: Multiplier on rewards for learning (Brax-style; logged returns stay unscaled).
     """
 
@@ -69,6 +71,7 @@ class ReFPO(PPO):
         ratio_mode: str = "mean",
         log_ratio_clip: float | None = None,
         explosion_threshold: float = 3.0,
+        value_clip_param: float | None = None,
         **ppo_kwargs,
     ) -> None:
         for name in ("rnd_cfg", "symmetry_cfg"):
@@ -102,6 +105,7 @@ class ReFPO(PPO):
         self.ratio_mode = ratio_mode
         self.log_ratio_clip = None if log_ratio_clip is None else float(log_ratio_clip)
         self.explosion_threshold = float(explosion_threshold)
+        self.value_clip_param = self.clip_param if value_clip_param is None else float(value_clip_param)
 
     # ---------------------------------------------------------------------------------------------- rollout
     def sample_pairs(self, batch: int, device) -> tuple[torch.Tensor, torch.Tensor]:
@@ -155,7 +159,7 @@ class ReFPO(PPO):
 
     def value_loss(self, values: torch.Tensor, old_values: torch.Tensor, returns: torch.Tensor) -> torch.Tensor:
         if self.use_clipped_value_loss:
-            clipped = old_values + (values - old_values).clamp(-self.clip_param, self.clip_param)
+            clipped = old_values + (values - old_values).clamp(-self.value_clip_param, self.value_clip_param)
             return torch.max((values - returns).pow(2), (clipped - returns).pow(2)).mean()
         return (returns - values).pow(2).mean()
 
