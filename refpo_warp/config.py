@@ -6,7 +6,8 @@ command-line overrides. Task and algo files hold deltas only.
 
 Keys are validated where they are consumed: ``env.*`` against the task's env cfg dataclass, ``actor.*``,
 ``critic.*`` and ``algorithm.*`` against the constructor of the class their ``class_name`` selects, and every other
-key against ``default.yaml``. An unknown key is an error that names the closest valid one.
+key against ``default.yaml``. An unknown key is an error that names the closest valid one. Env options may also be
+given without their ``env.`` prefix (``motion_file=...``).
 """
 
 from __future__ import annotations
@@ -228,6 +229,13 @@ def resolve_config(overrides: list[str] | dict[str, Any] | None = None, device_t
         raise unknown("task", task, list_tasks())
     if algo not in _choices("algo"):
         raise unknown("algo", algo, _choices("algo"))
+
+    # Env options may be given without the "env." prefix (e.g. motion_file=clips/ or conditioning=root).
+    from refpo_warp.registry import get_task
+
+    env_fields = {f.name for f in dataclasses.fields(get_task(task).env_class().cfg_class)}
+    for key in [k for k in flat if "." not in k and k not in defaults and k in env_fields]:
+        flat[f"env.{key}"] = flat.pop(key)
 
     task_cfg = _task_layers(task)
     cfg = merge(defaults, load_yaml(CONFIG_DIR / "algo" / f"{algo}.yaml"))

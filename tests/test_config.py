@@ -75,3 +75,10 @@ def test_cli_lists_tasks():
     proc = subprocess.run([sys.executable, "tools/train.py", "--tasks"], cwd=ROOT, capture_output=True, text=True,
                           timeout=120)  # fmt: skip
     assert proc.returncode == 0 and "gridworld" in proc.stdout
+
+
+def test_env_options_need_no_prefix():
+    cfg = resolve_config(["task=gridworld", "size=11", "max_episode_length=50"], device_type="cpu")
+    assert cfg["env"] == {"size": 11, "max_episode_length": 50}
+    cfg = resolve_config(["task=humanoid_root", "motion_file=clips/"], device_type="cpu")
+    assert cfg["env"]["motion_file"] == "clips/"
