@@ -51,7 +51,8 @@ def test_sizes_and_timing(task):
 # (MuJoCo qpos, qvel, action, hand-worked reward) per task. Derivations in the comments.
 HAND_WORKED = {
     "cartpole_balance": [
-        # upright (cos .3 + 1)/2, centered (1 + g(.5/2))/2, small_control (4 + 1 - .5^2)/5, small_velocity (1 + g(2/5))/2
+        # upright (cos .3 + 1)/2, centered (1 + g(.5/2))/2, small_control (4 + 1 - .5^2)/5,
+        # small_velocity (1 + g(2/5))/2
         ((0.5, 0.3), (0.1, 2.0), (0.5,), (math.cos(0.3) + 1) / 2 * (1 + g(0.25)) / 2 * 0.95 * (1 + g(0.4)) / 2),
         # an action beyond the range is clipped to 1: small_control (4 + 0)/5
         ((0.5, 0.3), (0.1, 2.0), (2.0,), (math.cos(0.3) + 1) / 2 * (1 + g(0.25)) / 2 * 0.8 * (1 + g(0.4)) / 2),

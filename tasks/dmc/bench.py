@@ -1,0 +1,121 @@
+"""DMC benchmark: env steps per second of every task vs the MuJoCo C library stepping the same model.
+
+    python tools/bench.py dmc [--num-envs N] [--device auto] [--tasks cartpole_balance,walker_walk] [--seconds 3]
+
+Ours: the task's Warp env (Newton + MuJoCo Warp), uniform random actions in [-1, 1], timed after warm-up steps (the
+step is replayed as a captured graph: a CUDA graph on GPU, a Warp CPU graph on CPU); one env step = the task's
+physics substeps plus rewards, resets and observations. Default: 256 envs on CPU, 4096 on CUDA.
+MuJoCo C: the same MJCF file loaded with ``mujoco.MjModel.from_xml_path``, the same number of worlds started from
+the env's reset states, each control held for the same substeps. ``C rollout`` is ``mujoco.rollout`` with one
+thread (Warp's CPU backend also runs one thread), ``C loop`` a Python loop of ``mj_step(model, data, substeps)`` over
+one ``MjData`` per world. Physics only: no observation or reward work on the C side.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+import torch
+
+from refpo_warp.benchmarking import env_steps_per_second, print_table
+from refpo_warp.device import resolve_device
+from refpo_warp.registry import make_env
+
+
+def _timed_steps(seconds: float, steps_per_second_guess: float, minimum: int = 10) -> int:
+    return max(minimum, int(seconds * steps_per_second_guess))
+
+
+def ours(task: str, num_envs: int, device: str, seconds: float) -> tuple[float, object]:
+    env = make_env(f"dmc_{task}", num_envs=num_envs, device=device, seed=0)
+    probe = env_steps_per_second(env, steps=5, warmup=3)  # also warms up (compile, graph capture)
+    steps = _timed_steps(seconds, probe / num_envs)
+    return env_steps_per_second(env, steps=steps, warmup=0), env
+
+
+def _initial_states(env, model):
+    import mujoco
+
+    qpos, qvel = env.qpos.cpu().numpy(), env.joint_qd.cpu().numpy()
+    data = mujoco.MjData(model)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    states = np.zeros((env.num_envs, mujoco.mj_stateSize(model, spec)))
+    for i in range(env.num_envs):
+        data.qpos[:], data.qvel[:] = qpos[i], qvel[i]
+        mujoco.mj_getState(model, data, states[i], spec)
+    return states
+
+
+def mujoco_c(env, seconds: float) -> tuple[float, float]:
+    """(rollout, Python loop) env steps per second of MuJoCo C for ``env``'s model, worlds and substeps."""
+    import mujoco
+    from mujoco import rollout
+
+    model = mujoco.MjModel.from_xml_path(str(env.task.model_path()))
+    substeps, n = env.task.substeps, env.num_envs
+    states = _initial_states(env, model)
+    rng = np.random.default_rng(0)
+
+    def run_rollout(control_steps: int) -> float:
+        controls = rng.uniform(-1, 1, size=(n, control_steps, model.nu))
+        controls = np.repeat(controls, substeps, axis=1)  # hold each control for the task's substeps
+        start = time.perf_counter()
+        rollout.rollout(model, mujoco.MjData(model), states, controls, nstep=control_steps * substeps)
+        return control_steps * n / (time.perf_counter() - start)
+
+    datas = [mujoco.MjData(model) for _ in range(n)]
+    for data, state in zip(datas, states):
+        mujoco.mj_setState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+
+    def run_loop(control_steps: int) -> float:
+        controls = rng.uniform(-1, 1, size=(control_steps, n, model.nu))
+        start = time.perf_counter()
+        for k in range(control_steps):
+            for data, ctrl in zip(datas, controls[k]):
+                data.ctrl[:] = ctrl
+                mujoco.mj_step(model, data, substeps)
+        return control_steps * n / (time.perf_counter() - start)
+
+    rollout_rate = run_rollout(_timed_steps(seconds, run_rollout(2) / n, minimum=2))
+    loop_rate = run_loop(_timed_steps(seconds, run_loop(2) / n, minimum=2))
+    return rollout_rate, loop_rate
+
+
+def main(argv: list[str]) -> None:
+    from tasks.dmc.suite import TASKS
+
+    parser = argparse.ArgumentParser(prog="tools/bench.py dmc", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--device", default="auto")
+    parser.add_argument("--num-envs", type=int, default=None, help="default: 256 on CPU, 4096 on CUDA")
+    parser.add_argument("--tasks", default=",".join(TASKS), help="comma-separated suite names")
+    parser.add_argument("--seconds", type=float, default=3.0, help="approximate timing window per measurement")
+    parser.add_argument("--no-mujoco-c", action="store_true", help="skip the MuJoCo C comparison")
+    args = parser.parse_args(argv)
+
+    device = resolve_device(args.device)
+    num_envs = args.num_envs or (256 if device == "cpu" else 4096)
+    tasks = [t.strip() for t in args.tasks.split(",") if t.strip()]
+    unknown = [t for t in tasks if t not in TASKS]
+    if unknown:
+        raise SystemExit(f"unknown DMC task(s) {unknown}; choose from {', '.join(TASKS)}")
+    torch.manual_seed(0)
+    print(f"DMC env steps/s on {device}: {num_envs} envs, random actions, graph-captured step"
+          + ("" if args.no_mujoco_c else "; MuJoCo C on the same model and number of worlds (1 thread)"), flush=True)
+    rows = []
+    for task in tasks:
+        rate, env = ours(task, num_envs, device, args.seconds)
+        row = {"task": task, "substeps": env.task.substeps, "ours (env steps/s)": f"{rate:,.0f}"}
+        if not args.no_mujoco_c:
+            c_rollout, c_loop = mujoco_c(env, args.seconds)
+            row.update({"C rollout": f"{c_rollout:,.0f}", "ours / C rollout": f"{rate / c_rollout:.2f}",
+                        "C loop": f"{c_loop:,.0f}", "ours / C loop": f"{rate / c_loop:.2f}"})  # fmt: skip
+        rows.append(row)
+        print(f"  {task}: {row}", flush=True)
+        del env
+    print()
+    columns = ["task", "substeps", "ours (env steps/s)"]
+    if not args.no_mujoco_c:
+        columns += ["C rollout", "ours / C rollout", "C loop", "ours / C loop"]
+    print_table(rows, columns)
