@@ -8,6 +8,8 @@ Reset: both joint angles U(-pi, pi), zero velocity.
 
 from __future__ import annotations
 
+import math
+
 import warp as wp
 
 from tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, tolerance
@@ -16,22 +18,6 @@ from tasks.dmc.task import DmcTask
 TARGET = wp.constant(wp.vec3(0.0, 0.0, 4.0))  # target site (world frame)
 TARGET_RADIUS = wp.constant(0.2)
 TIP = wp.constant(wp.vec3(0.0, 0.0, 1.0))  # tip site in the lower-arm frame
-
-
-@wp.kernel
-def reset_acrobot(
-    mask: wp.array(dtype=wp.bool),
-    rng: wp.array(dtype=wp.uint32),
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-):
-    i = wp.tid()
-    if mask[i]:
-        s = rng[i]
-        for j in range(2):
-            joint_q[i, j] = wp.randf(s, -wp.pi, wp.pi)
-            joint_qd[i, j] = 0.0
-        rng[i] = s
 
 
 @wp.kernel
@@ -71,9 +57,10 @@ class AcrobotSwingup(DmcTask):
         super().__init__(sim, cfg, rng)
         self.upper = self.views.body_index("upper_arm")
         self.lower = self.views.body_index("lower_arm")
+        self.reset_ranges = self.uniform_ranges([-math.pi] * 2, [math.pi] * 2)
 
     def reset(self, mask) -> None:
-        self.launch(reset_acrobot, [mask, self.rng, self.views.joint_q, self.views.joint_qd])
+        self.reset_uniform_joints(mask, self.reset_ranges)
 
     def reward(self, rewards) -> None:
         self.launch(acrobot_reward, [self.views.body_q, self.lower, rewards])

@@ -25,22 +25,6 @@ NUM_ROOT = 3  # rootx, rootz, rooty
 
 
 @wp.kernel
-def sample_leg_angles(
-    rng: wp.array(dtype=wp.uint32),
-    lower: wp.array(dtype=float),
-    upper: wp.array(dtype=float),
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-):
-    i = wp.tid()
-    s = rng[i]
-    for j in range(joint_q.shape[1]):
-        joint_q[i, j] = wp.where(j < NUM_ROOT, 0.0, wp.randf(s, lower[j], upper[j]))
-        joint_qd[i, j] = 0.0
-    rng[i] = s
-
-
-@wp.kernel
 def reset_from_bank(
     mask: wp.array(dtype=wp.bool),
     rng: wp.array(dtype=wp.uint32),
@@ -92,9 +76,12 @@ class CheetahRun(DmcTask):
         bank_q = torch.zeros(rounds * n, v.joint_q.shape[1], device=wp.device_to_torch(self.device))
         bank_qd = torch.zeros(rounds * n, v.joint_qd.shape[1], device=bank_q.device)
         everyone = wp.ones(n, dtype=wp.bool, device=self.device)
+        lower, upper = self.joint_limits()  # the six leg joints within their limits, the root at zero
+        lower[:NUM_ROOT], upper[:NUM_ROOT] = 0.0, 0.0
+        leg_ranges = self.uniform_ranges(lower, upper)
         wp.to_torch(v.ctrl).zero_()
         for r in range(rounds):
-            self.launch(sample_leg_angles, [self.rng, v.limit_lower, v.limit_upper, v.joint_q, v.joint_qd])
+            self.reset_uniform_joints(everyone, leg_ranges)
             sim.after_reset(everyone)
             sim.simulate_many(SETTLE_STEPS // self.substeps)
             bank_q[r * n : (r + 1) * n] = wp.to_torch(v.joint_q)

@@ -12,6 +12,8 @@ solver's contact data of the last physics substep (as MuJoCo's sensor data is); 
 
 from __future__ import annotations
 
+import math
+
 import warp as wp
 
 from tasks.dmc.task import DmcTask
@@ -89,26 +91,6 @@ def accumulate_touch(
 
 
 @wp.kernel
-def reset_finger(
-    mask: wp.array(dtype=wp.bool),
-    rng: wp.array(dtype=wp.uint32),
-    lower: wp.array(dtype=float),
-    upper: wp.array(dtype=float),
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-):
-    i = wp.tid()
-    if mask[i]:
-        s = rng[i]
-        joint_q[i, 0] = wp.randf(s, lower[0], upper[0])  # limits are in Newton coordinates (qpos - ref)
-        joint_q[i, 1] = wp.randf(s, lower[1], upper[1])
-        joint_q[i, 2] = wp.randf(s, -wp.pi, wp.pi)
-        for j in range(3):
-            joint_qd[i, j] = 0.0
-        rng[i] = s
-
-
-@wp.kernel
 def finger_reward(joint_qd: wp.array2d(dtype=float), rewards: wp.array(dtype=float)):
     i = wp.tid()
     rewards[i] = wp.where(joint_qd[i, 2] <= -SPIN_VELOCITY, 1.0, 0.0)
@@ -153,10 +135,12 @@ class FingerSpin(DmcTask):
         self.mj_distal = int(list(mj_to_newton).index(newton_distal))
         self.touch = wp.zeros((self.num_envs, 2), dtype=float, device=self.device)
         self.pyramidal = int(sim.solver.mj_model.opt.cone == 0)
+        lower, upper = self.joint_limits()  # the two finger joints within their limits (Newton coordinates)
+        lower[2], upper[2] = -math.pi, math.pi  # the spinner anywhere
+        self.reset_ranges = self.uniform_ranges(lower, upper)
 
     def reset(self, mask) -> None:
-        v = self.views
-        self.launch(reset_finger, [mask, self.rng, v.limit_lower, v.limit_upper, v.joint_q, v.joint_qd])
+        self.reset_uniform_joints(mask, self.reset_ranges)
 
     def after_physics(self) -> None:
         d, m = self.sim.solver.mjw_data, self.sim.solver.mjw_model

@@ -17,24 +17,6 @@ TARGET_RADIUS = wp.constant(0.015)  # the target geom; it sits at the origin, at
 
 
 @wp.kernel
-def reset_point_mass(
-    mask: wp.array(dtype=wp.bool),
-    rng: wp.array(dtype=wp.uint32),
-    lower: wp.array(dtype=float),
-    upper: wp.array(dtype=float),
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-):
-    i = wp.tid()
-    if mask[i]:
-        s = rng[i]
-        for j in range(2):
-            joint_q[i, j] = wp.randf(s, lower[j], upper[j])
-            joint_qd[i, j] = 0.0
-        rng[i] = s
-
-
-@wp.kernel
 def point_mass_reward(
     body_q: wp.array2d(dtype=wp.transform), ctrl: wp.array2d(dtype=float), mass: int, rewards: wp.array(dtype=float)
 ):
@@ -64,10 +46,10 @@ class PointMass(DmcTask):
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)
         self.mass = self.views.body_index("pointmass")
+        self.reset_ranges = self.uniform_ranges(*self.joint_limits())
 
     def reset(self, mask) -> None:
-        v = self.views
-        self.launch(reset_point_mass, [mask, self.rng, v.limit_lower, v.limit_upper, v.joint_q, v.joint_qd])
+        self.reset_uniform_joints(mask, self.reset_ranges)
 
     def reward(self, rewards) -> None:
         self.launch(point_mass_reward, [self.views.body_q, self.views.ctrl, self.mass, rewards])

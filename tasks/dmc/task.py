@@ -10,11 +10,31 @@ from __future__ import annotations
 from pathlib import Path
 from typing import ClassVar
 
+import numpy as np
 import warp as wp
 
 from refpo_warp.sim import MuJoCoWorlds
 
 MODELS_DIR = Path(__file__).resolve().parent / "models"
+
+
+@wp.kernel
+def reset_uniform(
+    mask: wp.array(dtype=wp.bool),
+    rng: wp.array(dtype=wp.uint32),
+    lower: wp.array(dtype=float),
+    upper: wp.array(dtype=float),
+    joint_q: wp.array2d(dtype=float),
+    joint_qd: wp.array2d(dtype=float),
+):
+    """Joint coordinate j ~ U(lower[j], upper[j]) (exactly lower[j] where the two are equal), zero velocities."""
+    i = wp.tid()
+    if mask[i]:
+        s = rng[i]
+        for j in range(joint_q.shape[1]):
+            joint_q[i, j] = wp.randf(s, lower[j], upper[j])
+            joint_qd[i, j] = 0.0
+        rng[i] = s
 
 
 class DmcTask:
@@ -40,6 +60,20 @@ class DmcTask:
 
     def launch(self, kernel, inputs) -> None:
         wp.launch(kernel, dim=self.num_envs, inputs=inputs, device=self.device)
+
+    def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Copies of the joint limits (Newton coordinates, i.e. qpos - ref), to edit into reset ranges."""
+        return self.views.limit_lower.numpy().copy(), self.views.limit_upper.numpy().copy()
+
+    def uniform_ranges(self, lower, upper) -> tuple[wp.array, wp.array]:
+        """Per-joint reset ranges for ``reset_uniform_joints`` (one entry per joint coordinate)."""
+        return (wp.array(np.asarray(lower, dtype=np.float32), dtype=float, device=self.device),
+                wp.array(np.asarray(upper, dtype=np.float32), dtype=float, device=self.device))  # fmt: skip
+
+    def reset_uniform_joints(self, mask, ranges: tuple[wp.array, wp.array]) -> None:
+        """Draw every joint coordinate of the masked envs uniformly in ``ranges``; zero their velocities."""
+        v = self.views
+        self.launch(reset_uniform, [mask, self.rng, ranges[0], ranges[1], v.joint_q, v.joint_qd])
 
     # ------------------------------------------------------------------------------------------ task contract
     def prepare(self) -> None:

@@ -10,6 +10,8 @@ Reset: rooty U(-pi, pi), the six leg joints U(joint range), root x/z at zero, ze
 
 from __future__ import annotations
 
+import math
+
 import warp as wp
 
 from refpo_warp.sim import world_com_velocity
@@ -20,30 +22,6 @@ STAND_HEIGHT = wp.constant(1.2)
 WALK_SPEED = wp.constant(1.0)
 BODIES = ("torso", "right_thigh", "right_leg", "right_foot", "left_thigh", "left_leg", "left_foot")
 ROOT_PITCH = 2  # joint order: rootz, rootx, rooty, then the six leg hinges
-
-
-@wp.kernel
-def reset_walker(
-    mask: wp.array(dtype=wp.bool),
-    rng: wp.array(dtype=wp.uint32),
-    lower: wp.array(dtype=float),
-    upper: wp.array(dtype=float),
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-):
-    i = wp.tid()
-    if not mask[i]:
-        return
-    s = rng[i]
-    for j in range(joint_q.shape[1]):
-        value = float(0.0)
-        if j == ROOT_PITCH:
-            value = wp.randf(s, -wp.pi, wp.pi)
-        elif j > ROOT_PITCH:
-            value = wp.randf(s, lower[j], upper[j])
-        joint_q[i, j] = value
-        joint_qd[i, j] = 0.0
-    rng[i] = s
 
 
 @wp.kernel
@@ -95,10 +73,13 @@ class WalkerWalk(DmcTask):
         super().__init__(sim, cfg, rng)
         self.bodies = wp.array([self.views.body_index(b) for b in BODIES], dtype=int, device=self.device)
         self.torso = self.views.body_index("torso")
+        lower, upper = self.joint_limits()  # the six leg hinges within their limits
+        lower[:ROOT_PITCH], upper[:ROOT_PITCH] = 0.0, 0.0  # root height and x offsets at the model's origin
+        lower[ROOT_PITCH], upper[ROOT_PITCH] = -math.pi, math.pi
+        self.reset_ranges = self.uniform_ranges(lower, upper)
 
     def reset(self, mask) -> None:
-        v = self.views
-        self.launch(reset_walker, [mask, self.rng, v.limit_lower, v.limit_upper, v.joint_q, v.joint_qd])
+        self.reset_uniform_joints(mask, self.reset_ranges)
 
     def reward(self, rewards) -> None:
         v = self.views
