@@ -130,7 +130,7 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         checkpoint = Path(checkpoint) if checkpoint else latest_checkpoint(run_dir)
         if checkpoint is None:
             raise FileNotFoundError(f"No checkpoint (model_*.pt) in {run_dir}")
-        _, runner = build_runner(cfg, None, num_envs=env.num_envs)
+        _, runner = build_runner(cfg, None, env=env)
         runner.load(str(checkpoint), map_location=runner.device)
     actor = runner.get_inference_policy(device=runner.device)
     results = {

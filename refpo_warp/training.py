@@ -80,11 +80,11 @@ def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
     return resolve_config(flat)
 
 
-def build_runner(cfg: dict, log_dir: Path | None, num_envs: int | None = None, env_overrides: dict | None = None):
-    """Env + rsl_rl runner (with our extensions) for a resolved config."""
+def build_runner(cfg: dict, log_dir: Path | None, env=None):
+    """Env + rsl_rl runner (with our extensions) for a resolved config; ``env`` hosts the runner instead of a new one."""
     device = resolve_device(cfg["device"])
-    env = make_env(cfg["task"], num_envs=num_envs or cfg["num_envs"], device=device, seed=cfg["seed"],
-                   **{**cfg["env"], **(env_overrides or {})})  # fmt: skip
+    if env is None:
+        env = make_env(cfg["task"], num_envs=cfg["num_envs"], device=device, seed=cfg["seed"], **cfg["env"])
     runner = Runner(env, rsl_rl_config(cfg), log_dir=str(log_dir) if log_dir else None, device=device,
                     log_full=cfg["runner"]["log_full"])  # fmt: skip
     return env, runner
