@@ -175,15 +175,10 @@ def periodic_evaluator(cfg: dict, runner):
         actor = runner.alg.get_policy()
         was_training = actor.training
         actor.eval()
-        out = {}
-        if is_flow(actor):
-            for n in cfg["eval"]["interval_flow_steps"]:
-                episodes = run_episodes(make_policy(actor, n, cfg["eval"]["stochastic"]), env,
-                                        max_steps=cfg["eval"]["max_steps"])  # fmt: skip
-                out[f"eval/return_N{n}"] = float(episodes["return"].mean())
-        else:
-            out["eval/return"] = float(run_episodes(make_policy(actor, None, False), env)["return"].mean())
+        results = evaluate_actor(cfg, actor, env, cfg["eval"]["interval_flow_steps"])
         actor.train(was_training)
-        return out
+        keys = {f"N={n}": f"eval/return_N{n}" for n in cfg["eval"]["interval_flow_steps"]}
+        keys["mean_action"] = "eval/return"
+        return {keys[name]: summary.get("return_mean", float("nan")) for name, summary in results.items()}
 
     return evaluate
