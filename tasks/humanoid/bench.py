@@ -1,8 +1,8 @@
 """Env-stepping throughput of the humanoid tracking env: ``python tools/bench.py humanoid [--num-envs N] ...``.
 
-Random actions in [-1, 1] (fresh each step), after warm-up steps (the first step compiles kernels and captures the
-step graph); counts env steps per second including resets of finished episodes. Defaults: 64 envs on CPU, 4096 on
-CUDA.
+Timed with ``refpo_warp.benchmarking.env_steps_per_second``: uniform random actions in [-1, 1] drawn ahead of time,
+after warm-up steps (the first step compiles kernels and captures the step graph); counts env steps per second
+including resets of finished episodes. Defaults: 64 envs on CPU, 4096 on CUDA.
 """
 
 from __future__ import annotations
@@ -13,8 +13,22 @@ import time
 
 import torch
 
+from refpo_warp.benchmarking import env_steps_per_second
 from refpo_warp.device import resolve_device
 from refpo_warp.registry import make_env
+
+
+class _CountEpisodes:
+    """The env's stepping interface, adding each step's finished episodes to a device counter (no host sync)."""
+
+    def __init__(self, env) -> None:
+        self.env, self.device, self.num_envs, self.num_actions = env, env.device, env.num_envs, env.num_actions
+        self.ended = torch.zeros((), dtype=torch.int64, device=env.device)
+
+    def step(self, actions: torch.Tensor):
+        out = self.env.step(actions)
+        self.ended += out[2].sum()
+        return out
 
 
 def measure(task: str, num_envs: int, device: str, steps: int, warmup: int, seed: int = 0, **env_cfg) -> dict:
@@ -22,29 +36,16 @@ def measure(task: str, num_envs: int, device: str, steps: int, warmup: int, seed
     start = time.perf_counter()
     env = make_env(task, num_envs=num_envs, device=device, seed=seed, **env_cfg)
     build_s = time.perf_counter() - start
-    generator = torch.Generator(device=env.device).manual_seed(seed)
-
-    def actions():
-        return torch.rand(num_envs, env.num_actions, device=env.device, generator=generator) * 2.0 - 1.0
-
     start = time.perf_counter()
-    for _ in range(warmup):
-        env.step(actions())
+    if warmup > 0:
+        env_steps_per_second(env, steps=warmup, warmup=0, seed=seed)
     warmup_s = time.perf_counter() - start
-    dones = 0
-    if env.device.startswith("cuda"):
-        torch.cuda.synchronize()
-    start = time.perf_counter()
-    for _ in range(steps):
-        _, _, done, _ = env.step(actions())
-        dones += int(done.sum())
-    if env.device.startswith("cuda"):
-        torch.cuda.synchronize()
-    elapsed = time.perf_counter() - start
+    counted = _CountEpisodes(env)
+    rate = env_steps_per_second(counted, steps=steps, warmup=0, seed=seed)
     return {
         "task": task, "device": env.device, "num_envs": num_envs, "steps": steps,
-        "env_steps_per_s": num_envs * steps / elapsed, "ms_per_step": 1e3 * elapsed / steps,
-        "episodes_ended": dones, "build_s": build_s, "warmup_s": warmup_s,
+        "env_steps_per_s": rate, "ms_per_step": 1e3 * num_envs / rate,
+        "episodes_ended": int(counted.ended), "build_s": build_s, "warmup_s": warmup_s,
         "graph_captured": env._graph is not None,
     }  # fmt: skip
 
