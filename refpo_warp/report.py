@@ -38,15 +38,7 @@ def make_policy(actor, flow_steps: int | None, stochastic: bool):
     if not is_flow(actor):
         return lambda obs: actor(obs)
 
-    def policy(obs):
-        previous = actor.num_flow_steps
-        actor.num_flow_steps = flow_steps
-        try:
-            return actor(obs, stochastic_output=stochastic)
-        finally:
-            actor.num_flow_steps = previous
-
-    return policy
+    return lambda obs: actor(obs, stochastic_output=stochastic, num_steps=flow_steps)
 
 
 def eval_num_envs(cfg: dict, interval: bool = False) -> int:

@@ -86,19 +86,18 @@ class FlowActor(nn.Module):
         n = int(num_steps or self.num_flow_steps)
         if n < 1:
             raise ValueError(f"num_flow_steps must be >= 1, got {n}")
-        obs_feat = self.velocity.project_obs(obs_norm)
-        x, dt = noise, 1.0 / n
-        for k in range(n):
-            tau = torch.full(x.shape[:-1], k * dt, device=x.device, dtype=x.dtype)
-            x = x + dt * self.velocity(obs_feat, x, tau)
-        return x
+        return self.velocity.integrate(self.velocity.project_obs(obs_norm), noise, n)
 
-    def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False) -> torch.Tensor:
-        """Sample actions; deterministic output integrates from zero noise (the flow's 'mode' for export)."""
+    def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False,
+                num_steps: int | None = None) -> torch.Tensor:  # fmt: skip
+        """Sample actions; deterministic output integrates from zero noise (the flow's 'mode' for export).
+
+        ``num_steps`` overrides ``num_flow_steps`` for this call (e.g. evaluating at N = 1).
+        """
         obs_norm = self.encode(obs)
         shape = (obs_norm.shape[0], self.action_dim)
         noise = torch.randn(shape, device=obs_norm.device) if stochastic_output else obs_norm.new_zeros(shape)
-        actions = self.integrate(obs_norm, noise)
+        actions = self.integrate(obs_norm, noise, num_steps)
         if stochastic_output and self.action_noise_std > 0:
             actions = actions + self.action_noise_std * torch.randn_like(actions)
         self._last_actions = actions.detach()
@@ -187,12 +186,7 @@ class FlowSampler(nn.Module):
 
     def forward(self, obs: torch.Tensor, noise: torch.Tensor | None = None) -> torch.Tensor:
         x = torch.zeros(obs.shape[0], self.action_dim, device=obs.device) if noise is None else noise
-        obs_feat = self.velocity.project_obs(self.obs_normalizer(obs))
-        dt = 1.0 / self.num_steps
-        for k in range(self.num_steps):
-            tau = torch.full([obs.shape[0]], k * dt, device=obs.device)
-            x = x + dt * self.velocity(obs_feat, x, tau)
-        return x
+        return self.velocity.integrate(self.velocity.project_obs(self.obs_normalizer(obs)), x, self.num_steps)
 
     @torch.jit.export
     def reset(self) -> None:

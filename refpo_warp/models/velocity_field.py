@@ -64,3 +64,12 @@ class VelocityField(nn.Module):
         else:
             h = h + obs_feat
         return self.trunk(h) * self.output_scale
+
+    def integrate(self, obs_feat: torch.Tensor, noise: torch.Tensor, num_steps: int) -> torch.Tensor:
+        """Euler-integrate dx/dtau = v from ``noise`` at tau = 0 to tau = 1 in ``num_steps`` steps (the sampler)."""
+        x = noise
+        dt = 1.0 / num_steps
+        for k in range(num_steps):
+            tau = torch.full(x.shape[:-1], k * dt, device=x.device, dtype=x.dtype)
+            x = x + dt * self.forward(obs_feat, x, tau)
+        return x

@@ -47,12 +47,7 @@ def action_field(actor, size: int, flow_steps: int, samples: int = 8, device: st
     """Sampled actions at every cell: (size, size, samples, 2), indexed [y, x]."""
     ys, xs = torch.meshgrid(torch.arange(size), torch.arange(size), indexing="ij")
     cells = torch.stack([xs.reshape(-1), ys.reshape(-1)], dim=-1).repeat_interleave(samples, 0).to(device)
-    previous = actor.num_flow_steps
-    actor.num_flow_steps = flow_steps
-    try:
-        actions = actor(_obs(cells, size), stochastic_output=True).clamp(-1, 1)
-    finally:
-        actor.num_flow_steps = previous
+    actions = actor(_obs(cells, size), stochastic_output=True, num_steps=flow_steps).clamp(-1, 1)
     return actions.reshape(size, size, samples, 2).cpu()
 
 
@@ -66,25 +61,20 @@ def rollouts(actor, env, flow_steps: int, starts=FIGURE_STARTS, episodes_per_sta
     env.reset_to(start)
     paths = [[tuple(p)] for p in start.tolist()]
     alive = torch.ones(n, dtype=torch.bool)
-    previous = actor.num_flow_steps
-    actor.num_flow_steps = flow_steps
-    try:
-        obs = env.get_observations()
-        for _ in range(env.max_episode_length):
-            # Positions before the step; an env that finishes this step auto-resets, so read its end cell from
-            # the action (the grid moves are deterministic given the clipped, rounded action).
-            before = env.positions.cpu().clone()
-            actions = actor(obs, stochastic_output=True)
-            obs, _, dones, _ = env.step(actions)
-            move = torch.where(actions.abs() > 0.5, actions.sign(), torch.zeros_like(actions)).cpu().int()
-            after = (before + move).clamp(0, env.cfg.size - 1)
-            for i in torch.nonzero(alive).flatten().tolist():
-                paths[i].append(tuple(after[i].tolist()))
-            alive &= ~dones.cpu()
-            if not alive.any():
-                break
-    finally:
-        actor.num_flow_steps = previous
+    obs = env.get_observations()
+    for _ in range(env.max_episode_length):
+        # Positions before the step; an env that finishes this step auto-resets, so read its end cell from
+        # the action (the grid moves are deterministic given the clipped, rounded action).
+        before = env.positions.cpu().clone()
+        actions = actor(obs, stochastic_output=True, num_steps=flow_steps)
+        obs, _, dones, _ = env.step(actions)
+        move = torch.where(actions.abs() > 0.5, actions.sign(), torch.zeros_like(actions)).cpu().int()
+        after = (before + move).clamp(0, env.cfg.size - 1)
+        for i in torch.nonzero(alive).flatten().tolist():
+            paths[i].append(tuple(after[i].tolist()))
+        alive &= ~dones.cpu()
+        if not alive.any():
+            break
     return paths
 
 
