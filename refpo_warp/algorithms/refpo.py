@@ -178,8 +178,10 @@ class ReFPO(PPO):
     # ---------------------------------------------------------------------------------------------- update
     def update(self) -> dict[str, float]:
         self.compute_old_losses()
-        sums: dict[str, float] = {}
-        ratio_max = 0.0
+        # Per-minibatch stats stay on the device (no host sync per minibatch); they are read once after the loop.
+        keys: list[str] = []
+        rows: list[torch.Tensor] = []
+        ratio_max = torch.zeros((), device=self.device)
         device_type = torch.device(self.device).type
         for batch in self.storage.mini_batch_generator(self.num_mini_batches, self.num_learning_epochs):
             tau, eps, old_loss = batch.old_distribution_params
@@ -214,9 +216,9 @@ class ReFPO(PPO):
                                         self.explosion_threshold)  # fmt: skip
                 self._adapt_learning_rate(stats["approx_kl"])
                 stats.update(surrogate=surrogate, value=value_loss, reflow=reflow)
-                for key, value in stats.items():
-                    sums[key] = sums.get(key, 0.0) + float(value)
-                ratio_max = max(ratio_max, float(ratio.max()))
+                keys = list(stats)
+                rows.append(torch.stack([value.detach().float() for value in stats.values()]))
+                ratio_max = torch.maximum(ratio_max, ratio.detach().max().float())
 
         # Normalisers follow the data after the update, as in rsl_rl's PPO.
         obs = self.storage.observations.flatten(0, 1)
@@ -225,8 +227,9 @@ class ReFPO(PPO):
         self.storage.clear()
 
         num_updates = self.num_learning_epochs * self.num_mini_batches
-        out = {key: value / num_updates for key, value in sums.items()}
-        out["ratio_max"] = ratio_max
+        sums = torch.stack(rows).cpu().double().sum(dim=0).tolist() if rows else []
+        out = {key: value / num_updates for key, value in zip(keys, sums)}
+        out["ratio_max"] = float(ratio_max)
         return out
 
     def _adapt_learning_rate(self, approx_kl: torch.Tensor) -> None:
