@@ -8,7 +8,8 @@ computes L_new,k on the same pairs and
     L     = -min(rho A, clip(rho, 1 - e, 1 + e) A) + c_v L_value + reflow_coef * mean_k L_new,k
 
 ``reflow_coef = 0`` is FPO. With ``ratio_mode="per_sample"`` each pair has its own ratio and the surrogate is
-averaged over pairs; ``log_ratio_clip`` clamps each log-ratio (and the averaged one) to [-c, c].
+averaged over pairs; ``log_ratio_clip`` clamps each pair's log-ratio L_old,k - L_new,k to [-c, c] (their mean, the
+"mean" log-ratio, then lies in [-c, c] as well).
 """
 
 from __future__ import annotations
@@ -145,10 +146,7 @@ class ReFPO(PPO):
             diff = diff.clamp(-self.log_ratio_clip, self.log_ratio_clip)
         if self.ratio_mode == "per_sample":
             return diff
-        log_rho = diff.mean(dim=-1)
-        if self.log_ratio_clip is not None:
-            log_rho = log_rho.clamp(-self.log_ratio_clip, self.log_ratio_clip)
-        return log_rho
+        return diff.mean(dim=-1)  # a mean of values in [-c, c] is in [-c, c]: no second clamp needed
 
     def surrogate_loss(self, ratio: torch.Tensor, advantages: torch.Tensor) -> torch.Tensor:
         """PPO's clipped surrogate (to minimise); advantages broadcast over per-sample ratios."""
