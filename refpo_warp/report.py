@@ -88,10 +88,11 @@ def straightness_error(actor, env, num_pairs: int = 16) -> float:
 
 def training_diagnostics(run_dir: Path) -> dict[str, float]:
     """Means of the per-update flow diagnostics logged during training (whole run and last 10% of iterations)."""
-    path = run_dir / "progress.jsonl"
-    if not path.exists():
+    from refpo_warp.plots import read_progress
+
+    if not (run_dir / "progress.jsonl").exists():
         return {}
-    rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    rows = read_progress(run_dir)
     out: dict[str, float] = {}
     for key in ("straightness_error", "explosion_rate", "ratio_mean", "ratio_max", "clip_fraction"):
         values = [r[f"loss/{key}"] for r in rows if f"loss/{key}" in r]
