@@ -112,6 +112,7 @@ def body_index(name: str) -> int:
 # below the toe joint (the reference model's foot boxes; ProtoMotions' 0.015 m toe offset); the ankle is higher by
 # its rest offset to the toe. Motion clips are grounded so the lowest sole point at the clip start is at z = 0.
 TOE_SOLE_DEPTH = 0.015
+HEEL_BEHIND_ANKLE = -0.05  # m along the foot: the heel (back of the sole) relative to the ankle joint
 FOOT_BODIES: tuple[str, ...] = ("L_Ankle", "L_Toe", "R_Ankle", "R_Toe")
 FOOT_SOLE_DEPTH = np.array(
     [TOE_SOLE_DEPTH + (0.0 if name.endswith("Toe") else -REST_OFFSETS[BODY_NAMES.index(name[0] + "_Toe"), 2])

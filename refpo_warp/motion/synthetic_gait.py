@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from refpo_warp.motion import rotations as rot
-from refpo_warp.motion.skeleton import BODY_NAMES, FOOT_BODIES, FOOT_SOLE_DEPTH, REST_OFFSETS
+from refpo_warp.motion.skeleton import BODY_NAMES, FOOT_BODIES, FOOT_SOLE_DEPTH, HEEL_BEHIND_ANKLE, REST_OFFSETS
 
 SWING_FRACTION = 0.4  # of each gait cycle per foot; the rest is stance (two double-support phases of 0.1)
 SWING_CLEARANCE = 0.06  # m, peak ankle lift above its stance height (scaled up with speed)
@@ -22,7 +22,6 @@ REACH_MARGIN = 0.985  # fraction of the full leg length a hip-ankle distance may
 HEIGHT_SMOOTHING_S = 0.04  # s, Gaussian width of the pelvis height smoothing
 _LEGS = (("L", 0.0), ("R", 0.5))  # side, gait phase offset (cycles)
 STRIKE_END, PUSH_START = 0.15, 0.7  # stance progress: heel roll until STRIKE_END, heel lift from PUSH_START
-HEEL_BEHIND_ANKLE = -0.05  # m along the foot: the heel contact relative to the ankle joint (as the humanoid MJCF)
 
 
 def _idx(name: str) -> int:

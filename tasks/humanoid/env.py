@@ -17,7 +17,7 @@ from refpo_warp.device import configure_warp
 from refpo_warp.envs import EnvCfg, WarpVecEnv
 from refpo_warp.motion import skeleton as sk
 from tasks.humanoid import motions
-from tasks.humanoid.model import EFFORT_LIMIT, HumanoidSim, SimOptions
+from tasks.humanoid.model import CONTROL_HZ, EFFORT_LIMIT, HumanoidSim, SimOptions
 from tasks.humanoid.obs_layout import OBS_DIM, conditioning_mask
 from tasks.humanoid.observations import observation_kernel
 from tasks.humanoid.tracking_kernels import (
@@ -73,7 +73,7 @@ class HumanoidTrackingEnv(WarpVecEnv):
 
     @property
     def step_dt(self) -> float:
-        return 1.0 / 30.0
+        return 1.0 / CONTROL_HZ
 
     # ------------------------------------------------------------------------------------------------ building
     def _build(self) -> None:

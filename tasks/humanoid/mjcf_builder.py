@@ -28,8 +28,8 @@ FRICTION = "1 0.005 0.0001"
 
 # Foot geometry (metres, model frame): the sole lies SOLE_BELOW_TOE below the toe joint, the heel HEEL_BEHIND
 # behind the ankle joint; the toe box reaches TOE_LENGTH in front of the toe joint.
-SOLE_BELOW_TOE = 0.015
-HEEL_BEHIND = 0.05
+SOLE_BELOW_TOE = sk.TOE_SOLE_DEPTH
+HEEL_BEHIND = -sk.HEEL_BEHIND_ANKLE
 FOOT_HALF_WIDTH = 0.045
 FOOT_HALF_HEIGHT = 0.04
 TOE_LENGTH = 0.05

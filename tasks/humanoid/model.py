@@ -25,6 +25,7 @@ wp = configure_warp()
 FREE_COORDS = 7  # root position (3) + quaternion xyzw (4)
 FREE_DOFS = 6  # root linear (COM) velocity (3) + angular velocity (3), world frame
 EFFORT_LIMIT = 500.0
+CONTROL_HZ = 30.0  # control steps per second; the motion library is sampled at this rate too
 GROUND_FRICTION = 1.0
 
 
@@ -33,7 +34,7 @@ class SimOptions:
     """Physics options of the humanoid worlds."""
 
     substeps: int = 4
-    control_dt: float = 1.0 / 30.0
+    control_dt: float = 1.0 / CONTROL_HZ
     nconmax: int = 64  # contact points per world
     njmax: int = 320  # constraint rows per world (4 per pyramidal contact + joint limits)
     iterations: int = 100

@@ -6,9 +6,10 @@ from functools import lru_cache
 from pathlib import Path
 
 from refpo_warp.motion.motion_library import MotionLibrary
+from tasks.humanoid.model import CONTROL_HZ
 
 SHIPPED_MOTIONS = Path(__file__).resolve().parent / "data" / "synthetic"
-LIBRARY_FPS = 30.0  # AMASS input is converted at the control rate
+LIBRARY_FPS = CONTROL_HZ  # AMASS input is converted at the control rate
 
 
 def resolve_motion_file(motion_file: str) -> Path:

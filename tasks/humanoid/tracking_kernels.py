@@ -9,13 +9,14 @@ Reward (reference ``compute_imitation_reward``; means over the 24 bodies, and ov
 from __future__ import annotations
 
 from refpo_warp.device import configure_warp
+from refpo_warp.motion import skeleton as sk
 from tasks.humanoid.model import FREE_COORDS, FREE_DOFS
 from tasks.humanoid.rotation_funcs import com_velocity, origin_velocity, quat_angle
 
 wp = configure_warp()
 
-NB = wp.constant(24)
-NDOF = wp.constant(69)
+NB = wp.constant(sk.NUM_BODIES)
+NDOF = wp.constant(sk.NUM_DOFS)
 QS = wp.constant(FREE_COORDS)  # first hinge coordinate in joint_q
 DS = wp.constant(FREE_DOFS)  # first hinge DoF in joint_qd
 POWER_FREE_STEPS = wp.constant(3)
