@@ -26,6 +26,9 @@ from refpo_warp.errors import ConfigError, unknown
 CONFIG_DIR = Path(os.environ.get("REFPO_WARP_CONFIGS", Path(__file__).resolve().parents[1] / "configs"))
 CLASS_SECTIONS = ("actor", "critic", "algorithm")
 PROFILE_KEYS = ("base", "by_device", "by_algo")
+# Mappings that are values, not config sections: merged, validated and flattened as a whole (obs_groups has
+# free-form group names; distribution_cfg is one class's constructor kwargs, replaced rather than merged key-wise).
+LEAF_KEYS = ("obs_groups", "distribution_cfg")
 # Top-level keys of a task file starting with "_" are YAML anchors for reuse inside that file, not options.
 
 
@@ -41,7 +44,7 @@ def merge(base: dict, delta: dict) -> dict:
     """Deep-merge ``delta`` into a copy of ``base`` (mappings merge, everything else replaces)."""
     out = copy.deepcopy(base)
     for key, value in delta.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict) and key not in ("obs_groups",):
+        if isinstance(value, dict) and isinstance(out.get(key), dict) and key not in LEAF_KEYS:
             out[key] = merge(out[key], value)
         else:
             out[key] = copy.deepcopy(value)
@@ -196,7 +199,7 @@ def _validate_plain(cfg: dict, schema: dict, prefix: str = "") -> None:
         dotted = f"{prefix}{key}"
         if key not in schema:
             raise unknown("config key", dotted, _flatten_keys(schema, prefix))
-        if isinstance(schema[key], dict) and schema[key] and isinstance(value, dict) and key != "obs_groups":
+        if isinstance(schema[key], dict) and schema[key] and isinstance(value, dict) and key not in LEAF_KEYS:
             _validate_plain(value, schema[key], dotted + ".")
         else:
             cfg[key] = _coerce(value, schema[key], dotted)

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from refpo_warp.config import dump_config, load_yaml, resolve_config
+from refpo_warp.config import LEAF_KEYS, dump_config, load_yaml, resolve_config
 from refpo_warp.device import resolve_device
 from refpo_warp.errors import ConfigError
 from refpo_warp.registry import make_env
@@ -60,10 +60,10 @@ def default_run_dir(cfg: dict) -> Path:
 
 
 def flatten(cfg: dict, prefix: str = "") -> dict[str, Any]:
-    """Dotted-key view of a nested config (class sections and obs_groups stay whole where needed)."""
+    """Dotted-key view of a nested config (``LEAF_KEYS`` mappings stay whole)."""
     out: dict[str, Any] = {}
     for key, value in cfg.items():
-        if isinstance(value, dict) and value and key not in ("obs_groups", "distribution_cfg"):
+        if isinstance(value, dict) and value and key not in LEAF_KEYS:
             out.update(flatten(value, f"{prefix}{key}."))
         else:
             out[f"{prefix}{key}"] = value
