@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import warp as wp
 
-from refpo_warp.sim import MuJoCoWorlds, flag_nonfinite_worlds, mjcf_timestep, world_com_velocity
+from refpo_warp.sim import MuJoCoWorlds, mjcf_timestep, world_com_velocity, world_state_finite
 from refpo_warp.sim.mjcf_worlds import build_mjcf_worlds
 from tasks.dmc.task import MODELS_DIR
 
@@ -65,8 +65,8 @@ def test_joint_ref_offset_is_exposed():
     finger = MuJoCoWorlds(MODELS_DIR / "finger_spin.xml", 1, "cpu")
     np.testing.assert_allclose(finger.views.coord_ref.numpy(), [-math.pi / 2, 0.0, 0.0], atol=1e-6)
     # Newton limits are qpos - ref: the proximal range (-110, 110) deg becomes (-20, 200) deg
-    np.testing.assert_allclose(np.degrees(finger.views.limit_lower.numpy()[:2]), [-20.0, -110.0], atol=1e-4)
-    np.testing.assert_allclose(np.degrees(finger.views.limit_upper.numpy()[:2]), [200.0, 110.0], atol=1e-4)
+    np.testing.assert_allclose(np.degrees(finger.views.limit_lower[:2]), [-20.0, -110.0], atol=1e-4)
+    np.testing.assert_allclose(np.degrees(finger.views.limit_upper[:2]), [200.0, 110.0], atol=1e-4)
 
 
 def _swing(substeps, calls, graph=False):
@@ -92,13 +92,21 @@ def test_odd_and_even_substeps_and_graph_replay_agree():
     assert abs(one[0][0, 0] - 0.3) > 1e-3  # it moved
 
 
-def test_clear_solver_memory_touches_only_masked_worlds(pendulum):
+def test_after_reset_clears_solver_memory_of_masked_worlds_only(pendulum):
     data = pendulum.solver.mjw_data
     data.qacc_warmstart.fill_(3.0)
     data.qfrc_applied.fill_(2.0)
-    pendulum.clear_solver_memory(wp.array([True, False, True], dtype=wp.bool, device="cpu"))
+    pendulum.after_reset(wp.array([True, False, True], dtype=wp.bool, device="cpu"))
     np.testing.assert_array_equal(data.qacc_warmstart.numpy()[:, 0], [0.0, 3.0, 0.0])
     np.testing.assert_array_equal(data.qfrc_applied.numpy()[:, 0], [0.0, 2.0, 0.0])
+
+
+@wp.kernel
+def flag_nonfinite_worlds(
+    joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float), nonfinite: wp.array(dtype=wp.bool)
+):
+    w = wp.tid()
+    nonfinite[w] = not world_state_finite(joint_q, joint_qd, w)
 
 
 def test_nonfinite_worlds_are_flagged():

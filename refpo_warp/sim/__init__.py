@@ -5,7 +5,7 @@ from refpo_warp.device import configure_warp
 configure_warp()  # Warp options must be set before Newton's kernel modules are imported
 
 from refpo_warp.sim.body_kinematics import world_com_velocity  # noqa: E402
-from refpo_warp.sim.health import flag_nonfinite_worlds, world_state_finite  # noqa: E402
+from refpo_warp.sim.health import world_state_finite  # noqa: E402
 from refpo_warp.sim.mjcf_worlds import build_mjcf_worlds, mjcf_timestep  # noqa: E402
 from refpo_warp.sim.mujoco_worlds import MuJoCoWorlds  # noqa: E402
 from refpo_warp.sim.world_views import WorldViews, make_world_views  # noqa: E402
@@ -14,7 +14,6 @@ __all__ = [
     "MuJoCoWorlds",
     "WorldViews",
     "build_mjcf_worlds",
-    "flag_nonfinite_worlds",
     "make_world_views",
     "mjcf_timestep",
     "world_com_velocity",

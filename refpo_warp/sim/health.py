@@ -16,11 +16,3 @@ def world_state_finite(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dt
             return False
     return True
 
-
-@wp.kernel
-def flag_nonfinite_worlds(
-    joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float), nonfinite: wp.array(dtype=wp.bool)
-):
-    """``nonfinite[w]`` = the state of world ``w`` holds a NaN or an inf."""
-    w = wp.tid()
-    nonfinite[w] = not world_state_finite(joint_q, joint_qd, w)

@@ -4,7 +4,8 @@
 a scratch state for the solver's ping-pong. ``simulate()`` runs the physics substeps of one control step and always
 leaves the result in ``state``, so a captured graph replays correctly for any substep count. Resets write joint
 coordinates into ``state`` (the solver copies them into MuJoCo at its next step), then ``after_reset`` clears the
-solver's per-world memory (warm start, applied forces) and recomputes body poses by forward kinematics.
+solver's per-world memory (``SolverMuJoCo.reset``: warm start, controls, applied forces) and recomputes body poses by
+forward kinematics.
 """
 
 from __future__ import annotations
@@ -19,17 +20,11 @@ from refpo_warp.sim.world_views import make_world_views
 
 
 @wp.kernel
-def _clear_masked_rows(mask: wp.array(dtype=wp.bool), values: wp.array2d(dtype=float)):
-    w, j = wp.tid()
-    if mask[w]:
-        values[w, j] = 0.0
-
-
-@wp.kernel
-def _clear_masked_wrenches(mask: wp.array(dtype=wp.bool), values: wp.array2d(dtype=wp.spatial_vector)):
-    w, j = wp.tid()
-    if mask[w]:
-        values[w, j] = wp.spatial_vector()
+def _articulations_of_worlds(
+    world_mask: wp.array(dtype=wp.bool), articulation_world: wp.array(dtype=wp.int32), out: wp.array(dtype=wp.bool)
+):
+    a = wp.tid()
+    out[a] = world_mask[articulation_world[a]]
 
 
 class MuJoCoWorlds:
@@ -63,6 +58,10 @@ class MuJoCoWorlds:
         self._scratch = self.model.state()
         self.control = self.model.control()
         self.views = make_world_views(self.model, self.state, self.control)
+        # SolverMuJoCo.reset takes a (worlds + 1) mask (the last entry is the global world); envs write the first W.
+        self._world_mask = wp.zeros(num_worlds + 1, dtype=wp.bool, device=self.model.device)
+        self.reset_mask = self._world_mask[:num_worlds]
+        self._articulation_mask = wp.zeros(self.model.articulation_count, dtype=wp.bool, device=self.model.device)
         self._eval_fk = newton.eval_fk
         self.forward_kinematics()
 
@@ -78,7 +77,7 @@ class MuJoCoWorlds:
         for name in ("body_invweight0", "dof_invweight0", "tendon_invweight0"):
             target, source = getattr(mjw, name), np.asarray(getattr(mj, name), dtype=np.float32)
             if target.size:
-                shape = target.numpy().shape
+                shape = target.numpy().shape  # with the vector dimension of vec2/vec3 entries
                 target.assign(np.ascontiguousarray(np.broadcast_to(source.reshape(shape[1:]), shape)))
 
     @property
@@ -117,16 +116,15 @@ class MuJoCoWorlds:
         """Recompute body poses and velocities of all worlds from ``state.joint_q``/``joint_qd``."""
         self._eval_fk(self.model, self.state.joint_q, self.state.joint_qd, self.state)
 
-    def clear_solver_memory(self, world_mask) -> None:
-        """Zero MuJoCo's per-world carry-over (warm start, controls, applied forces) where ``world_mask`` is true."""
-        data = self.solver.mjw_data
-        for values in (data.qacc_warmstart, data.qfrc_applied, data.ctrl, data.act):
-            if values.shape[1] > 0:
-                wp.launch(_clear_masked_rows, dim=values.shape, inputs=[world_mask, values], device=self.model.device)
-        wp.launch(_clear_masked_wrenches, dim=data.xfrc_applied.shape, inputs=[world_mask, data.xfrc_applied],
+    def after_reset(self, world_mask=None) -> None:
+        """Finish a reset whose new joint coordinates were written into ``state`` for the worlds in ``world_mask``
+        (default: ``reset_mask``, which needs no copy): clear their solver memory, then recompute body poses."""
+        if world_mask is not None and world_mask.ptr != self.reset_mask.ptr:
+            wp.copy(self.reset_mask, world_mask)
+        self.solver.reset(self.state, world_mask=self._world_mask, flags=0)
+        # Forward kinematics of the reset worlds only (the solver's step already did it for the others); the FK mask
+        # is per articulation, and a world may hold several (e.g. ball and cup).
+        wp.launch(_articulations_of_worlds, dim=self.model.articulation_count,
+                  inputs=[self.reset_mask, self.model.articulation_world, self._articulation_mask],
                   device=self.model.device)  # fmt: skip
-
-    def after_reset(self, world_mask) -> None:
-        """Finish a reset whose new joint coordinates were written into ``state`` for the worlds in ``world_mask``."""
-        self.clear_solver_memory(world_mask)
-        self.forward_kinematics()
+        self._eval_fk(self.model, self.state.joint_q, self.state.joint_qd, self.state, mask=self._articulation_mask)

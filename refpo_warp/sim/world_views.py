@@ -24,13 +24,9 @@ class WorldViews:
     body_mass: wp.array  # (W, bodies)
     ctrl: wp.array | None  # (W, actuators) MuJoCo actuator controls (control.mujoco.ctrl), None without actuators
     coord_ref: wp.array  # (coords,) MJCF joint ``ref``: MuJoCo qpos = joint_q + coord_ref
-    limit_lower: wp.array  # (dofs,) joint limits in Newton coordinates (huge for unlimited joints)
-    limit_upper: wp.array
+    limit_lower: np.ndarray  # (dofs,) joint limits in Newton coordinates (huge for unlimited joints); host only
+    limit_upper: np.ndarray
     body_labels: list[str]  # labels of the bodies of one world, in body order
-
-    @property
-    def num_worlds(self) -> int:
-        return self.joint_q.shape[0]
 
     def body_index(self, name: str) -> int:
         """Index (within a world) of the body whose MJCF name is ``name``."""
@@ -60,7 +56,7 @@ def make_world_views(model, state, control) -> WorldViews:
         body_mass=model.body_mass.reshape((w, bodies)),
         ctrl=ctrl.reshape((w, ctrl.shape[0] // w)) if ctrl is not None and ctrl.shape[0] else None,
         coord_ref=wp.array(ref.astype(np.float32), dtype=float, device=model.device),
-        limit_lower=wp.array(model.joint_limit_lower.numpy()[:dofs], dtype=float, device=model.device),
-        limit_upper=wp.array(model.joint_limit_upper.numpy()[:dofs], dtype=float, device=model.device),
+        limit_lower=model.joint_limit_lower.numpy()[:dofs].copy(),
+        limit_upper=model.joint_limit_upper.numpy()[:dofs].copy(),
         body_labels=list(model.body_label[:bodies]),
     )

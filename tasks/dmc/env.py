@@ -98,8 +98,6 @@ class DmcEnv(WarpVecEnv):
         if ctrl is None or ctrl.shape[1] != task_class.num_actions:
             raise ValueError(f"{task_class.model_file}: expected {task_class.num_actions} actuators, found "
                              f"{0 if ctrl is None else ctrl.shape[1]}")  # fmt: skip
-        self._reset_mask_torch = torch.zeros(self.num_envs, dtype=torch.bool, device=self.device)
-        self._reset_mask = wp.from_torch(self._reset_mask_torch, dtype=wp.bool)
         self.task = task_class(self.sim, cfg, self.buffers.rng)
         self.task.prepare()
 
@@ -111,15 +109,17 @@ class DmcEnv(WarpVecEnv):
         task.reward(b.rewards)
         wp.launch(finish_step, dim=self.num_envs,
                   inputs=[sim.views.joint_q, sim.views.joint_qd, self.max_episode_length, b.rewards,
-                          b.episode_length, b.terminated, b.truncated, self._reset_mask,
+                          b.episode_length, b.terminated, b.truncated, sim.reset_mask,
                           b.metrics["nonfinite_resets"]])  # fmt: skip
-        task.reset(self._reset_mask)
-        sim.after_reset(self._reset_mask)
-        task.observe(b.obs["policy"], self._reset_mask)
+        self._start_episodes(sim.reset_mask)
 
     def _reset_impl(self, mask) -> None:
-        self.task.reset(mask)
         wp.launch(restart_episodes, dim=self.num_envs, inputs=[mask, self.buffers.episode_length])
+        self._start_episodes(mask)
+
+    def _start_episodes(self, mask) -> None:
+        """Initial states of the envs in ``mask``, then the observations of all envs."""
+        self.task.reset(mask)
         self.sim.after_reset(mask)
         self.task.observe(self.buffers.obs["policy"], mask)
 
@@ -147,10 +147,10 @@ class DmcEnv(WarpVecEnv):
         self.joint_q.copy_(qpos - wp.to_torch(v.coord_ref))
         self.joint_qd.copy_(qvel)
         with wp.ScopedDevice(self.wp_device):
-            self._reset_mask.fill_(True)
-            self.sim.after_reset(self._reset_mask)
-            self.task.observe(self.buffers.obs["policy"], self._reset_mask)
-            self._reset_mask.zero_()
+            self.sim.reset_mask.fill_(True)
+            self.sim.after_reset()
+            self.task.observe(self.buffers.obs["policy"], self.sim.reset_mask)
+            self.sim.reset_mask.zero_()
 
     @property
     def qpos(self) -> torch.Tensor:

@@ -90,7 +90,8 @@ class ReacherEasy(DmcTask):
         super().__init__(sim, cfg, rng)
         self.finger = self.views.body_index("finger")
         self.target = wp.zeros(self.num_envs, dtype=wp.vec2, device=self.device)
-        self.wrist_range = (float(self.views.limit_lower.numpy()[1]), float(self.views.limit_upper.numpy()[1]))
+        lower, upper = self.joint_limits()
+        self.wrist_range = (float(lower[1]), float(upper[1]))
 
     def reset(self, mask) -> None:
         v = self.views

@@ -63,7 +63,7 @@ class DmcTask:
 
     def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
         """Copies of the joint limits (Newton coordinates, i.e. qpos - ref), to edit into reset ranges."""
-        return self.views.limit_lower.numpy().copy(), self.views.limit_upper.numpy().copy()
+        return self.views.limit_lower.copy(), self.views.limit_upper.copy()
 
     def uniform_ranges(self, lower, upper) -> tuple[wp.array, wp.array]:
         """Per-joint reset ranges for ``reset_uniform_joints`` (one entry per joint coordinate)."""
