@@ -17,16 +17,6 @@ INSIDE_HALF_WIDTH = wp.constant(0.05 - 0.025)  # target box half-size (x and z) 
 
 
 @wp.kernel
-def reset_ball_in_cup(mask: wp.array(dtype=wp.bool), joint_q: wp.array2d(dtype=float),
-                      joint_qd: wp.array2d(dtype=float)):  # fmt: skip
-    i = wp.tid()
-    if mask[i]:
-        for j in range(4):
-            joint_q[i, j] = 0.0
-            joint_qd[i, j] = 0.0
-
-
-@wp.kernel
 def ball_in_cup_reward(body_q: wp.array2d(dtype=wp.transform), cup: int, ball: int, rewards: wp.array(dtype=float)):
     i = wp.tid()
     target = wp.transform_point(body_q[i, cup], TARGET_OFFSET)
@@ -55,9 +45,10 @@ class BallInCup(DmcTask):
         super().__init__(sim, cfg, rng)
         self.cup = self.views.body_index("cup")
         self.ball = self.views.body_index("ball")
+        self.reset_ranges = self.uniform_ranges([0.0] * 4, [0.0] * 4)  # the model's rest pose
 
     def reset(self, mask) -> None:
-        self.launch(reset_ball_in_cup, [mask, self.views.joint_q, self.views.joint_qd])
+        self.reset_uniform_joints(mask, self.reset_ranges)
 
     def reward(self, rewards) -> None:
         self.launch(ball_in_cup_reward, [self.views.body_q, self.cup, self.ball, rewards])

@@ -18,21 +18,6 @@ COS_8_DEG = wp.constant(math.cos(math.radians(8.0)))
 
 
 @wp.kernel
-def reset_pendulum(
-    mask: wp.array(dtype=wp.bool),
-    rng: wp.array(dtype=wp.uint32),
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-):
-    i = wp.tid()
-    if mask[i]:
-        s = rng[i]
-        joint_q[i, 0] = wp.randf(s) * wp.pi
-        joint_qd[i, 0] = 0.0
-        rng[i] = s
-
-
-@wp.kernel
 def pendulum_reward(body_q: wp.array2d(dtype=wp.transform), pole: int, rewards: wp.array(dtype=float)):
     i = wp.tid()
     zz = wp.quat_to_matrix(wp.transform_get_rotation(body_q[i, pole]))[2, 2]
@@ -61,9 +46,10 @@ class PendulumSwingup(DmcTask):
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)
         self.pole = self.views.body_index("pole")
+        self.reset_ranges = self.uniform_ranges([0.0], [math.pi])
 
     def reset(self, mask) -> None:
-        self.launch(reset_pendulum, [mask, self.rng, self.views.joint_q, self.views.joint_qd])
+        self.reset_uniform_joints(mask, self.reset_ranges)
 
     def reward(self, rewards) -> None:
         self.launch(pendulum_reward, [self.views.body_q, self.pole, rewards])

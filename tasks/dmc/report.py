@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from refpo_warp.plots import read_progress
-from tasks.dmc.figures import reward_curve
+from refpo_warp.plots import read_progress, return_curves
 
 
 def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
@@ -13,4 +12,4 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
     rows = read_progress(run_dir)
     if not rows:
         return []
-    return [reward_curve(rows, Path(run_dir) / "reward_curve.png", label=f"{cfg['task']} {cfg['algo']}")]
+    return [return_curves({f"{cfg['task']} {cfg['algo']}": rows}, Path(run_dir) / "reward_curve.png")]
