@@ -85,7 +85,6 @@ class WarpVecEnv(VecEnv):
             obs={k: wp.from_torch(v) for k, v in self._obs.items()},
             metrics={k: wp.from_torch(v) for k, v in self._metrics.items()},
         )
-        self._rng_torch = rng
         self.reseed(self.seed)
         self._graph = None
         self._steps_taken = 0
