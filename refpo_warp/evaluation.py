@@ -51,11 +51,11 @@ def run_episodes(
         running_return += rewards
         running_length += 1
         keep = dones & (finished < episodes_per_env)
-        if keep.any():
-            records["return"].append(running_return[keep].clone())
-            records["length"].append(running_length[keep].clone())
+        if keep.any():  # boolean indexing copies, so the records survive the in-place resets below
+            records["return"].append(running_return[keep])
+            records["length"].append(running_length[keep])
             for name in metric_names:
-                records[name].append(env.episode_metric_buffers[name][keep].clone())
+                records[name].append(env.episode_metric_buffers[name][keep])
         finished += dones.long()
         running_return[dones] = 0.0
         running_length[dones] = 0.0
