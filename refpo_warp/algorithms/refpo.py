@@ -161,7 +161,6 @@ class ReFPO(PPO):
             return torch.max((values - returns).pow(2), (clipped - returns).pow(2)).mean()
         return (returns - values).pow(2).mean()
 
-    @torch.no_grad()
     def compute_old_losses(self, chunk: int = 65536) -> None:
         """Fill the stored old CFM losses under the current (= rollout) parameters, before any gradient step."""
         st = self.storage
