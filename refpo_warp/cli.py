@@ -40,9 +40,9 @@ def main(command: str, args: list[str], usage: str) -> int:
             print(f"{task:28s} {get_task(task).description}")
         return 0
     try:
-        import torch
+        from refpo_warp.device import set_torch_threads
 
-        torch.set_num_threads(max(1, min(torch.get_num_threads(), 1 if _cpu_only() else 4)))
+        set_torch_threads(cuda_cap=4)
         COMMANDS[command](args)
     except (ConfigError, MotionDataError) as err:
         print(f"error: {err}", file=sys.stderr)
@@ -56,8 +56,3 @@ def main(command: str, args: list[str], usage: str) -> int:
         return 130
     return 0
 
-
-def _cpu_only() -> bool:
-    import torch
-
-    return not torch.cuda.is_available()

@@ -22,6 +22,18 @@ def resolve_device(device: str = "auto") -> str:
     return device
 
 
+def set_torch_threads(cuda_cap: int | None = None) -> int:
+    """Limit torch's CPU threads: 1 without CUDA (the CPU cores run the env kernels), else at most ``cuda_cap``.
+
+    ``cuda_cap=None`` leaves the thread count unchanged when CUDA is available. Returns the count set.
+    """
+    n = torch.get_num_threads()
+    n = 1 if not torch.cuda.is_available() else (min(n, cuda_cap) if cuda_cap else n)
+    n = max(1, n)
+    torch.set_num_threads(n)
+    return n
+
+
 def configure_warp():
     """Set Warp's global options; must run before any module defining kernels (ours, Newton's) is imported."""
     global _CONFIGURED

@@ -20,9 +20,9 @@ def main(argv: list[str]) -> int:
 
         print(f"error: {unknown('benchmark', family, FAMILIES + ('all',))}", file=sys.stderr)
         return 2
-    import torch
+    from refpo_warp.device import set_torch_threads
 
-    torch.set_num_threads(1 if not torch.cuda.is_available() else torch.get_num_threads())
+    set_torch_threads()
     for name in FAMILIES if family == "all" else (family,):
         print(f"\n=== {name} ===", flush=True)
         importlib.import_module(f"tasks.{name}.bench").main(rest)
