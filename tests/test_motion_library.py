@@ -82,6 +82,20 @@ def test_sample_kernel_matches_numpy_interpolation(library):
     np.testing.assert_allclose(got["body_pos"][2], library.clip(2)["body_pos"][-1], atol=1e-6)
 
 
+
+def test_masked_sample_writes_only_the_selected_rows(library):
+    rng = np.random.default_rng(1)
+    ids = wp.array(rng.integers(0, 3, size=8).astype(np.int32), dtype=int)
+    times = wp.array(rng.uniform(0.0, 3.0, size=8).astype(np.float32), dtype=float)
+    full, masked = library.allocate_frames(8), library.allocate_frames(8)
+    library.sample(ids, times, full)
+    select = np.array([1, 0, 0, 1, 0, 1, 1, 0], dtype=bool)
+    library.sample(ids, times, masked, mask=wp.array(select, dtype=wp.bool))
+    for key in ("body_pos", "body_rot", "body_vel", "body_angvel", "dof_pos", "dof_vel"):
+        got, want = getattr(masked, key).numpy(), getattr(full, key).numpy()
+        np.testing.assert_array_equal(got[select], want[select], err_msg=key)
+        assert not np.any(got[~select]), key  # untouched (still the zeros of allocate_frames)
+
 def test_sample_interpolates_angles_the_short_way_and_is_capturable():
     # A hinge angle stepping from 3.1 to -3.1 rad turns 0.083 rad through +-pi, not 6.2 rad through 0.
     n = 2

@@ -121,22 +121,26 @@ class MotionLibrary:
             dof_vel=zeros(float, NUM_DOFS),
         )
 
-    def sample(self, clip_ids: wp.array, times: wp.array, out: MotionFrames) -> None:
+    def sample(self, clip_ids: wp.array, times: wp.array, out: MotionFrames, mask: wp.array | None = None) -> None:
         """Reference states at ``times`` seconds into each env's clip (one launch over (env, body); no host sync).
 
         Times are clamped to [0, clip duration] and clip ids to [0, num_clips - 1]. Positions, velocities and
         joint angles are interpolated linearly between the two bracketing frames (angles along the shorter way
-        round), rotations by slerp. ``clip_ids`` and ``times`` hold one entry per row of ``out``.
+        round), rotations by slerp. ``clip_ids`` and ``times`` hold one entry per row of ``out``. With a bool
+        ``mask`` (one entry per row) only the rows where it is set are written; the others keep their values.
         """
         num_envs = out.body_pos.shape[0]
         if clip_ids.shape[0] != num_envs or times.shape[0] != num_envs:
             raise ValueError(f"MotionLibrary.sample: {clip_ids.shape[0]} clip ids and {times.shape[0]} times for "
                              f"{num_envs} output rows; they must match")  # fmt: skip
+        if mask is not None and mask.shape[0] != num_envs:
+            raise ValueError(f"MotionLibrary.sample: {mask.shape[0]} mask entries for {num_envs} output rows")
         wp.launch(
             _sample_kernel,
             dim=(num_envs, NUM_BODIES),
             inputs=[self.clip_start, self.clip_frames, self.num_clips, self.fps, self.body_pos, self.body_rot,
-                    self.body_vel, self.body_angvel, self.dof_pos, self.dof_vel, clip_ids, times],  # fmt: skip
+                    self.body_vel, self.body_angvel, self.dof_pos, self.dof_vel, clip_ids, times,
+                    int(mask is not None), mask],  # fmt: skip
             outputs=[out.body_pos, out.body_rot, out.body_vel, out.body_angvel, out.dof_pos, out.dof_vel],
             device=self.device,
         )
@@ -179,6 +183,8 @@ def _sample_kernel(
     dof_vel: wp.array2d(dtype=float),
     clip_ids: wp.array(dtype=int),
     times: wp.array(dtype=float),
+    use_mask: int,
+    mask: wp.array(dtype=wp.bool),
     out_body_pos: wp.array2d(dtype=wp.vec3),
     out_body_rot: wp.array2d(dtype=wp.quat),
     out_body_vel: wp.array2d(dtype=wp.vec3),
@@ -187,6 +193,9 @@ def _sample_kernel(
     out_dof_vel: wp.array2d(dtype=float),
 ):
     env, body = wp.tid()
+    if use_mask != 0:
+        if not mask[env]:
+            return
     clip = wp.clamp(clip_ids[env], 0, num_clips - 1)
     last = clip_frames[clip] - 1
     f = wp.clamp(times[env] * fps, 0.0, float(last))

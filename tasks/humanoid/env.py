@@ -144,7 +144,8 @@ class HumanoidTrackingEnv(WarpVecEnv):
                     int(self.cfg.eval_mode)],
             outputs=[self.clip_id, self.start_time, self.ref_time, b.episode_length, self.mpjpe_sum, s.reset_mask],
         )  # fmt: skip
-        self.motion.sample(self.clip_id, self.ref_time, r)
+        # Only the starting envs need the reference at their (new) start; every row is resampled below.
+        self.motion.sample(self.clip_id, self.ref_time, r, mask=s.reset_mask)
         wp.launch(write_reference_state_kernel, dim=n,
                   inputs=[s.reset_mask, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, r.dof_pos, r.dof_vel,
                           self.root_com],
