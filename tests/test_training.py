@@ -71,6 +71,13 @@ def test_train_writes_checkpoints_config_progress_and_eval(tmp_run_dir):
     assert all((tmp_run_dir / f).exists() for f in ("gridworld_field_N1.png", "gridworld_trajectories_N10.png"))
 
 
+def test_gaussian_ppo_run_is_evaluated_with_its_figures(tmp_run_dir):
+    ppo = [a for a in QUICK if not a.startswith(("algo=", "algorithm.num_mc"))] + ["algo=ppo"]
+    results = train(ppo + [f"run_dir={tmp_run_dir}"])
+    assert 0.0 <= results["results"]["mean_action"]["success_rate"] <= 1.0
+    assert all((tmp_run_dir / f).exists() for f in ("gridworld_field.png", "gridworld_trajectories.png"))
+
+
 def test_resume_continues_from_last_checkpoint(tmp_run_dir):
     train(QUICK + [f"run_dir={tmp_run_dir}", "eval.at_end=false"])
     with pytest.raises(ConfigError, match="resume=true"):

@@ -32,6 +32,13 @@ def _obs(cells: torch.Tensor, size: int) -> TensorDict:
     return TensorDict({"policy": (cells.float() - c) / c}, batch_size=[cells.shape[0]])
 
 
+def _sample(actor, obs, flow_steps: int | None) -> torch.Tensor:
+    """Stochastic actions; ``flow_steps`` Euler steps for a flow policy, None for a Gaussian one."""
+    if flow_steps is None:
+        return actor(obs, stochastic_output=True)
+    return actor(obs, stochastic_output=True, num_steps=flow_steps)
+
+
 def _draw_grid(ax, size: int) -> None:
     for rows in ((0, 1), (size - 2, size - 1)):
         ax.axhspan(rows[0] - 0.5, rows[1] + 0.5, color="#b6e3b6", zorder=0)
@@ -43,16 +50,16 @@ def _draw_grid(ax, size: int) -> None:
 
 
 @torch.inference_mode()
-def action_field(actor, size: int, flow_steps: int, samples: int = 8, device: str = "cpu") -> torch.Tensor:
+def action_field(actor, size: int, flow_steps: int | None, samples: int = 8, device: str = "cpu") -> torch.Tensor:
     """Sampled actions at every cell: (size, size, samples, 2), indexed [y, x]."""
     ys, xs = torch.meshgrid(torch.arange(size), torch.arange(size), indexing="ij")
     cells = torch.stack([xs.reshape(-1), ys.reshape(-1)], dim=-1).repeat_interleave(samples, 0).to(device)
-    actions = actor(_obs(cells, size), stochastic_output=True, num_steps=flow_steps).clamp(-1, 1)
+    actions = _sample(actor, _obs(cells, size), flow_steps).clamp(-1, 1)
     return actions.reshape(size, size, samples, 2).cpu()
 
 
 @torch.inference_mode()
-def rollouts(actor, env, flow_steps: int, starts=FIGURE_STARTS, episodes_per_start: int = 20) -> list[list]:
+def rollouts(actor, env, flow_steps: int | None, starts=FIGURE_STARTS, episodes_per_start: int = 20) -> list[list]:
     """Trajectories (lists of (x, y)) of ``episodes_per_start`` episodes from each start; env must have that many envs."""
     n = env.num_envs
     if n != len(starts) * episodes_per_start:
@@ -66,7 +73,7 @@ def rollouts(actor, env, flow_steps: int, starts=FIGURE_STARTS, episodes_per_sta
         # Positions before the step; an env that finishes this step auto-resets, so read its end cell from
         # the action (the grid moves are deterministic given the clipped, rounded action).
         before = env.positions.cpu().clone()
-        actions = actor(obs, stochastic_output=True, num_steps=flow_steps)
+        actions = _sample(actor, obs, flow_steps)
         obs, _, dones, _ = env.step(actions)
         move = torch.where(actions.abs() > 0.5, actions.sign(), torch.zeros_like(actions)).cpu().int()
         after = (before + move).clamp(0, env.cfg.size - 1)
@@ -79,7 +86,8 @@ def rollouts(actor, env, flow_steps: int, starts=FIGURE_STARTS, episodes_per_sta
 
 
 def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
-    """Write ``gridworld_field_N{10,1}.png`` and ``gridworld_trajectories_N{10,1}.png`` into the run dir."""
+    """Write ``gridworld_field_N{10,1}.png`` and ``gridworld_trajectories_N{10,1}.png`` into the run dir (a Gaussian
+    policy: ``gridworld_field.png`` and ``gridworld_trajectories.png``)."""
     from refpo_warp.registry import make_env
 
     size = int(cfg["env"].get("size", 25))
@@ -87,7 +95,8 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
     env = make_env(cfg["task"], num_envs=len(FIGURE_STARTS) * 20, device=str(device), seed=cfg["seed"] + 20_000,
                    **cfg["env"])  # fmt: skip
     written = []
-    for n in FIGURE_FLOW_STEPS:
+    for n in FIGURE_FLOW_STEPS if hasattr(actor, "num_flow_steps") else (None,):
+        suffix, policy = (f"_N{n}", f"{n}-step flow") if n else ("", "Gaussian policy")
         field = action_field(actor, size, n, device=str(device))
         fig, ax = plt.subplots(figsize=(5, 5))
         _draw_grid(ax, size)
@@ -95,8 +104,8 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
         for s in range(field.shape[2]):
             ax.quiver(xs, ys, field[:, :, s, 0], field[:, :, s, 1], angles="xy", scale_units="xy", scale=2.2,
                       width=0.004, alpha=0.35, color="#1f4e9c")  # fmt: skip
-        ax.set_title(f"Sampled actions, {n}-step flow")
-        path = Path(run_dir) / f"gridworld_field_N{n}.png"
+        ax.set_title(f"Sampled actions, {policy}")
+        path = Path(run_dir) / f"gridworld_field{suffix}.png"
         fig.savefig(path, dpi=120, bbox_inches="tight")
         plt.close(fig)
         written.append(path)
@@ -110,8 +119,8 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
             ax.plot(xy[:, 0] + jitter[0], xy[:, 1] + jitter[1], color=colors[i // 20], alpha=0.45, lw=1)
         for (x, y), c in zip(FIGURE_STARTS, colors):
             ax.plot(x, y, "o", color=c, ms=8, mec="k")
-        ax.set_title(f"Rollouts from fixed starts, {n}-step flow")
-        path = Path(run_dir) / f"gridworld_trajectories_N{n}.png"
+        ax.set_title(f"Rollouts from fixed starts, {policy}")
+        path = Path(run_dir) / f"gridworld_trajectories{suffix}.png"
         fig.savefig(path, dpi=120, bbox_inches="tight")
         plt.close(fig)
         written.append(path)
