@@ -74,7 +74,7 @@ def set_sim_to_reference(env, ref):
     all_envs = wp.array(np.ones(env.num_envs, bool), dtype=wp.bool, device="cpu")
     wp.launch(write_reference_state_kernel, dim=env.num_envs,
               inputs=[all_envs, ref.body_pos, ref.body_rot, ref.body_vel, ref.body_angvel, ref.dof_pos, ref.dof_vel,
-                      env.root_com],
+                      s.root_com],
               outputs=[s.joint_q, s.joint_qd], device="cpu")  # fmt: skip
     newton.eval_fk(s.model, s.state.joint_q, s.state.joint_qd, s.state)
 

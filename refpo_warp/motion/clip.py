@@ -73,15 +73,13 @@ def build_clip(
     local_rot: np.ndarray,
     src_fps: float,
     fps: float,
-    fix_height: bool = True,
 ) -> MotionClip:
     """Full pipeline for one clip given in the model frame (see ``kinematics.amass_to_model``)."""
     root_rot = rot.quat_make_continuous(rot.quat_normalize(root_rot))
     local_rot = rot.quat_make_continuous(rot.quat_normalize(local_rot))
     root_pos, root_rot, local_rot = resample(root_pos, root_rot, local_rot, src_fps, fps)
     body_pos, body_rot = kin.forward_kinematics(root_pos, root_rot, local_rot)
-    if fix_height:
-        body_pos[..., 2] += ground_offset(body_pos, fps)
+    body_pos[..., 2] += ground_offset(body_pos, fps)
     body_rot = rot.quat_make_continuous(body_rot)
     dof_pos = kin.dof_positions(local_rot)
     return MotionClip(

@@ -34,7 +34,7 @@ NUM_AMASS_BODY_JOINTS = 22  # pelvis (root_orient) + 21 body joints; AMASS hands
 
 
 def forward_kinematics(
-    root_pos: np.ndarray, root_rot: np.ndarray, local_rot: np.ndarray, offsets: np.ndarray = REST_OFFSETS
+    root_pos: np.ndarray, root_rot: np.ndarray, local_rot: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """World body positions (T, 24, 3) and rotations (T, 24, 4 xyzw) from the root pose and per-body local rotations.
 
@@ -50,7 +50,8 @@ def forward_kinematics(
     body_rot[:, 0] = rot.quat_normalize(np.asarray(root_rot, dtype=np.float64))
     for b in range(1, NUM_BODIES):
         p = PARENTS[b]
-        body_pos[:, b] = body_pos[:, p] + rot.quat_rotate(body_rot[:, p], np.broadcast_to(offsets[b], root_pos.shape))
+        offset = np.broadcast_to(REST_OFFSETS[b], root_pos.shape)
+        body_pos[:, b] = body_pos[:, p] + rot.quat_rotate(body_rot[:, p], offset)
         body_rot[:, b] = rot.quat_normalize(rot.quat_mul(body_rot[:, p], local_rot[:, b]))
     return body_pos, body_rot
 

@@ -100,7 +100,6 @@ class HumanoidTrackingEnv(WarpVecEnv):
         self.kd = wp.array(gains[:, 1], dtype=float, device=dev)
         self.eval_body = wp.array(eval_body, dtype=float, device=dev)
         self.mask = wp.array(self.obs_mask, dtype=float, device=dev)
-        self.root_com = wp.vec3(*self.sim.body_com.numpy()[0])
 
         self.clip_id = wp.zeros(n, dtype=int, device=dev)
         self.start_time = wp.zeros(n, dtype=float, device=dev)
@@ -148,7 +147,7 @@ class HumanoidTrackingEnv(WarpVecEnv):
         self.motion.sample(self.clip_id, self.ref_time, r, mask=s.reset_mask)
         wp.launch(write_reference_state_kernel, dim=n,
                   inputs=[s.reset_mask, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, r.dof_pos, r.dof_vel,
-                          self.root_com],
+                          s.root_com],
                   outputs=[s.joint_q, s.joint_qd])  # fmt: skip
         s.finish_reset()
         wp.launch(_shift_time_kernel, dim=n, inputs=[self.ref_time, self.step_dt], outputs=[self.obs_time])

@@ -54,7 +54,7 @@ class HumanoidSim:
     (COM linear velocity, angular velocity); ``joint_target`` (N, 76) PD targets (only the hinge entries are used).
     """
 
-    def __init__(self, num_envs: int, device, options: SimOptions = SimOptions(), mjcf: Path = MJCF_PATH) -> None:
+    def __init__(self, num_envs: int, device, options: SimOptions = SimOptions()) -> None:
         import newton
 
         if options.substeps < 2 or options.substeps % 2:
@@ -63,7 +63,7 @@ class HumanoidSim:
         self.options = options
         self.num_envs = num_envs
         self.device = device
-        self.model = build_model(num_envs, device, mjcf)
+        self.model = build_model(num_envs, device)
         self.solver = newton.solvers.SolverMuJoCo(
             self.model, njmax=options.njmax, nconmax=options.nconmax, iterations=options.iterations,
             ls_iterations=options.ls_iterations, integrator=options.integrator,
@@ -77,7 +77,9 @@ class HumanoidSim:
         self.body_qd = self.state.body_qd.reshape((n, -1))
         self.joint_target = self.control.joint_target_q.reshape((n, -1))
         per_world = self.model.body_count // n
-        self.body_com = wp.array(self.model.body_com.numpy()[:per_world], dtype=wp.vec3, device=device)
+        body_com = self.model.body_com.numpy()[:per_world]
+        self.body_com = wp.array(body_com, dtype=wp.vec3, device=device)
+        self.root_com = wp.vec3(*body_com[0])  # the root's COM offset in its frame (a kernel argument)
         # The solver's reset takes a (worlds + 1) mask (the last entry is the global world); kernels write the first N.
         self._world_mask = wp.zeros(n + 1, dtype=wp.bool, device=device)
         self.reset_mask = self._world_mask[:n]
@@ -104,15 +106,15 @@ class HumanoidSim:
         return int(data.nefc.numpy().max()), int(data.nacon.numpy()[0])
 
 
-def build_model(num_envs: int, device, mjcf: Path = MJCF_PATH):
+def build_model(num_envs: int, device):
     """Finalized Newton model of ``num_envs`` humanoid worlds with PD target gains and a shared ground plane."""
     import newton
 
     robot = newton.ModelBuilder()
     newton.solvers.SolverMuJoCo.register_custom_attributes(robot)
     robot.default_shape_cfg.gap = 0.0  # Newton's default 0.1 m gap only adds inactive contact candidates
-    robot.add_mjcf(str(mjcf), floating=True, enable_self_collisions=True)
-    _check_layout(robot, mjcf)
+    robot.add_mjcf(str(MJCF_PATH), floating=True, enable_self_collisions=True)
+    _check_layout(robot, MJCF_PATH)
     for body in range(1, sk.NUM_BODIES):
         kp, kd = sk.PD_GAINS[body]
         for axis in range(3):

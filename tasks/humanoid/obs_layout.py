@@ -36,7 +36,6 @@ BLOCKS: tuple[tuple[str, int], ...] = (
 OFFSET = dict(zip([b[0] for b in BLOCKS], np.cumsum([0] + [b[1] for b in BLOCKS[:-1]]).tolist()))
 SELF_DIM = OFFSET["diff_pos"]  # 358
 OBS_DIM = sum(b[1] for b in BLOCKS)  # 934
-TASK_DIM = OBS_DIM - SELF_DIM  # 576
 
 CONDITIONING_REGIMES = tuple(sk.CONDITIONED_BODIES)  # ("all", "root_hands", "root")
 
