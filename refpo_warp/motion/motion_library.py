@@ -70,29 +70,29 @@ class MotionLibrary:
         (``sample`` interpolates at any time, so any control rate can use it). Raises ``MotionDataError`` naming
         the file and the problem; nothing is built from a partly read source.
         """
+        return cls(**cls.read(source, fps), device=device)
+
+    @staticmethod
+    def read(source: str | Path, fps: float = 30.0) -> dict:
+        """The host data ``load`` builds a library from (the constructor's arguments but ``device``), for callers
+        that keep it to build libraries on several devices without reading or converting the source again."""
         path = Path(source).expanduser()
         if not path.exists():
             raise MotionDataError(f"{path}: motion source not found (expected an AMASS .npz file, a folder of "
                                   f"them, or a *.motionlib.npz library)")  # fmt: skip
         if path.is_file() and is_library_file(path):
             frames, clip_frames, meta = load_library(path)
-            return cls(frames, clip_frames, meta["fps"], meta["clip_names"], meta["sources"], device)
+            return {"frames": frames, "clip_frames": clip_frames, "fps": meta["fps"],
+                    "clip_names": meta["clip_names"], "sources": meta["sources"]}  # fmt: skip
         if not (np.isfinite(fps) and fps > 0):
             raise ValueError(f"MotionLibrary.load: fps must be a positive number, got {fps}")
         clips, sources = load_amass_clips(path, float(fps))
-        return cls.from_clips(clips, device=device, sources=sources)
+        return _concatenate(clips, sources)
 
     @classmethod
     def from_clips(cls, clips: list[MotionClip], device: str = "cpu", sources: list[str] | None = None):
         """Concatenate clips that share one frame rate."""
-        if not clips:
-            raise ValueError("MotionLibrary.from_clips needs at least one clip")
-        rates = {clip.fps for clip in clips}
-        if len(rates) != 1:
-            raise ValueError(f"MotionLibrary.from_clips: clips have different frame rates {sorted(rates)}")
-        frames = {key: np.concatenate([getattr(c, key) for c in clips]) for key in FRAME_ARRAYS}
-        clip_frames = np.array([c.num_frames for c in clips])
-        return cls(frames, clip_frames, rates.pop(), [c.name for c in clips], sources, device)
+        return cls(**_concatenate(clips, sources), device=device)
 
     def save(self, path: str | Path) -> None:
         """Write the converted library file (``*.motionlib.npz``)."""
@@ -148,6 +148,19 @@ class MotionLibrary:
     def __repr__(self) -> str:
         return (f"MotionLibrary({self.num_clips} clips, {self.num_frames} frames at {self.fps:g} fps, "
                 f"{float(self.clip_duration.sum()):.1f} s, device={self.device})")  # fmt: skip
+
+
+def _concatenate(clips: list[MotionClip], sources: list[str] | None) -> dict:
+    """Constructor arguments (but ``device``) of the library of ``clips``, which must share one frame rate."""
+    if not clips:
+        raise ValueError("MotionLibrary.from_clips needs at least one clip")
+    rates = {clip.fps for clip in clips}
+    if len(rates) != 1:
+        raise ValueError(f"MotionLibrary.from_clips: clips have different frame rates {sorted(rates)}")
+    frames = {key: np.concatenate([getattr(c, key) for c in clips]) for key in FRAME_ARRAYS}
+    clip_frames = np.array([c.num_frames for c in clips])
+    return {"frames": frames, "clip_frames": clip_frames, "fps": rates.pop(), "clip_names": [c.name for c in clips],
+            "sources": sources}  # fmt: skip
 
 
 @wp.func

@@ -18,17 +18,15 @@ def resolve_motion_file(motion_file: str) -> Path:
 
 
 @lru_cache(maxsize=4)
-def _host_library(path: Path) -> MotionLibrary:
-    return MotionLibrary.load(path, device="cpu", fps=LIBRARY_FPS)
+def _host_data(path: Path) -> dict:
+    """The library's host data (``MotionLibrary.read``); callers must not modify it."""
+    return MotionLibrary.read(path, fps=LIBRARY_FPS)
 
 
 def load_motions(motion_file: str, device: str) -> MotionLibrary:
     """The motion library of ``motion_file`` on ``device`` (an AMASS folder is converted only once per process)."""
-    host = _host_library(resolve_motion_file(motion_file))
-    if device == "cpu":
-        return host
-    return MotionLibrary(host.frames, host.clip_num_frames, host.fps, host.clip_names, host.sources, device)
+    return MotionLibrary(**_host_data(resolve_motion_file(motion_file)), device=device)
 
 
 def num_clips(motion_file: str) -> int:
-    return _host_library(resolve_motion_file(motion_file)).num_clips
+    return len(_host_data(resolve_motion_file(motion_file))["clip_names"])
