@@ -27,7 +27,8 @@ def mjcf_timestep(mjcf_path: str | Path) -> float:
         raise ValueError(f"{mjcf_path}: <option timestep='{value}'> is not a number") from err
 
 
-def build_mjcf_worlds(mjcf_path: str | Path, num_worlds: int, device: str, contact_gap: float = 0.0):
+def build_mjcf_worlds(mjcf_path: str | Path, num_worlds: int, device: str, contact_gap: float = 0.0,
+                      edit_world=None, ground=None, **mjcf_options):  # fmt: skip
     """Import ``mjcf_path`` once and replicate it into ``num_worlds`` worlds of one finalized Newton model.
 
     Args:
@@ -36,6 +37,10 @@ def build_mjcf_worlds(mjcf_path: str | Path, num_worlds: int, device: str, conta
         device: Warp device of the model (``"cpu"`` or ``"cuda:N"``).
         contact_gap: Gap given to geoms that author none. MJCF's default is 0; Newton's own default widens contact
             detection by 0.1 m, which only adds inactive contacts (and halves the speed of contact-rich models).
+        edit_world: Called with the one-world ``ModelBuilder`` after the import, before replication (e.g. to check
+            the layout or set joint target gains in code).
+        ground: A ``ModelBuilder.ShapeConfig`` for a ground plane shared by all worlds; None for none.
+        mjcf_options: Keyword arguments of ``ModelBuilder.add_mjcf`` (e.g. ``floating``).
     """
     import newton
     from newton.solvers import SolverMuJoCo
@@ -48,11 +53,15 @@ def build_mjcf_worlds(mjcf_path: str | Path, num_worlds: int, device: str, conta
     world = newton.ModelBuilder()
     SolverMuJoCo.register_custom_attributes(world)  # keeps MuJoCo actuators, tendons and options from the file
     world.default_shape_cfg.gap = contact_gap
-    world.add_mjcf(str(path))
+    world.add_mjcf(str(path), **mjcf_options)
+    if edit_world is not None:
+        edit_world(world)
 
     scene = newton.ModelBuilder()
     SolverMuJoCo.register_custom_attributes(scene)
     scene.replicate(world, num_worlds)
+    if ground is not None:
+        scene.add_ground_plane(cfg=ground)
     return scene.finalize(device=device)
 
 

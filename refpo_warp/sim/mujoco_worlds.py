@@ -36,23 +36,27 @@ class MuJoCoWorlds:
         device: Warp device name.
         substeps: Physics steps per control step.
         solver_options: Extra ``SolverMuJoCo`` keyword arguments (e.g. ``iterations``); the file's options otherwise.
+        physics_dt: Physics step in seconds; default: the file's ``<option timestep>``.
+        warn_overflow: Let MuJoCo Warp print a line when a capacity or iteration cap is hit.
+        build_options: Keyword arguments of ``build_mjcf_worlds`` (``edit_world``, ``ground``, ``add_mjcf`` options).
     """
 
     def __init__(self, mjcf_path: str | Path, num_worlds: int, device: str, substeps: int = 1,
-                 solver_options: dict | None = None) -> None:  # fmt: skip
+                 solver_options: dict | None = None, physics_dt: float | None = None, warn_overflow: bool = True,
+                 **build_options) -> None:  # fmt: skip
         import newton
 
         if substeps < 1:
             raise ValueError(f"substeps must be >= 1, got {substeps}")
         self.mjcf_path = Path(mjcf_path)
-        self.dt = mjcf_timestep(self.mjcf_path)
+        self.dt = physics_dt or mjcf_timestep(self.mjcf_path)
         self.substeps = int(substeps)
-        self.model = build_mjcf_worlds(self.mjcf_path, num_worlds, device)
+        self.model = build_mjcf_worlds(self.mjcf_path, num_worlds, device, **build_options)
         # Every movable root would otherwise get an inactive weld constraint (only needed for kinematic switching).
         options = {"kinematic_switchable_roots": False, **(solver_options or {})}
         self.solver = newton.solvers.SolverMuJoCo(self.model, **options)
-        # MuJoCo Warp prints a line per step when the (deliberately low) iteration caps of the DMC models are hit.
-        self.solver.mjw_model.opt.warn_overflow = 0
+        if not warn_overflow:
+            self.solver.mjw_model.opt.warn_overflow = 0
         self._use_mujoco_c_inverse_weights()
         self.state = self.model.state()
         self._scratch = self.model.state()

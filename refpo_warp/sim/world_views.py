@@ -23,7 +23,8 @@ class WorldViews:
     body_qd: wp.array  # (W, bodies) wp.spatial_vector: (linear velocity of the COM, angular velocity), world frame
     body_mass: wp.array  # (W, bodies)
     ctrl: wp.array | None  # (W, actuators) MuJoCo actuator controls (control.mujoco.ctrl), None without actuators
-    coord_ref: wp.array  # (coords,) MJCF joint ``ref``: MuJoCo qpos = joint_q + coord_ref
+    joint_target: wp.array  # (W, coords) joint position targets of Newton's joint PD (control.joint_target_q)
+    coord_ref: wp.array | None  # (coords,) MJCF joint ``ref``: MuJoCo qpos = joint_q + coord_ref; None with free joints
     limit_lower: np.ndarray  # (dofs,) joint limits in Newton coordinates (huge for unlimited joints); host only
     limit_upper: np.ndarray
     body_labels: list[str]  # labels of the bodies of one world, in body order
@@ -38,15 +39,14 @@ class WorldViews:
 
 
 def make_world_views(model, state, control) -> WorldViews:
-    """Build the views for ``state``/``control`` of a model made of identical worlds (hinge/slide joints only)."""
+    """Build the views for ``state``/``control`` of a model made of identical worlds."""
     w = model.world_count
     coords, dofs, bodies = model.joint_coord_count // w, model.joint_dof_count // w, model.body_count // w
-    if model.joint_coord_count != model.joint_dof_count:
-        # MuJoCo qpos = joint_q + ref holds coordinate-wise only when every coordinate is a DOF (no free/ball).
-        raise ValueError("make_world_views supports hinge/slide models only (joint_coord_count != joint_dof_count)")
-    mujoco_attrs = getattr(model, "mujoco", None)
-    dof_ref = getattr(mujoco_attrs, "dof_ref", None)
-    ref = dof_ref.numpy()[:coords] if dof_ref is not None else np.zeros(coords, np.float32)
+    coord_ref = None
+    if coords == dofs:  # MuJoCo qpos = joint_q + ref holds coordinate-wise only without free/ball joints
+        dof_ref = getattr(getattr(model, "mujoco", None), "dof_ref", None)
+        ref = dof_ref.numpy()[:coords] if dof_ref is not None else np.zeros(coords, np.float32)
+        coord_ref = wp.array(ref.astype(np.float32), dtype=float, device=model.device)
     ctrl = getattr(getattr(control, "mujoco", None), "ctrl", None)
     return WorldViews(
         joint_q=state.joint_q.reshape((w, coords)),
@@ -55,7 +55,8 @@ def make_world_views(model, state, control) -> WorldViews:
         body_qd=state.body_qd.reshape((w, bodies)),
         body_mass=model.body_mass.reshape((w, bodies)),
         ctrl=ctrl.reshape((w, ctrl.shape[0] // w)) if ctrl is not None and ctrl.shape[0] else None,
-        coord_ref=wp.array(ref.astype(np.float32), dtype=float, device=model.device),
+        joint_target=control.joint_target_q.reshape((w, coords)),
+        coord_ref=coord_ref,
         limit_lower=model.joint_limit_lower.numpy()[:dofs].copy(),
         limit_upper=model.joint_limit_upper.numpy()[:dofs].copy(),
         body_labels=list(model.body_label[:bodies]),

@@ -93,7 +93,10 @@ class DmcEnv(WarpVecEnv):
             options["iterations"] = cfg.solver_iterations
         if cfg.solver_ls_iterations:
             options["ls_iterations"] = cfg.solver_ls_iterations
-        self.sim = MuJoCoWorlds(task_class.model_path(), self.num_envs, self.device, task_class.substeps, options)
+        # warn_overflow off: MuJoCo Warp would print a line per step when the models' (deliberately low, Playground's)
+        # iteration caps are hit.
+        self.sim = MuJoCoWorlds(task_class.model_path(), self.num_envs, self.device, task_class.substeps, options,
+                                warn_overflow=False)  # fmt: skip
         ctrl = self.sim.views.ctrl
         if ctrl is None or ctrl.shape[1] != task_class.num_actions:
             raise ValueError(f"{task_class.model_file}: expected {task_class.num_actions} actuators, found "

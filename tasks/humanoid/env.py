@@ -149,7 +149,7 @@ class HumanoidTrackingEnv(WarpVecEnv):
                   inputs=[s.reset_mask, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, r.dof_pos, r.dof_vel,
                           s.root_com],
                   outputs=[s.joint_q, s.joint_qd])  # fmt: skip
-        s.finish_reset()
+        s.after_reset()
         wp.launch(_shift_time_kernel, dim=n, inputs=[self.ref_time, self.step_dt], outputs=[self.obs_time])
         self.motion.sample(self.clip_id, self.obs_time, r)
         wp.launch(observation_kernel, dim=(n, sk.NUM_BODIES),

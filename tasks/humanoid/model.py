@@ -18,6 +18,7 @@ import numpy as np
 
 from refpo_warp.device import configure_warp
 from refpo_warp.motion import skeleton as sk
+from refpo_warp.sim import MuJoCoWorlds
 from tasks.humanoid.mjcf_builder import MJCF_PATH
 
 wp = configure_warp()
@@ -46,59 +47,33 @@ class SimOptions:
         return self.control_dt / self.substeps
 
 
-class HumanoidSim:
-    """Newton model, MuJoCo solver, state and control of ``num_envs`` humanoid worlds, with per-world 2-D views.
+class HumanoidSim(MuJoCoWorlds):
+    """``num_envs`` humanoid worlds on a ground plane (``MuJoCoWorlds`` with the PD gains set in code).
 
     Views (first axis = world): ``joint_q`` (N, 76) root pose then 69 hinge angles; ``joint_qd`` (N, 75) root COM
     velocity and angular velocity then 69 hinge rates; ``body_q`` (N, 24) transforms; ``body_qd`` (N, 24) twists
     (COM linear velocity, angular velocity); ``joint_target`` (N, 76) PD targets (only the hinge entries are used).
+    After writing joint coordinates of the worlds in ``reset_mask``, ``after_reset()`` recomputes their body poses and
+    clears the solver's carried-over buffers (warm start), so a diverged world cannot poison its next episode.
     """
 
     def __init__(self, num_envs: int, device, options: SimOptions = SimOptions()) -> None:
         import newton
 
-        if options.substeps < 2 or options.substeps % 2:
-            raise ValueError(f"substeps must be even and >= 2 (state buffers swap each substep), got "
-                             f"{options.substeps}")  # fmt: skip
+        solver_options = {"njmax": options.njmax, "nconmax": options.nconmax, "iterations": options.iterations,
+                          "ls_iterations": options.ls_iterations, "integrator": options.integrator}  # fmt: skip
+        super().__init__(MJCF_PATH, num_envs, device, options.substeps, solver_options, physics_dt=options.physics_dt,
+                         edit_world=_set_pd_gains, ground=newton.ModelBuilder.ShapeConfig(mu=GROUND_FRICTION, gap=0.0),
+                         floating=True, enable_self_collisions=True)  # fmt: skip
         self.options = options
         self.num_envs = num_envs
         self.device = device
-        self.model = build_model(num_envs, device)
-        self.solver = newton.solvers.SolverMuJoCo(
-            self.model, njmax=options.njmax, nconmax=options.nconmax, iterations=options.iterations,
-            ls_iterations=options.ls_iterations, integrator=options.integrator,
-        )  # fmt: skip
-        self.state, self._scratch = self.model.state(), self.model.state()
-        self.control = self.model.control()
-        n = num_envs
-        self.joint_q = self.state.joint_q.reshape((n, -1))
-        self.joint_qd = self.state.joint_qd.reshape((n, -1))
-        self.body_q = self.state.body_q.reshape((n, -1))
-        self.body_qd = self.state.body_qd.reshape((n, -1))
-        self.joint_target = self.control.joint_target_q.reshape((n, -1))
-        per_world = self.model.body_count // n
-        body_com = self.model.body_com.numpy()[:per_world]
+        v = self.views
+        self.joint_q, self.joint_qd, self.body_q, self.body_qd = v.joint_q, v.joint_qd, v.body_q, v.body_qd
+        self.joint_target = v.joint_target
+        body_com = self.model.body_com.numpy()[: sk.NUM_BODIES]
         self.body_com = wp.array(body_com, dtype=wp.vec3, device=device)
         self.root_com = wp.vec3(*body_com[0])  # the root's COM offset in its frame (a kernel argument)
-        # The solver's reset takes a (worlds + 1) mask (the last entry is the global world); kernels write the first N.
-        self._world_mask = wp.zeros(n + 1, dtype=wp.bool, device=device)
-        self.reset_mask = self._world_mask[:n]
-
-    def simulate(self) -> None:
-        """Advance one control step (graph-capturable; an even number of substeps leaves the result in ``state``)."""
-        dt = self.options.physics_dt
-        a, b = self.state, self._scratch
-        for _ in range(self.options.substeps):
-            self.solver.step(a, b, self.control, None, dt)
-            a, b = b, a
-
-    def finish_reset(self) -> None:
-        """After writing joint coordinates of the worlds in ``reset_mask``: recompute their body poses and clear the
-        solver's carried-over buffers (warm start) so a diverged world cannot poison its next episode."""
-        import newton
-
-        newton.eval_fk(self.model, self.state.joint_q, self.state.joint_qd, self.state, mask=self.reset_mask)
-        self.solver.reset(self.state, world_mask=self._world_mask, flags=0)
 
     def constraint_usage(self) -> tuple[int, int]:
         """(largest constraint-row count of any world, total contacts) after the last substep (host sync; tests)."""
@@ -106,14 +81,10 @@ class HumanoidSim:
         return int(data.nefc.numpy().max()), int(data.nacon.numpy()[0])
 
 
-def build_model(num_envs: int, device):
-    """Finalized Newton model of ``num_envs`` humanoid worlds with PD target gains and a shared ground plane."""
+def _set_pd_gains(robot) -> None:
+    """Check the imported layout, then give every hinge the reference's PD gains as Newton joint target gains."""
     import newton
 
-    robot = newton.ModelBuilder()
-    newton.solvers.SolverMuJoCo.register_custom_attributes(robot)
-    robot.default_shape_cfg.gap = 0.0  # Newton's default 0.1 m gap only adds inactive contact candidates
-    robot.add_mjcf(str(MJCF_PATH), floating=True, enable_self_collisions=True)
     _check_layout(robot, MJCF_PATH)
     for body in range(1, sk.NUM_BODIES):
         kp, kd = sk.PD_GAINS[body]
@@ -123,13 +94,6 @@ def build_model(num_envs: int, device):
             robot.joint_target_kd[dof] = float(kd)
             robot.joint_target_mode[dof] = int(newton.JointTargetMode.POSITION)
             robot.joint_effort_limit[dof] = EFFORT_LIMIT
-
-    scene = newton.ModelBuilder()
-    newton.solvers.SolverMuJoCo.register_custom_attributes(scene)
-    scene.replicate(robot, num_envs)
-    ground = newton.ModelBuilder.ShapeConfig(mu=GROUND_FRICTION, gap=0.0)
-    scene.add_ground_plane(cfg=ground)
-    return scene.finalize(device=device)
 
 
 def _check_layout(robot, mjcf: Path) -> None:
