@@ -2,7 +2,8 @@
 
 Layers, later winning: ``configs/default.yaml`` < ``configs/algo/<algo>.yaml`` < ``configs/task/<task>.yaml``
 (after the task files it names in ``base``) < the task's ``by_device.<cpu|cuda>`` < its ``by_algo.<algo>`` <
-command-line overrides. Task and algo files hold deltas only.
+``by_device.<cpu|cuda>.by_algo.<algo>`` < command-line overrides. Task and algo files hold deltas only. Keys of
+``actor``, ``critic`` and ``algorithm`` that only some algorithms accept belong under ``by_algo`` in task files.
 
 Keys are validated where they are consumed: ``env.*`` against the task's env cfg dataclass, ``actor.*``,
 ``critic.*`` and ``algorithm.*`` against the constructor of the class their ``class_name`` selects, and every other
@@ -172,8 +173,10 @@ def _validate_class_section(section: str, values: dict) -> dict:
         if key == "class_name":
             continue
         if key not in params:
-            raise unknown(f"key '{section}.{key}' for {values['class_name']}", f"{section}.{key}",
+            err = unknown(f"key '{section}.{key}' for {values['class_name']}", f"{section}.{key}",
                           [f"{section}.{k}" for k in params])
+            raise ConfigError(f"{err} (A task file keeps keys that only some algorithms accept under "
+                              f"by_algo.<algo>.{section}.)")
         out[key] = _coerce(value, params[key], f"{section}.{key}")
     return out
 
@@ -249,8 +252,11 @@ def resolve_config(overrides: list[str] | dict[str, Any] | None = None, device_t
         from refpo_warp.device import resolve_device
 
         device_type = resolve_device(str(flat.get("device", cfg.get("device", "auto")))).split(":")[0]
-    cfg = merge(cfg, (task_cfg.get("by_device") or {}).get(device_type, {}))
+    device_profile = dict((task_cfg.get("by_device") or {}).get(device_type, {}))
+    device_by_algo = device_profile.pop("by_algo", None) or {}
+    cfg = merge(cfg, device_profile)
     cfg = merge(cfg, (task_cfg.get("by_algo") or {}).get(algo, {}))
+    cfg = merge(cfg, device_by_algo.get(algo, {}))
     for key, value in flat.items():
         if key in PROFILE_KEYS:
             raise ConfigError(f"'{key}' is a config-file key, not a run option")

@@ -19,6 +19,7 @@ def run_episodes(
     episodes_per_env: int = 1,
     max_steps: int | None = None,
     reset: bool = True,
+    record_obs: int = 0,
 ) -> dict[str, torch.Tensor]:
     """Roll ``policy`` in ``env`` until every env finished ``episodes_per_env`` episodes (or ``max_steps`` passed).
 
@@ -29,6 +30,8 @@ def run_episodes(
         max_steps: Step cap (default: ``episodes_per_env * env.max_episode_length``); unfinished episodes are
             dropped from the result and counted in ``"unfinished"``.
         reset: Reset all envs first so every recorded episode starts from a fresh initial state.
+        record_obs: Keep about this many of the observations the policy acted on, evenly spread over the steps
+            (returned as ``"observations"``, a TensorDict), for on-policy diagnostics.
 
     Returns:
         Flat tensors over recorded episodes: ``return``, ``length`` and one entry per env episode metric, plus the
@@ -44,8 +47,12 @@ def run_episodes(
     metric_names = list(env.episode_metric_buffers)
     for name in metric_names:
         records[name] = []
+    every = max(1, (max_steps * n) // record_obs) if record_obs else 0  # steps between recorded observations
+    visited = []
 
-    for _ in range(max_steps):
+    for step in range(max_steps):
+        if every and step % every == 0:
+            visited.append(obs.clone())
         actions = policy(obs)
         obs, rewards, dones, _ = env.step(actions)
         running_return += rewards
@@ -64,6 +71,8 @@ def run_episodes(
 
     out = {k: torch.cat(v) if v else torch.zeros(0, device=env.device) for k, v in records.items()}
     out["unfinished"] = torch.tensor(int((episodes_per_env - finished.clamp(max=episodes_per_env)).sum()))
+    if visited:
+        out["observations"] = torch.cat(visited)[:record_obs]
     return out
 
 
@@ -71,6 +80,8 @@ def summarize(episodes: dict[str, torch.Tensor]) -> dict[str, float]:
     """Means (and the return's std) of a ``run_episodes`` result, as plain floats for JSON."""
     out: dict[str, float] = {"episodes": int(episodes["return"].numel())}
     for key, values in episodes.items():
+        if key == "observations":
+            continue
         if key == "unfinished":
             out[key] = int(values)
         elif values.numel():

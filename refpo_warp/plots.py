@@ -14,10 +14,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 DIAGNOSTICS = (
-    ("loss/ratio_max", "max ratio per update"),
-    ("loss/clip_fraction", "clip fraction"),
-    ("loss/explosion_rate", "Explosion Rate"),
-    ("loss/straightness_error", "Straightness Error"),
+    ("Flow/ratio_max", "max ratio per update"),
+    ("Flow/clip_fraction", "clip fraction"),
+    ("Flow/explosion_rate", "Explosion Rate (per action)"),
+    ("Flow/straightness_error", "Straightness Error"),
 )
 
 

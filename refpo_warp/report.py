@@ -1,8 +1,15 @@
 """Evaluate a trained run: returns at several flow-step counts, flow diagnostics, ``eval.json`` and figures.
 
-Flow policies are evaluated at every N in ``eval.flow_steps`` (1-step vs multi-step returns); a Gaussian actor
-once, with its mean action. Task families may add a ``tasks/<family>/report.py`` with ``summarize(episodes)``
-(extra numbers, e.g. GridWorld's top/bottom goal shares) and ``figures(run_dir, actor, cfg)`` (PNG files).
+Flow policies are evaluated at every N in ``eval.flow_steps`` (1-step vs multi-step returns) under the protocol
+``eval.initial_noise`` (random | zero) and ``eval.perturbation`` (the rollout's post-sample noise on | off); a
+Gaussian actor once, with its mean action. Task families may add a ``tasks/<family>/report.py`` with
+``summarize(episodes)`` (extra numbers, e.g. GridWorld's top/bottom goal shares) and ``figures(run_dir, actor, cfg)``
+(PNG files).
+
+``eval.json`` diagnostics of flow policies: the training-time means over the run of the per-update values logged in
+``progress.jsonl`` (``straightness_error``, ``explosion_rate`` = the paper's "Explosion" / "Ratio Expl.",
+``explosion_rate_pair``, ``clip_fraction``; ``ratio_max`` is the run's maximum), and, on observations visited by
+the evaluated policy, ``straightness_error_eval`` and the Jacobian statistics (``refpo_warp.flow_diagnostics``).
 """
 
 from __future__ import annotations
@@ -10,6 +17,7 @@ from __future__ import annotations
 import importlib
 import json
 import os
+from functools import partial
 from pathlib import Path
 
 import torch
@@ -17,9 +25,12 @@ import torch
 from refpo_warp.evaluation import run_episodes, summarize
 from refpo_warp.registry import get_task
 
+DIAGNOSTIC_OBSERVATIONS = 1024  # on-policy observations kept from the evaluation for the flow diagnostics
+TRAINING_MEANS = ("straightness_error", "explosion_rate", "explosion_rate_pair", "clip_fraction")
+
 
 def is_flow(actor) -> bool:
-    return hasattr(actor, "num_flow_steps") and hasattr(actor, "velocity_error")
+    return hasattr(actor, "num_flow_steps") and hasattr(actor, "sample")
 
 
 def family_report(task: str):
@@ -33,12 +44,11 @@ def family_report(task: str):
         return None
 
 
-def make_policy(actor, flow_steps: int | None, stochastic: bool):
+def make_policy(actor, flow_steps: int | None, initial_noise: str = "random", perturbation: bool = False):
     """obs -> actions for evaluation: a flow integrated with ``flow_steps`` Euler steps, or a Gaussian's mean."""
     if not is_flow(actor):
         return lambda obs: actor(obs)
-
-    return lambda obs: actor(obs, stochastic_output=stochastic, num_steps=flow_steps)
+    return lambda obs: actor.sample(obs, flow_steps, initial_noise, perturbation)
 
 
 def eval_num_envs(cfg: dict, interval: bool = False) -> int:
@@ -61,45 +71,63 @@ def make_eval_env(cfg: dict, interval: bool = False):
                     seed=cfg["seed"] + 10_000, **{**cfg["env"], **cfg["eval"]["env"]})  # fmt: skip
 
 
-def evaluate_actor(cfg: dict, actor, env, flow_steps: list[int]) -> dict[str, dict]:
-    """Summaries per evaluation setting: ``{"N=10": {...}, "N=1": {...}}`` (flows) or ``{"mean_action": {...}}``."""
+def evaluate_actor(cfg: dict, actor, env, flow_steps: list[int], record_obs: int = 0) -> tuple[dict, object]:
+    """Summaries per evaluation setting (``{"N=10": {...}, "N=1": {...}}`` for flows, ``{"mean_action": {...}}``
+    otherwise) and up to ``record_obs`` observations visited in the first setting (None if none were asked for)."""
     report = family_report(cfg["task"])
     settings = [(f"N={n}", n) for n in flow_steps] if is_flow(actor) else [("mean_action", None)]
-    results = {}
+    results, visited = {}, None
     for name, n in settings:
-        episodes = run_episodes(make_policy(actor, n, cfg["eval"]["stochastic"]), env,
-                                max_steps=cfg["eval"]["max_steps"])  # fmt: skip
+        policy = make_policy(actor, n, cfg["eval"]["initial_noise"], cfg["eval"]["perturbation"])
+        episodes = run_episodes(policy, env, max_steps=cfg["eval"]["max_steps"],
+                                record_obs=record_obs if visited is None else 0)  # fmt: skip
+        visited = episodes.pop("observations", visited)
         summary = summarize(episodes)
         if report is not None and hasattr(report, "summarize"):
             summary.update(report.summarize(episodes))
         results[name] = summary
-    return results
+    return results, visited
 
 
-@torch.inference_mode()
-def straightness_error(actor, env, num_pairs: int = 16) -> float:
-    """MSE between v_theta and the straight direction a - eps on fresh pairs, for actions the policy samples."""
-    obs = env.reset()
-    actions = actor(obs, stochastic_output=True)
-    tau = torch.rand(actions.shape[0], num_pairs, device=actions.device)
-    eps = torch.randn(actions.shape[0], num_pairs, actions.shape[1], device=actions.device)
-    return float(actor.velocity_error(obs, actions, tau, eps).mean())
+def tau_sampler(cfg: dict, actor):
+    """Draws flow times the way the run's algorithm drew them in training (uniform for algorithms without pairs)."""
+    from refpo_warp.algorithms.refpo import sample_tau
+
+    alg = cfg["algorithm"]
+    return partial(sample_tau, mode=alg.get("tau_sampling", "uniform"), num_flow_steps=actor.num_flow_steps,
+                   logit_mean=alg.get("tau_logit_mean", -1.2), logit_std=alg.get("tau_logit_std", 1.2),
+                   device="cpu")  # fmt: skip
+
+
+def flow_diagnostics(cfg: dict, actor, observations) -> dict:
+    """Straightness Error and Jacobian statistics on on-policy observations (for actors that define them)."""
+    from refpo_warp import flow_diagnostics as fd
+
+    out: dict = {}
+    if observations is None or not len(observations):
+        return out
+    if hasattr(actor, "cfm_terms"):
+        out["straightness_error_eval"] = fd.straightness_error(actor, observations, tau_sampler(cfg, actor))
+    if hasattr(actor, "velocity") and hasattr(actor.velocity, "project_obs"):
+        out.update(fd.jacobian_statistics(actor, observations, num_steps=actor.num_flow_steps))
+    return out
 
 
 def training_diagnostics(run_dir: Path) -> dict[str, float]:
-    """Means of the per-update flow diagnostics logged during training (whole run and last 10% of iterations)."""
+    """Means over the run of the per-update flow diagnostics in ``progress.jsonl`` (``ratio_max``: the maximum)."""
     from refpo_warp.plots import read_progress
 
     if not (run_dir / "progress.jsonl").exists():
         return {}
     rows = read_progress(run_dir)
     out: dict[str, float] = {}
-    for key in ("straightness_error", "explosion_rate", "ratio_mean", "ratio_max", "clip_fraction"):
-        values = [r[f"loss/{key}"] for r in rows if f"loss/{key}" in r]
+    for key in TRAINING_MEANS:
+        values = [r[f"Flow/{key}"] for r in rows if f"Flow/{key}" in r]
         if values:
-            tail = values[-max(1, len(values) // 10):]
-            out[f"train_{key}"] = sum(values) / len(values)
-            out[f"train_{key}_last10pct"] = sum(tail) / len(tail)
+            out[key] = sum(values) / len(values)
+    ratio_max = [r["Flow/ratio_max"] for r in rows if "Flow/ratio_max" in r]
+    if ratio_max:
+        out["ratio_max"] = max(ratio_max)
     return out
 
 
@@ -126,39 +154,43 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         _, runner = build_runner(cfg, None, env=env)
         runner.load(str(checkpoint), map_location=runner.device)
     actor = runner.get_inference_policy(device=runner.device)
-    results = {
+    flow = is_flow(actor)
+    results, visited = evaluate_actor(cfg, actor, env, cfg["eval"]["flow_steps"],
+                                      record_obs=DIAGNOSTIC_OBSERVATIONS if flow else 0)  # fmt: skip
+    out = {
         "task": cfg["task"],
         "algo": cfg["algo"],
+        "seed": cfg["seed"],
         "checkpoint_iteration": runner.current_learning_iteration,
+        "env_steps": (runner.current_learning_iteration + 1) * cfg["num_envs"] * cfg["runner"]["num_steps_per_env"],
         "eval_envs": env.num_envs,
-        "stochastic": bool(cfg["eval"]["stochastic"]) if is_flow(actor) else False,
-        "results": evaluate_actor(cfg, actor, env, cfg["eval"]["flow_steps"]),
+        "protocol": ({"initial_noise": cfg["eval"]["initial_noise"], "perturbation": bool(cfg["eval"]["perturbation"])}
+                     if flow else {"mean_action": True}),  # fmt: skip
+        "results": results,
+        "diagnostics": {**training_diagnostics(run_dir), **flow_diagnostics(cfg, actor, visited)} if flow else {},
     }
-    diagnostics = training_diagnostics(run_dir)
-    if is_flow(actor):
-        diagnostics["straightness_error"] = straightness_error(actor, env)
-        if "train_explosion_rate" in diagnostics:
-            diagnostics["explosion_rate"] = diagnostics["train_explosion_rate"]
-    results["diagnostics"] = diagnostics
     report = family_report(cfg["task"])
     if report is not None and hasattr(report, "figures"):
-        results["figures"] = [str(p) for p in report.figures(run_dir, actor, cfg)]
-    write_json(results, run_dir / "eval.json")
+        out["figures"] = [str(p) for p in report.figures(run_dir, actor, cfg)]
+    write_json(out, run_dir / "eval.json")
     runner.alg.train_mode()
-    _print_results(results)
-    return results
+    _print_results(out)
+    return out
 
 
 def _print_results(results: dict) -> None:
     for name, summary in results["results"].items():
         numbers = "  ".join(f"{k} {v:.4g}" for k, v in summary.items() if isinstance(v, float))
         print(f"[eval] {results['task']} {name}: {numbers}", flush=True)
-    if results.get("diagnostics"):
-        print("[eval] diagnostics: " + "  ".join(f"{k} {v:.4g}" for k, v in results["diagnostics"].items()))
+    scalars = {k: v for k, v in results.get("diagnostics", {}).items() if isinstance(v, float)}
+    if scalars:
+        print("[eval] diagnostics: " + "  ".join(f"{k} {v:.4g}" for k, v in scalars.items()))
 
 
 def periodic_evaluator(cfg: dict, runner):
-    """Hook for ``ProgressLogger.on_iteration``: every ``eval.interval`` iterations, returns at ``interval_flow_steps``."""
+    """Hook for ``ProgressLogger.on_iteration``: every ``eval.interval`` iterations, the returns at
+    ``eval.interval_flow_steps`` (``eval/return_N<n>``, or ``eval/return`` for a Gaussian actor) and, for flows,
+    the Jacobian statistics (``Flow/jacobian_*``) on the visited observations."""
     env = make_eval_env(cfg, interval=True)
     interval = int(cfg["eval"]["interval"])
 
@@ -168,10 +200,17 @@ def periodic_evaluator(cfg: dict, runner):
         actor = runner.alg.get_policy()
         was_training = actor.training
         actor.eval()
-        results = evaluate_actor(cfg, actor, env, cfg["eval"]["interval_flow_steps"])
+        flow = is_flow(actor)
+        results, visited = evaluate_actor(cfg, actor, env, cfg["eval"]["interval_flow_steps"],
+                                          record_obs=256 if flow else 0)  # fmt: skip
+        out = {f"eval/return_N{name[2:]}" if name.startswith("N=") else "eval/return": s.get("return_mean", float("nan"))
+               for name, s in results.items()}  # fmt: skip
+        if flow and visited is not None and hasattr(actor, "velocity"):
+            from refpo_warp.flow_diagnostics import jacobian_statistics
+
+            stats = jacobian_statistics(actor, visited, num_steps=actor.num_flow_steps)
+            out.update({f"Flow/{k}": v for k, v in stats.items() if isinstance(v, float)})
         actor.train(was_training)
-        keys = {f"N={n}": f"eval/return_N{n}" for n in cfg["eval"]["interval_flow_steps"]}
-        keys["mean_action"] = "eval/return"
-        return {keys[name]: summary.get("return_mean", float("nan")) for name, summary in results.items()}
+        return out
 
     return evaluate

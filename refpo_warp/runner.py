@@ -59,9 +59,14 @@ class ProgressLogger(Logger):
         if self.writer is None:
             return
         episode = _episode_means(self.ep_extras)
+        # Statistics named with a prefix (Flow/...) are TensorBoard tags of their own; the rest are rsl_rl's Loss/.
+        tagged = {k: float(v) for k, v in loss_dict.items() if "/" in k}
+        losses = {k: v for k, v in loss_dict.items() if "/" not in k}
         sink = contextlib.nullcontext() if self.log_full else contextlib.redirect_stdout(io.StringIO())
         with sink:
-            super().log(it, start_it, total_it, collect_time, learn_time, loss_dict, **kwargs)
+            super().log(it, start_it, total_it, collect_time, learn_time, losses, **kwargs)
+        for key, value in tagged.items():
+            self.writer.add_scalar(key, value, it)
         row = {
             "iteration": it,
             "env_steps": self.tot_timesteps,
@@ -72,7 +77,8 @@ class ProgressLogger(Logger):
             row["reward_mean"] = statistics.mean(self.rewbuffer)
             row["episode_length_mean"] = statistics.mean(self.lenbuffer)
         row.update(episode)
-        row.update({f"loss/{k}": float(v) for k, v in loss_dict.items()})
+        row.update({f"Loss/{k}": float(v) for k, v in losses.items()})
+        row.update(tagged)
         if self.on_iteration is not None:
             evaluated = self.on_iteration(it, it == total_it - 1)
             for key, value in evaluated.items():
@@ -89,8 +95,8 @@ class ProgressLogger(Logger):
         if "reward_mean" in row:
             parts.append(f"return {row['reward_mean']:9.2f}")
             parts.append(f"len {row['episode_length_mean']:6.1f}")
-        for key in ("Episode/success", "loss/ratio_max", "loss/clip_fraction", "loss/explosion_rate",
-                    "loss/straightness_error"):  # fmt: skip
+        for key in ("Episode/success", "Flow/ratio_max", "Flow/clip_fraction", "Flow/explosion_rate",
+                    "Flow/straightness_error"):  # fmt: skip
             if key in row:
                 parts.append(f"{key.split('/')[-1]} {row[key]:.3g}")
         parts += [f"{k.split('/')[-1]} {v:.1f}" for k, v in row.items() if k.startswith("eval/return")]

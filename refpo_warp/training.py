@@ -119,13 +119,39 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
     dump_config(cfg, run_dir / RUN_CONFIG)
     start = runner.resume_from(checkpoint) if (resume and checkpoint is not None) else 0
     total = num_iterations(cfg)
+    notice = cfg["notice"].format(task=cfg["task"], algo=cfg["algo"]) if cfg["notice"] else None
+    if notice:
+        print(f"[refpo_warp] NOTE: {notice}", flush=True)
     print(f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs, "
           f"iterations {start}..{total - 1} ({total * env.num_envs * cfg['runner']['num_steps_per_env']:,} env "
           f"steps), run dir {run_dir}", flush=True)  # fmt: skip
+    if cfg["eval"]["interval"] is None:  # periodic evaluation on by default: 10 evaluations per run
+        cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
     if cfg["eval"]["interval"] > 0:
         runner.logger.on_iteration = periodic_evaluator(cfg, runner)
     if total > start:
         runner.learn(total - start, init_at_random_ep_len=cfg["runner"]["init_at_random_ep_len"])
-    if not cfg["eval"]["at_end"]:
-        return {}
-    return evaluate_run(run_dir, cfg=cfg, runner=runner)
+    results = {}
+    if cfg["eval"]["at_end"]:
+        results = evaluate_run(run_dir, cfg=cfg, runner=runner)
+        log_final_evaluation(runner, results)
+    if notice:
+        print(f"[refpo_warp] NOTE: {notice}", flush=True)
+    return results
+
+
+def log_final_evaluation(runner, results: dict) -> None:
+    """The final evaluation's returns, task metrics and scalar diagnostics as TensorBoard scalars (``Eval/...``)."""
+    writer = runner.logger.writer
+    if writer is None:
+        return
+    it = results["checkpoint_iteration"]
+    for setting, summary in results["results"].items():
+        for key, value in summary.items():
+            if isinstance(value, float):
+                writer.add_scalar(f"Eval/{setting}/{key}", value, it)
+    for key, value in results.get("diagnostics", {}).items():
+        if isinstance(value, float):
+            writer.add_scalar(f"Eval/diagnostics/{key}", value, it)
+    if hasattr(writer, "flush"):
+        writer.flush()

@@ -50,7 +50,7 @@ def cartpole(m, d, ctrl, extra):
 
 def pendulum(m, d, ctrl, extra):
     r = _xmat(m, d, "pole")
-    return [r[0, 2], r[2, 2], d.qvel[0]], float(r[2, 2] >= math.cos(math.radians(8)))
+    return [r[2, 2], r[0, 2], d.qvel[0]], float(r[2, 2] >= math.cos(math.radians(8)))
 
 
 def point_mass(m, d, ctrl, extra):

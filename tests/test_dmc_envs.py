@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 import torch
+import warp as wp
 
 from refpo_warp.registry import get_task, make_env
 
@@ -22,10 +23,11 @@ _ENVS = {}
 
 
 def dmc_env(task):
-    """One 4-env instance per task for this module (cheetah with a small bank of settled initial states)."""
+    """One 4-env instance per task for this module (cheetah with a small bank of settled initial states); actions
+    clipped, so hand-worked rewards see the controls as written (tanh squashing has its own test)."""
     if task not in _ENVS:
         extra = {"reset_bank_size": 16} if task == "cheetah_run" else {}
-        _ENVS[task] = make_env(f"dmc_{task}", num_envs=N, device="cpu", seed=7, **extra)
+        _ENVS[task] = make_env(f"dmc_{task}", num_envs=N, device="cpu", seed=7, action_transform="clip", **extra)
     return _ENVS[task]
 
 
@@ -226,3 +228,20 @@ def test_nonfinite_state_resets_that_env(task):
 def test_unknown_task_name_is_a_clear_error():
     with pytest.raises(ValueError, match="cartpole_balance"):
         make_env("dmc_cartpole_balance", num_envs=1, device="cpu", task="cartpole_balanse")
+
+
+def test_tanh_squashing_sends_tanh_of_the_stored_action_to_the_env():
+    """DMC's default action transform (Playground): the env's controls are tanh(a); the learner's a is untouched."""
+    squashed = make_env("dmc_cartpole_balance", num_envs=N, device="cpu", seed=7)
+    clipped = dmc_env("cartpole_balance")
+    assert squashed.cfg.action_transform == "tanh"
+    actions = torch.tensor([[0.3], [-2.0], [5.0], [0.0]])
+    stored = actions.clone()
+    squashed.step(actions)
+    torch.testing.assert_close(actions, stored)  # the caller's (stored, pre-tanh) action is not modified
+    torch.testing.assert_close(wp.to_torch(squashed.sim.views.ctrl), torch.tanh(actions))
+    qpos, qvel = torch.zeros(N, 2), torch.zeros(N, 2)
+    for env in (squashed, clipped):
+        env.set_state(qpos, qvel)
+    np.testing.assert_allclose(squashed.compute_rewards(actions).numpy(),
+                               clipped.compute_rewards(torch.tanh(actions)).numpy(), rtol=1e-6)  # fmt: skip

@@ -1,7 +1,7 @@
 """Newton/MuJoCo-Warp envs against the MuJoCo C library running the same MJCF file from the same states.
 
 Both sides start from the env's reset states and apply the same controls (envs 0-1 passive, envs 2-3 random
-actions in [-1.5, 1.5], clipped by both). Positions, velocities, observations and rewards are compared after every
+actions in [-1.5, 1.5], squashed by tanh on both sides as the env does). Positions, velocities, observations and rewards are compared after every
 control step; observations and rewards on the C side come from the independent numpy references in
 ``dmc_mujoco_reference.py`` (Playground formulas on MuJoCo's own kinematics).
 
@@ -73,9 +73,10 @@ def _compare(task, converged, steps, tol_q, tol_v, tol_obs, tol_rew):
         assert not done.any()
         ref = []
         for i, data in enumerate(datas):
-            data.ctrl[:] = actions[i].numpy()  # MuJoCo clamps to ctrlrange itself
+            ctrl = np.tanh(actions[i].numpy())  # the env's action transform (Playground's tanh)
+            data.ctrl[:] = ctrl
             mujoco.mj_step(model, data, env.task.substeps)
-            ref.append(_reference(task, model, data, probe, actions[i].numpy()))
+            ref.append(_reference(task, model, data, probe, ctrl))
         errors = (
             np.abs(env.qpos.numpy() - np.stack([d.qpos for d in datas])).max(),
             np.abs(env.joint_qd.numpy() - np.stack([d.qvel for d in datas])).max(),
@@ -109,7 +110,7 @@ def test_finger_touch_sensors_match_mujoco():
     for i in range(N):
         data = mujoco.MjData(model)
         data.qpos[:] = qpos[i]
-        data.ctrl[:] = 1.0
+        data.ctrl[:] = math.tanh(1.0)  # the env squashes its actions with tanh
         mujoco.mj_step(model, data, env.task.substeps)
         touch.append(data.sensordata[:2].copy())
     touch = np.array(touch)

@@ -61,7 +61,7 @@ def test_train_writes_checkpoints_config_progress_and_eval(tmp_run_dir):
     assert (tmp_run_dir / "config.yaml").exists() and list(tmp_run_dir.glob("events.out.tfevents*"))
     rows = [json.loads(line) for line in (tmp_run_dir / "progress.jsonl").read_text().splitlines()]
     assert [r["iteration"] for r in rows] == [0, 1, 2]
-    assert {"loss/ratio_max", "loss/explosion_rate", "loss/straightness_error", "loss/clip_fraction"} <= set(rows[0])
+    assert {"Flow/ratio_max", "Flow/explosion_rate", "Flow/straightness_error", "Flow/clip_fraction"} <= set(rows[0])
     saved = json.loads((tmp_run_dir / "eval.json").read_text())
     assert saved == json.loads(json.dumps(results))
     assert set(saved["results"]) == {"N=1", "N=2"}

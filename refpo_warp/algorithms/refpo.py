@@ -5,11 +5,17 @@ so under the rollout parameters) the old CFM losses L_old,k are computed in one 
 computes L_new,k on the same pairs and
 
     rho   = exp(mean_k L_old,k - mean_k L_new,k)                      (ratio_mode="mean", the reference default)
-    L     = -min(rho A, clip(rho, 1 - e, 1 + e) A) + c_v L_value + reflow_coef * mean_k L_new,k
+    L     = -min(rho A, clip(rho, 1 - e, 1 + e) A) + c_v L_value + reflow_coef * mean_k L_new,k [+ bound loss]
 
 ``reflow_coef = 0`` is FPO. With ``ratio_mode="per_sample"`` each pair has its own ratio and the surrogate is
 averaged over pairs; ``log_ratio_clip`` clamps each pair's log-ratio L_old,k - L_new,k to [-c, c] (their mean, the
-"mean" log-ratio, then lies in [-c, c] as well).
+"mean" log-ratio, then lies in [-c, c] as well). The CFM loss (its output mode and scale) is the actor's
+(``refpo_warp.models.flow_actor``), so the ratio and the Reflow term always use the same numbers.
+
+Diagnostics (``Flow/...``, paper §4.2 and Appendix C): ``explosion_rate`` is the fraction of actions whose
+log-ratio mean_k (L_old,k - L_new,k) exceeds ``explosion_threshold`` in magnitude (the paper's "Explosion" /
+"Ratio Expl."), ``explosion_rate_pair`` the same per (tau, eps) pair; ``straightness_error`` the mean of
+|v - (a - eps)|^2 on the stored pairs; ``ratio_mean``, ``ratio_max``, ``clip_fraction``, ``approx_kl``.
 """
 
 from __future__ import annotations
@@ -20,44 +26,42 @@ import torch
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.algorithms.ppo import PPO
-from refpo_warp.errors import NonFiniteLossError
+from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm, soft_bound_loss
+from refpo_warp.models.flow_actor import OUTPUT_MODES, cfm_loss
 
-TAU_SAMPLING = ("uniform", "discrete")
+TAU_SAMPLING = ("uniform", "discrete", "logit_normal")
 RATIO_MODES = ("mean", "per_sample")
 
 
-def flow_statistics(old_loss, new_loss, log_rho, velocity_error, clip_param: float, explosion_threshold: float):
-    """Per-minibatch diagnostics: ratio mean, clip fraction, Explosion Rate, Straightness Error, approx. KL.
-
-    Explosion Rate is the fraction of (action, tau, eps) samples with |L_new - L_old| > ``explosion_threshold``
-    (a proxy-ratio change beyond exp(3) for the default 3); Straightness Error is the mean squared difference
-    between v_theta and the straight direction a - eps on the stored pairs.
-    """
-    ratio = torch.exp(log_rho)
-    return {
-        "ratio_mean": ratio.mean(),
-        "clip_fraction": ((ratio - 1.0).abs() > clip_param).float().mean(),
-        "explosion_rate": ((new_loss - old_loss).abs() > explosion_threshold).float().mean(),
-        "straightness_error": velocity_error.mean(),
-        "approx_kl": ((ratio - 1.0) - log_rho).mean(),
-    }
+def sample_tau(shape: tuple[int, ...], mode: str, num_flow_steps: int, logit_mean: float, logit_std: float,
+               device) -> torch.Tensor:  # fmt: skip
+    """Flow times for the CFM pairs: U[0, 1); the sampler's Euler grid {0, 1/N, ..., (N-1)/N}; or logit-normal,
+    tau = 1 / (1 + exp(logit_std * n + logit_mean)), n ~ N(0, 1), clipped to [1e-4, 1] (Puffer-PHC; with its
+    mean -1.2 and std 1.2 the median is 0.77, towards the action end)."""
+    if mode == "uniform":
+        return torch.rand(shape, device=device)
+    if mode == "discrete":
+        return torch.randint(0, num_flow_steps, shape, device=device).float() / num_flow_steps
+    if mode == "logit_normal":
+        sigma = torch.exp(torch.randn(shape, device=device) * logit_std + logit_mean)
+        return (1.0 / (1.0 + sigma)).clamp(1e-4, 1.0)
+    raise ValueError(f"tau_sampling must be one of {TAU_SAMPLING}, got '{mode}'")
 
 
-class ReFPO(PPO):
+class ReFPO(OnPolicyAlgorithm):
     """Reflow-regularised Flow Matching Policy Gradients on rsl_rl's PPO machinery.
 
-    Args (in addition to every rsl_rl PPO argument):
+    The defaults are the project's tuned values (a fixed learning rate, not rsl_rl's adaptive schedule).
+
+    Args (in addition to the shared ones of ``OnPolicyAlgorithm`` and rsl_rl's PPO arguments):
         reflow_coef: lambda, the weight of the un-weighted CFM (Reflow) term; 0 gives FPO.
         num_mc_samples: K, (tau, eps) pairs stored per action.
-        output_mode: ``"u"`` or ``"eps"`` CFM weighting; default: the actor's ``output_mode``.
-        tau_sampling: ``"uniform"`` (tau ~ U[0, 1)) or ``"discrete"`` (tau on the sampler's Euler grid k/N).
+        output_mode: ``"u"``, ``"eps"`` or ``"data"`` CFM loss; default: the actor's ``output_mode``.
+        tau_sampling: ``"uniform"``, ``"discrete"`` (the sampler's Euler grid k/N) or ``"logit_normal"``.
+        tau_logit_mean, tau_logit_std: Parameters of the logit-normal tau (Puffer-PHC: -1.2, 1.2).
         ratio_mode: ``"mean"`` (average the K losses before the exp) or ``"per_sample"``.
         log_ratio_clip: Clamp for the log-ratio (None: no clamp).
-        explosion_threshold: |L_new - L_old| above which a sample counts towards the Explosion Rate.
-        value_clip_param: Clip range of the clipped value loss (None: ``clip_param``, as in rsl_rl's PPO). The
-            reference humanoid setup clips the ratio at 0.01 but the value at 0.2.
-        reward_scale: Multiplier on rewards for learning (Brax-style; logged returns stay unscaled).
+        explosion_threshold: |log-ratio| above which an action (or pair) counts towards the Explosion Rate.
     """
 
     def __init__(
@@ -69,21 +73,19 @@ class ReFPO(PPO):
         num_mc_samples: int = 8,
         output_mode: str | None = None,
         tau_sampling: str = "uniform",
+        tau_logit_mean: float = -1.2,
+        tau_logit_std: float = 1.2,
         ratio_mode: str = "mean",
         log_ratio_clip: float | None = None,
         explosion_threshold: float = 3.0,
-        value_clip_param: float | None = None,
-        **ppo_kwargs,
+        clip_param: float = 0.05,
+        learning_rate: float = 3e-4,
+        schedule: str = "fixed",
+        entropy_coef: float = 0.0,
+        use_clipped_value_loss: bool = False,
+        **kwargs,
     ) -> None:
-        for name in ("rnd_cfg", "symmetry_cfg"):
-            if ppo_kwargs.get(name):
-                raise ValueError(
-                    f"ReFPO does not support {name}: it trains the flow actor through the CFM-ratio surrogate "
-                    f"only. Remove '{name}' from the algorithm config (or set it to None)."
-                )
-        if getattr(critic, "is_recurrent", False) or getattr(actor, "is_recurrent", False):
-            raise ValueError("ReFPO supports feed-forward actors and critics only (no recurrent models).")
-        for method in ("cfm_loss", "velocity_error", "cfm_weight"):
+        for method in ("cfm_terms", "sample"):
             if not hasattr(actor, method):
                 raise TypeError(
                     f"ReFPO needs a flow actor with {method}(); set actor.class_name to refpo_warp.models:FlowActor"
@@ -92,52 +94,57 @@ class ReFPO(PPO):
             raise ValueError(f"tau_sampling must be one of {TAU_SAMPLING}, got '{tau_sampling}'")
         if ratio_mode not in RATIO_MODES:
             raise ValueError(f"ratio_mode must be one of {RATIO_MODES}, got '{ratio_mode}'")
-        if output_mode not in (None, "u", "eps"):
-            raise ValueError(f"output_mode must be 'u', 'eps' or None (the actor's), got '{output_mode}'")
+        if output_mode is not None and output_mode not in OUTPUT_MODES:
+            raise ValueError(f"output_mode must be one of {OUTPUT_MODES} or None (the actor's), got '{output_mode}'")
         if num_mc_samples < 1:
             raise ValueError(f"num_mc_samples must be >= 1, got {num_mc_samples}")
-        if ppo_kwargs.get("entropy_coef"):
+        if entropy_coef:
             warnings.warn("ReFPO ignores entropy_coef: a flow policy has no closed-form entropy.")
-        super().__init__(actor, critic, storage, **ppo_kwargs)
+        if schedule == "adaptive":
+            warnings.warn(
+                "ReFPO with schedule='adaptive': rsl_rl's schedule would be driven by the CFM proxy ratio's KL "
+                "estimate, which is not the policy's KL and moves the learning rate to its bounds within an "
+                "iteration (measured: 1e-3 -> 2e-5). Use schedule='fixed' (ReFPO's default)."
+            )
+        super().__init__(actor, critic, storage, clip_param=clip_param, learning_rate=learning_rate,
+                         schedule=schedule, entropy_coef=entropy_coef, use_clipped_value_loss=use_clipped_value_loss,
+                         **kwargs)  # fmt: skip
         self.reflow_coef = float(reflow_coef)
         self.num_mc_samples = int(num_mc_samples)
         self.output_mode = output_mode or actor.output_mode
         self.tau_sampling = tau_sampling
+        self.tau_logit_mean = float(tau_logit_mean)
+        self.tau_logit_std = float(tau_logit_std)
         self.ratio_mode = ratio_mode
         self.log_ratio_clip = None if log_ratio_clip is None else float(log_ratio_clip)
         self.explosion_threshold = float(explosion_threshold)
-        self.value_clip_param = self.clip_param if value_clip_param is None else float(value_clip_param)
 
     # ---------------------------------------------------------------------------------------------- rollout
     def sample_pairs(self, batch: int, device) -> tuple[torch.Tensor, torch.Tensor]:
         """Draw K (tau, eps) pairs per action: tau (batch, K), eps (batch, K, A)."""
         k, a = self.num_mc_samples, self.actor.action_dim
-        if self.tau_sampling == "uniform":
-            tau = torch.rand(batch, k, device=device)
-        else:  # the sampler's Euler grid {0, 1/N, ..., (N-1)/N}
-            n = self.actor.num_flow_steps
-            tau = torch.randint(0, n, (batch, k), device=device).float() / n
+        tau = sample_tau((batch, k), self.tau_sampling, self.actor.num_flow_steps, self.tau_logit_mean,
+                         self.tau_logit_std, device)  # fmt: skip
         return tau, torch.randn(batch, k, a, device=device)
 
     def act(self, obs: TensorDict) -> torch.Tensor:
         actions = self.actor(obs, stochastic_output=True).detach()
         n = actions.shape[0]
         tau, eps = self.sample_pairs(n, actions.device)
+        self.store.write(self.storage.step, tau=tau, eps=eps)
         t = self.transition
-        t.hidden_states = (None, None)
         t.actions = actions
         t.values = self.critic(obs).detach()
         t.actions_log_prob = torch.zeros(n, device=actions.device)
-        # (tau, eps, old CFM loss): the old losses are filled in at the start of update().
-        t.distribution_params = (tau, eps, torch.zeros(n, self.num_mc_samples, device=actions.device))
+        t.distribution_params = ()  # a flow has none; ReFPO's own data is in self.store
         t.observations = obs
         return actions
 
     # ---------------------------------------------------------------------------------------------- losses
     def cfm_losses(self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor):
-        """(CFM loss in ``output_mode``, unweighted velocity error), both (B, K)."""
-        error = self.actor.velocity_error(obs, actions, tau, eps)
-        return self.actor.cfm_weight(tau, self.output_mode) * error, error
+        """(CFM loss per pair in ``output_mode``, the actor's CfmTerms), losses (B, K)."""
+        terms = self.actor.cfm_terms(obs, actions, tau, eps)
+        return cfm_loss(terms, tau, self.output_mode, self.actor.loss_scale), terms
 
     def log_ratio(self, old_loss: torch.Tensor, new_loss: torch.Tensor) -> torch.Tensor:
         """log rho: (B,) for ratio_mode "mean", (B, K) for "per_sample"."""
@@ -155,90 +162,49 @@ class ReFPO(PPO):
         clipped = -adv * ratio.clamp(1.0 - self.clip_param, 1.0 + self.clip_param)
         return torch.max(unclipped, clipped).mean()
 
-    def value_loss(self, values: torch.Tensor, old_values: torch.Tensor, returns: torch.Tensor) -> torch.Tensor:
-        if self.use_clipped_value_loss:
-            clipped = old_values + (values - old_values).clamp(-self.value_clip_param, self.value_clip_param)
-            return torch.max((values - returns).pow(2), (clipped - returns).pow(2)).mean()
-        return (returns - values).pow(2).mean()
+    def reflow_loss(self, new_loss: torch.Tensor, batch: Minibatch) -> torch.Tensor:
+        """The Reflow term: the CFM loss of the current parameters on the stored pairs, un-weighted."""
+        return new_loss.mean()
 
-    def compute_old_losses(self, chunk: int = 65536) -> None:
-        """Fill the stored old CFM losses under the current (= rollout) parameters, before any gradient step."""
-        st = self.storage
-        obs = st.observations.flatten(0, 1)
-        actions = st.actions.flatten(0, 1)
-        tau, eps, old = (p.flatten(0, 1) for p in st.distribution_params)
-        with torch.inference_mode():  # the storage buffers were allocated in inference mode by the runner
-            for i in range(0, actions.shape[0], chunk):
-                sl = slice(i, i + chunk)
-                old[sl] = self.cfm_losses(obs[sl], actions[sl], tau[sl], eps[sl])[0]
-
-    # ---------------------------------------------------------------------------------------------- update
-    def update(self) -> dict[str, float]:
-        self.compute_old_losses()
-        # Per-minibatch stats stay on the device (no host sync per minibatch); they are read once after the loop.
-        keys: list[str] = []
-        rows: list[torch.Tensor] = []
-        ratio_max = torch.zeros((), device=self.device)
-        device_type = torch.device(self.device).type
-        for batch in self.storage.mini_batch_generator(self.num_mini_batches, self.num_learning_epochs):
-            tau, eps, old_loss = batch.old_distribution_params
-            advantages = batch.advantages.squeeze(-1)
-            if self.normalize_advantage_per_mini_batch:
-                advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
-            with torch.autocast(device_type=device_type, enabled=self.use_mixed_precision, dtype=torch.bfloat16):
-                new_loss, velocity_error = self.cfm_losses(batch.observations, batch.actions, tau, eps)
-                log_rho = self.log_ratio(old_loss, new_loss)
-                ratio = torch.exp(log_rho)
-                surrogate = self.surrogate_loss(ratio, advantages)
-                value_loss = self.value_loss(self.critic(batch.observations), batch.values, batch.returns)
-                reflow = new_loss.mean()
-                loss = surrogate + self.value_loss_coef * value_loss + self.reflow_coef * reflow
-            if not torch.isfinite(loss):
-                raise NonFiniteLossError(
-                    f"Non-finite ReFPO loss (surrogate={surrogate.item():.4g}, value={value_loss.item():.4g}, "
-                    f"reflow={reflow.item():.4g}, max log-ratio={log_rho.abs().max().item():.4g}); the update was "
-                    "stopped before applying it. Try a smaller learning_rate or log_ratio_clip."
-                )
-
-            self.optimizer.zero_grad()
-            loss.backward()
-            if self.is_multi_gpu:
-                self.reduce_parameters()
-            nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
-            nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
-            self.optimizer.step()
-
-            with torch.no_grad():
-                stats = flow_statistics(old_loss, new_loss, log_rho, velocity_error, self.clip_param,
-                                        self.explosion_threshold)  # fmt: skip
-                self._adapt_learning_rate(stats["approx_kl"])
-                stats.update(surrogate=surrogate, value=value_loss, reflow=reflow)
-                keys = list(stats)
-                rows.append(torch.stack([value.detach().float() for value in stats.values()]))
-                ratio_max = torch.maximum(ratio_max, ratio.detach().max().float())
-
-        # Normalisers follow the data after the update, as in rsl_rl's PPO.
+    def before_update(self, chunk: int = 65536) -> None:
+        """Store the old CFM losses under the current (= rollout) parameters, before any gradient step."""
         obs = self.storage.observations.flatten(0, 1)
-        self.actor.update_normalization(obs)
-        self.critic.update_normalization(obs)
-        self.storage.clear()
+        actions = self.storage.actions.flatten(0, 1)
+        tau, eps = self.store.flat("tau"), self.store.flat("eps")
+        with torch.inference_mode():
+            old = torch.cat([self.cfm_losses(obs[i : i + chunk], actions[i : i + chunk], tau[i : i + chunk],
+                                             eps[i : i + chunk])[0] for i in range(0, actions.shape[0], chunk)])  # fmt: skip
+            self.store.write_all(old_loss=old)
 
-        num_updates = self.num_learning_epochs * self.num_mini_batches
-        sums = torch.stack(rows).cpu().double().sum(dim=0).tolist() if rows else []
-        out = {key: value / num_updates for key, value in zip(keys, sums)}
-        out["ratio_max"] = float(ratio_max)
-        return out
+    def policy_loss(self, batch: Minibatch) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        tau, eps, old_loss = batch.field("tau"), batch.field("eps"), batch.field("old_loss")
+        new_loss, terms = self.cfm_losses(batch.observations, batch.actions, tau, eps)
+        log_rho = self.log_ratio(old_loss, new_loss)
+        ratio = torch.exp(log_rho)
+        surrogate = self.surrogate_loss(ratio, batch.advantages)
+        reflow = self.reflow_loss(new_loss, batch)
+        loss = surrogate + self.reflow_coef * reflow
+        stats = {"surrogate": surrogate, "reflow": reflow}
+        if self.bound_coef > 0:
+            stats["bound"] = soft_bound_loss(terms.clean_action, self.bound)
+            loss = loss + self.bound_coef * stats["bound"]
+        with torch.no_grad():
+            stats.update(self.flow_statistics(old_loss, new_loss, log_rho, terms.velocity_error))
+        return loss, stats
 
-    def _adapt_learning_rate(self, approx_kl: torch.Tensor) -> None:
-        """rsl_rl's adaptive schedule, driven by the CFM-ratio estimate of the KL, E[(rho - 1) - log rho]."""
-        if self.desired_kl is None or self.schedule != "adaptive":
-            return
-        if self.is_multi_gpu:
-            torch.distributed.all_reduce(approx_kl, op=torch.distributed.ReduceOp.SUM)
-            approx_kl /= self.gpu_world_size
-        if approx_kl > self.desired_kl * 2.0:
-            self.learning_rate = max(1e-5, self.learning_rate / 1.5)
-        elif 0.0 < approx_kl < self.desired_kl / 2.0:
-            self.learning_rate = min(1e-2, self.learning_rate * 1.5)
-        for group in self.optimizer.param_groups:
-            group["lr"] = self.learning_rate
+    def flow_statistics(self, old_loss, new_loss, log_rho, velocity_error) -> dict[str, torch.Tensor]:
+        """Per-minibatch diagnostics (see the module docstring)."""
+        ratio = torch.exp(log_rho)
+        change = old_loss - new_loss
+        return {
+            "Flow/ratio_mean": ratio.mean(),
+            "Flow/ratio_max": ratio.max(),
+            "Flow/clip_fraction": ((ratio - 1.0).abs() > self.clip_param).float().mean(),
+            "Flow/explosion_rate": (change.mean(dim=-1).abs() > self.explosion_threshold).float().mean(),
+            "Flow/explosion_rate_pair": (change.abs() > self.explosion_threshold).float().mean(),
+            "Flow/straightness_error": velocity_error.mean(),
+            "Flow/approx_kl": ((ratio - 1.0) - log_rho).mean(),
+        }
+
+    def kl_estimate(self, stats: dict[str, torch.Tensor]) -> torch.Tensor | None:
+        return stats.get("Flow/approx_kl")

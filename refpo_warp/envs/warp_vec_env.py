@@ -20,6 +20,9 @@ from tensordict import TensorDict
 from refpo_warp.device import init_warp, resolve_device
 
 
+ACTION_TRANSFORMS = ("clip", "tanh")
+
+
 @dataclass
 class EnvCfg:
     """Options shared by every environment; task cfgs subclass this."""
@@ -27,6 +30,10 @@ class EnvCfg:
     max_episode_length: int = 1000
     graph_capture: bool = True
     """Replay the step as a captured graph after one eager warm-up step (CUDA graph or Warp CPU graph)."""
+    action_transform: str = "clip"
+    """What the env does with the policy's actions before its dynamics: ``clip`` to [-1, 1] (the task kernels
+    clip), or ``tanh`` first (MuJoCo Playground sends tanh(action) to the env; the learner keeps the pre-tanh
+    action, so every algorithm trains on what it sampled)."""
 
 
 @dataclass
@@ -61,6 +68,8 @@ class WarpVecEnv(VecEnv):
         self.seed = int(seed)
         self.max_episode_length = int(cfg.max_episode_length)
 
+        if cfg.action_transform not in ACTION_TRANSFORMS:
+            raise ValueError(f"env.action_transform must be one of {ACTION_TRANSFORMS}, got '{cfg.action_transform}'")
         self.num_actions, obs_dims = self._spaces()
         n, dev = self.num_envs, self.device
         self._actions = torch.zeros(n, self.num_actions, device=dev)
@@ -166,13 +175,23 @@ class WarpVecEnv(VecEnv):
             if self._graph is not None:
                 wp.capture_launch(self._graph)
             else:
-                self._step_impl()
+                self._transform_and_step()
                 self._steps_taken += 1
                 # Capture after the eager warm-up step: every module is loaded and lazy buffers exist.
                 if self.cfg.graph_capture and self._steps_taken == 1 and self._can_capture():
                     with wp.ScopedCapture(device=self.wp_device) as capture:
-                        self._step_impl()
+                        self._transform_and_step()
                     self._graph = capture.graph
+
+    def _transform_and_step(self) -> None:
+        if self.cfg.action_transform == "tanh":
+            self.transform_actions(self.buffers.actions)
+        self._step_impl()
+
+    def transform_actions(self, actions) -> None:
+        """Apply ``action_transform`` in place to a Warp (num_envs, num_actions) array (``clip`` is the tasks')."""
+        if self.cfg.action_transform == "tanh":
+            wp.launch(_tanh_in_place, dim=actions.shape, inputs=[actions], device=self.wp_device)
 
     def _can_capture(self) -> bool:
         return self.wp_device.is_cpu or self.wp_device.is_mempool_enabled
@@ -187,6 +206,12 @@ class WarpVecEnv(VecEnv):
     def reseed(self, seed: int) -> None:
         """Restart every env's random stream from ``seed`` (gymnasium's ``reset(seed=...)``)."""
         wp.launch(_seed_streams, dim=self.num_envs, inputs=[seed, self.buffers.rng], device=self.wp_device)
+
+
+@wp.kernel
+def _tanh_in_place(actions: wp.array2d(dtype=float)):
+    i, j = wp.tid()
+    actions[i, j] = wp.tanh(actions[i, j])
 
 
 @wp.kernel

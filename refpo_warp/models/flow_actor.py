@@ -2,27 +2,55 @@
 
 Convention (DESIGN.md): tau in [0, 1], tau = 0 is noise eps ~ N(0, I), tau = 1 is the action a;
 x_tau = (1 - tau) eps + tau a; the target velocity is a - eps; actions are sampled by integrating
-dx/dtau = v(x, tau; o) with N Euler steps from tau = 0.
+dx/dtau = v(x, tau; o) with N Euler steps from tau = 0 (``refpo_warp.models.velocity_field`` for the network).
 
-CFM loss per (action, tau, eps), averaged over action dimensions:
-- ``output_mode="u"``: ||v - (a - eps)||^2 (plain velocity regression, ReFPO's mode);
-- ``output_mode="eps"``: tau^2 ||v - (a - eps)||^2, the reference FPO default ("u_but_supervise_as_eps", which
-  supervises the implied noise prediction and so weights the velocity error by tau^2 in this convention).
+CFM loss per (action, tau, eps), averaged over action dimensions, times ``loss_scale``. With e_v = v - (a - eps) the
+velocity error and e_a = a_hat - a = (1 - tau) e_v the error of the predicted clean action:
+- ``output_mode="u"``: |e_v|^2, plain velocity regression (ReFPO's mode);
+- ``output_mode="eps"``: tau^2 |e_v|^2, the reference FPO default ("u_but_supervise_as_eps");
+- ``output_mode="data"``: |e_a|^2 = (1 - tau)^2 |e_v|^2, the Puffer-PHC humanoid loss (with ``loss_scale`` 200, i.e.
+  1 / (2 * 0.05^2), its Gaussian "log-probability" scale).
+Whatever the parameterisation, the error is computed in the space the network predicts and converted, so the ratio,
+the Reflow term and the bound loss all see one consistent set of numbers.
 """
 
 from __future__ import annotations
 
-import copy
 import warnings
+from dataclasses import dataclass
 
 import torch
 from rsl_rl.modules import EmpiricalNormalization
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.models.velocity_field import VelocityField
+from refpo_warp.models.normalization import with_clip
+from refpo_warp.models.velocity_field import DATA_GUARD, VelocityField
 
-OUTPUT_MODES = ("u", "eps")
+OUTPUT_MODES = ("u", "eps", "data")
+INITIAL_NOISE = ("random", "zero")
+
+
+@dataclass
+class CfmTerms:
+    """Per-sample CFM quantities on K stored (tau, eps) pairs: squared errors (B, K) and the predicted action."""
+
+    velocity_error: torch.Tensor  # mean over action dims of |v - (a - eps)|^2: the Straightness Error's summand
+    action_error: torch.Tensor  # mean over action dims of |a_hat - a|^2
+    clean_action: torch.Tensor  # a_hat (B, K, A), the action the network predicts at (x_tau, tau)
+
+
+def cfm_loss(terms: CfmTerms, tau: torch.Tensor, output_mode: str, loss_scale: float) -> torch.Tensor:
+    """The CFM loss per sample (B, K) in ``output_mode`` (see the module docstring)."""
+    if output_mode == "u":
+        loss = terms.velocity_error
+    elif output_mode == "eps":
+        loss = tau.square() * terms.velocity_error
+    elif output_mode == "data":
+        loss = terms.action_error
+    else:
+        raise ValueError(f"output_mode must be one of {OUTPUT_MODES}, got '{output_mode}'")
+    return loss_scale * loss
 
 
 class FlowActor(nn.Module):
@@ -33,10 +61,16 @@ class FlowActor(nn.Module):
         hidden_dims, activation, obs_normalization: The velocity MLP and observation normalisation.
         distribution_cfg: Accepted for config compatibility; a flow policy has no parametric distribution.
         num_flow_steps: Euler steps N used to sample actions (change it at any time, e.g. N = 1 at deployment).
-        time_embed_dim: Size of the sinusoidal embedding of tau.
-        output_mode: ``"u"`` or ``"eps"`` weighting of the CFM loss (see module docstring).
-        output_scale: Multiplier on the velocity MLP output.
-        action_noise_std: Gaussian noise added to sampled actions when ``stochastic_output`` (reference PHC: 0.05).
+        time_embed_dim: Channels of the time embedding (2^k sinusoid for ``concat``, DiT sinusoid for ``adaln``).
+        output_mode: ``"u"``, ``"eps"`` or ``"data"`` CFM loss (see the module docstring).
+        output_scale: Multiplier on the network's head.
+        action_noise_std: Gaussian perturbation added to sampled actions during rollouts (Puffer-PHC: 0.05); the
+            perturbed action is the one stored and trained on.
+        parameterization: ``"velocity"`` or ``"data"`` (the head predicts the clean action).
+        time_conditioning: ``"concat"`` or ``"adaln"``.
+        head_init_gain: Orthogonal init gain of the head with zero bias (Puffer-PHC: 0.01); None keeps PyTorch's.
+        loss_scale: Multiplier on the CFM loss (Puffer-PHC: 200); it scales the ratio's log and the Reflow term alike.
+        obs_clip: Clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); None: no clamp.
     """
 
     is_recurrent: bool = False
@@ -56,12 +90,21 @@ class FlowActor(nn.Module):
         output_mode: str = "u",
         output_scale: float = 1.0,
         action_noise_std: float = 0.0,
+        parameterization: str = "velocity",
+        time_conditioning: str = "concat",
+        head_init_gain: float | None = None,
+        loss_scale: float = 1.0,
+        obs_clip: float | None = None,
     ) -> None:
         super().__init__()
         if distribution_cfg is not None:
             warnings.warn("FlowActor ignores distribution_cfg: actions are sampled by integrating the flow.")
         if output_mode not in OUTPUT_MODES:
             raise ValueError(f"output_mode must be one of {OUTPUT_MODES}, got '{output_mode}'")
+        if int(num_flow_steps) < 1:
+            raise ValueError(f"num_flow_steps must be >= 1, got {num_flow_steps}")
+        if loss_scale <= 0:
+            raise ValueError(f"loss_scale must be > 0, got {loss_scale}")
         self.obs_groups = list(obs_groups[obs_set])
         for group in self.obs_groups:
             if obs[group].dim() != 2:
@@ -69,58 +112,74 @@ class FlowActor(nn.Module):
         self.obs_dim = sum(obs[g].shape[-1] for g in self.obs_groups)
         self.action_dim = output_dim
         self.obs_normalization = obs_normalization
-        self.obs_normalizer = EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity()
-        self.velocity = VelocityField(self.obs_dim, output_dim, hidden_dims, activation, time_embed_dim, output_scale)
+        self.obs_normalizer = with_clip(EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity(),
+                                        obs_clip)  # fmt: skip
+        self.velocity = VelocityField(self.obs_dim, output_dim, hidden_dims, activation, time_embed_dim, output_scale,
+                                      parameterization, time_conditioning, head_init_gain)  # fmt: skip
         self.num_flow_steps = int(num_flow_steps)
         self.output_mode = output_mode
+        self.loss_scale = float(loss_scale)
         self.action_noise_std = float(action_noise_std)
         self._last_actions = torch.zeros(1, output_dim)
 
     # ------------------------------------------------------------------------------------------------ sampling
     def encode(self, obs: TensorDict) -> torch.Tensor:
-        """Concatenate this actor's observation groups and normalise them."""
+        """Concatenate this actor's observation groups and normalise them (clamped to ``obs_clip`` if set)."""
         return self.obs_normalizer(torch.cat([obs[g] for g in self.obs_groups], dim=-1))
 
-    def integrate(self, obs_norm: torch.Tensor, noise: torch.Tensor, num_steps: int | None = None) -> torch.Tensor:
-        """Euler-integrate the flow from ``noise`` at tau = 0 to the action at tau = 1."""
+    def sample(self, obs: TensorDict, num_steps: int | None = None, initial_noise: str = "random",
+               perturbation: bool = False, noise: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
+        """Actions from the flow: integrate from random (or zero, or the given) noise with ``num_steps`` Euler steps
+        (default ``num_flow_steps``), then add the ``action_noise_std`` perturbation if ``perturbation``."""
         n = int(num_steps or self.num_flow_steps)
         if n < 1:
-            raise ValueError(f"num_flow_steps must be >= 1, got {n}")
-        return self.velocity.integrate(self.velocity.project_obs(obs_norm), noise, n)
-
-    def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False,
-                num_steps: int | None = None) -> torch.Tensor:  # fmt: skip
-        """Sample actions; deterministic output integrates from zero noise (the flow's 'mode' for export).
-
-        ``num_steps`` overrides ``num_flow_steps`` for this call (e.g. evaluating at N = 1).
-        """
+            raise ValueError(f"num_steps must be >= 1, got {n}")
+        if initial_noise not in INITIAL_NOISE:
+            raise ValueError(f"initial_noise must be one of {INITIAL_NOISE}, got '{initial_noise}'")
         obs_norm = self.encode(obs)
-        shape = (obs_norm.shape[0], self.action_dim)
-        noise = torch.randn(shape, device=obs_norm.device) if stochastic_output else obs_norm.new_zeros(shape)
-        actions = self.integrate(obs_norm, noise, num_steps)
-        if stochastic_output and self.action_noise_std > 0:
+        if noise is None:
+            shape = (obs_norm.shape[0], self.action_dim)
+            noise = torch.randn(shape, device=obs_norm.device) if initial_noise == "random" else obs_norm.new_zeros(shape)
+        actions = self.velocity.integrate(self.velocity.project_obs(obs_norm), noise, n)
+        if perturbation and self.action_noise_std > 0:
             actions = actions + self.action_noise_std * torch.randn_like(actions)
         self._last_actions = actions.detach()
         return actions
 
+    def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False,
+                num_steps: int | None = None) -> torch.Tensor:  # fmt: skip
+        """rsl_rl's model call: a rollout sample (random noise, perturbation on) with ``stochastic_output``, else the
+        deterministic output (zero noise, no perturbation), which is what inference and export use."""
+        if stochastic_output:
+            return self.sample(obs, num_steps, "random", perturbation=True)
+        return self.sample(obs, num_steps, "zero", perturbation=False)
+
     # ------------------------------------------------------------------------------------------------ CFM loss
-    def velocity_error(
-        self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor
-    ) -> torch.Tensor:
-        """||v(x_tau, tau; o) - (a - eps)||^2 averaged over action dims, shape (B, K) for tau (B, K), eps (B, K, A)."""
+    def cfm_terms(self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor) -> CfmTerms:
+        """CFM errors on the pairs tau (B, K), eps (B, K, A) for actions (B, A), in one forward pass."""
         obs_feat = self.velocity.project_obs(self.encode(obs))
         a = actions.unsqueeze(1)
-        x_tau = (1.0 - tau.unsqueeze(-1)) * eps + tau.unsqueeze(-1) * a
-        v = self.velocity(obs_feat, x_tau, tau)
-        return (v - (a - eps)).square().mean(dim=-1)
+        t = tau.unsqueeze(-1)
+        x_tau = (1.0 - t) * eps + t * a
+        prediction = self.velocity.predict(obs_feat, x_tau, tau)
+        if self.velocity.parameterization == "velocity":
+            e_v = prediction - (a - eps)
+            e_a = (1.0 - t) * e_v
+            clean = a + e_a
+        else:  # the error of the clean action is native; the velocity error divides by the guarded 1 - tau
+            clean = prediction
+            e_a = prediction - a
+            e_v = e_a / (1.0 - t).clamp(min=DATA_GUARD)
+        return CfmTerms(e_v.square().mean(dim=-1), e_a.square().mean(dim=-1), clean)
 
-    def cfm_weight(self, tau: torch.Tensor, output_mode: str | None = None) -> torch.Tensor | float:
-        """Per-sample weight of the velocity error in the CFM loss of ``output_mode`` (default: the actor's)."""
-        return tau.square() if (output_mode or self.output_mode) == "eps" else 1.0
+    def cfm_loss(self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor,
+                 output_mode: str | None = None) -> torch.Tensor:  # fmt: skip
+        """CFM loss per (action, tau, eps) sample, shape (B, K), in ``output_mode`` (default: the actor's)."""
+        return cfm_loss(self.cfm_terms(obs, actions, tau, eps), tau, output_mode or self.output_mode, self.loss_scale)
 
-    def cfm_loss(self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor) -> torch.Tensor:
-        """CFM loss per (action, tau, eps) sample in this actor's output mode, shape (B, K)."""
-        return self.cfm_weight(tau) * self.velocity_error(obs, actions, tau, eps)
+    def velocity_error(self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor):
+        """|v - (a - eps)|^2 averaged over action dims, shape (B, K): the Straightness Error's summand."""
+        return self.cfm_terms(obs, actions, tau, eps).velocity_error
 
     # ------------------------------------------------------------------------------------------------ rsl_rl model protocol
     def reset(self, dones: torch.Tensor | None = None, hidden_state=None) -> None:
@@ -157,48 +216,14 @@ class FlowActor(nn.Module):
     def output_entropy(self) -> torch.Tensor:
         raise NotImplementedError("A flow policy has no closed-form entropy; see get_output_log_prob.")
 
-    def as_jit(self) -> nn.Module:
-        """TorchScript-able sampler: ``forward(obs, noise=None)`` with N = ``num_flow_steps`` Euler steps."""
-        return FlowSampler(self)
+    def as_jit(self, num_flow_steps: int | None = None, noise_input: bool = False) -> nn.Module:
+        """TorchScript-able sampler (``refpo_warp.models.flow_export.FlowSampler``); obs only unless ``noise_input``."""
+        from refpo_warp.models.flow_export import FlowSampler
 
-    def as_onnx(self, verbose: bool = False) -> nn.Module:
-        """ONNX-exportable sampler with inputs ``obs`` and ``noise`` (the Euler loop unrolls when traced)."""
-        return FlowSampler(self, onnx=True)
+        return FlowSampler(self, num_flow_steps, noise_input)
 
+    def as_onnx(self, verbose: bool = False, num_flow_steps: int | None = None, noise_input: bool = False) -> nn.Module:
+        """ONNX-exportable sampler (the Euler loop unrolls when traced); obs only unless ``noise_input``."""
+        from refpo_warp.models.flow_export import FlowSampler
 
-class FlowSampler(nn.Module):
-    """Export wrapper: normaliser + velocity field + an N-step Euler sampler, noise given as an input.
-
-    ``forward(obs, noise)`` returns the action the flow maps ``noise`` to; ``noise=None`` (TorchScript only)
-    integrates from zero noise, the deterministic output.
-    """
-
-    is_recurrent: bool = False
-
-    def __init__(self, actor: FlowActor, onnx: bool = False) -> None:
-        super().__init__()
-        self.obs_normalizer = copy.deepcopy(actor.obs_normalizer)
-        self.velocity = copy.deepcopy(actor.velocity)
-        self.num_steps = int(actor.num_flow_steps)
-        self.obs_dim = actor.obs_dim
-        self.action_dim = actor.action_dim
-        self.onnx = onnx
-
-    def forward(self, obs: torch.Tensor, noise: torch.Tensor | None = None) -> torch.Tensor:
-        x = torch.zeros(obs.shape[0], self.action_dim, device=obs.device) if noise is None else noise
-        return self.velocity.integrate(self.velocity.project_obs(self.obs_normalizer(obs)), x, self.num_steps)
-
-    @torch.jit.export
-    def reset(self) -> None:
-        pass
-
-    def get_dummy_inputs(self) -> tuple[torch.Tensor, torch.Tensor]:
-        return torch.zeros(1, self.obs_dim), torch.zeros(1, self.action_dim)
-
-    @property
-    def input_names(self) -> list[str]:
-        return ["obs", "noise"]
-
-    @property
-    def output_names(self) -> list[str]:
-        return ["actions"]
+        return FlowSampler(self, num_flow_steps, noise_input)

@@ -1,6 +1,6 @@
 """DMC-style control tasks (MuJoCo Playground's DM Control Suite) on Newton's MuJoCo solver, one world per env.
 
-One control step: clip actions to [-1, 1] into the MuJoCo actuator controls, run the task's physics substeps, compute
+One control step: squash actions with tanh (``action_transform``; or clip them) into the MuJoCo actuator controls, run the task's physics substeps, compute
 the reward from the new state, end episodes (a time-out after ``max_episode_length`` steps, reported as truncated so
 the value is bootstrapped; a non-finite physics state, reported as terminated with reward 0 and counted in the
 ``nonfinite_resets`` episode metric), re-initialise finished envs, and write observations. Everything runs in Warp
@@ -22,6 +22,8 @@ from tasks.dmc.suite import TASKS
 
 @dataclass
 class DmcCfg(EnvCfg):
+    action_transform: str = "tanh"
+    """MuJoCo Playground sends tanh(action) to the DM Control envs (``clip``: the actions clipped to [-1, 1])."""
     task: str = "cartpole_balance"
     """Suite task name (set by the registered task id, e.g. dmc_cheetah_run -> cheetah_run)."""
     solver_iterations: int = 0
@@ -161,14 +163,15 @@ class DmcEnv(WarpVecEnv):
         return self.joint_q + wp.to_torch(self.sim.views.coord_ref)
 
     def compute_rewards(self, actions: torch.Tensor) -> torch.Tensor:
-        """Rewards of the current states under ``actions`` (clipped as in a step), without stepping.
+        """Rewards of the current states under ``actions`` (transformed as in a step), without stepping.
 
         Contact-based inputs (finger touch) keep their last values; use after ``set_state`` (tests, figures).
         """
         out = torch.zeros(self.num_envs, device=self.device)
         actions = actions.to(self.device, torch.float32).reshape(self.num_envs, self.num_actions).contiguous()
         with wp.ScopedDevice(self.wp_device):
-            wp.launch(apply_actions, dim=(self.num_envs, self.num_actions),
-                      inputs=[wp.from_torch(actions), self.sim.views.ctrl])  # fmt: skip
+            actions = wp.from_torch(actions.clone())
+            self.transform_actions(actions)
+            wp.launch(apply_actions, dim=(self.num_envs, self.num_actions), inputs=[actions, self.sim.views.ctrl])
             self.task.reward(wp.from_torch(out))
         return out

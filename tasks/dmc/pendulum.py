@@ -1,6 +1,7 @@
 """Pendulum swing-up (Playground ``PendulumSwingup``).
 
-Observation (3): pole frame xz and zz (sin and cos of the angle from upright), hinge angular velocity.
+Observation (3): pole frame zz and xz (cos and sin of the angle from upright; dm_control's order), hinge angular
+velocity.
 Reward: 1 when the pole is within 8 degrees of upright (tolerance(zz, bounds=(cos 8deg, 1)), margin 0), else 0.
 Reset: hinge angle U(0, pi) (Playground; dm_control uses U(-pi, pi)), zero velocity.
 """
@@ -31,8 +32,8 @@ def pendulum_obs(
 ):  # fmt: skip
     i = wp.tid()
     r = wp.quat_to_matrix(wp.transform_get_rotation(body_q[i, pole]))
-    obs[i, 0] = r[0, 2]
-    obs[i, 1] = r[2, 2]
+    obs[i, 0] = r[2, 2]
+    obs[i, 1] = r[0, 2]
     obs[i, 2] = joint_qd[i, 0]
 
 

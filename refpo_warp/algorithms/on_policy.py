@@ -1,0 +1,234 @@
+"""The update loop every refpo_warp algorithm shares, on top of rsl_rl's PPO (models, storage, GAE, multi-GPU, I/O).
+
+A subclass says how it acts (``act``, storing what it needs in ``self.store``) and what its policy loss is
+(``policy_loss(batch)``); this class runs the passes over the rollout: minibatches (rsl_rl's single permutation, or
+a fresh one per pass as Brax does), per-minibatch advantage normalisation, the value loss, a non-finite check before
+any step is applied, gradient reduction across ranks, clipping, the optimizer step, the learning-rate schedule and
+the statistics, which are kept on the device and read once per update.
+
+Options shared by every algorithm (besides rsl_rl's PPO arguments):
+    reward_scale: Multiplier on rewards for learning (Brax-style; logged returns stay unscaled).
+    value_clip_param: Clip range of the clipped value loss (None: ``clip_param``, as rsl_rl). The reference humanoid
+        set-up clips the ratio at 0.01 but values at 0.2.
+    reshuffle_each_epoch: New minibatch permutation on every pass (Brax / MuJoCo Playground) instead of one for all.
+    joint_grad_clip: Clip the gradient norm of actor and critic together (Puffer-PHC) instead of separately (rsl_rl).
+    lr_decay_rate, lr_decay_floor: After update k the learning rate is lr * max(exp(-rate * k), floor) (Puffer-PHC's
+        exponential decay; rate 0 keeps it constant).
+    bound_coef, bound: Soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on the policy's predicted action
+        (Puffer-PHC, coefficient 10, bound 0.9 of the action range); 0 turns it off.
+
+Logged statistics: keys with a ``/`` (e.g. ``Flow/ratio_max``) are logged under that name, others as ``Loss/<key>``;
+a key ending in ``_max`` is the maximum over the update's minibatches, every other key the mean.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import torch
+from rsl_rl.algorithms import PPO as RslPPO
+from tensordict import TensorDict
+from torch import nn
+
+from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_indices
+from refpo_warp.errors import NonFiniteLossError
+
+
+@dataclass
+class Minibatch:
+    """One minibatch of the rollout: rsl_rl's fields plus the algorithm's own (``field(name)``)."""
+
+    observations: TensorDict
+    actions: torch.Tensor
+    values: torch.Tensor  # (B, 1)
+    returns: torch.Tensor  # (B, 1)
+    advantages: torch.Tensor  # (B,)
+    indices: torch.Tensor
+    store: TransitionStore
+
+    def field(self, name: str) -> torch.Tensor:
+        return self.store.flat(name)[self.indices]
+
+
+def value_regression_loss(values: torch.Tensor, old_values: torch.Tensor, returns: torch.Tensor,
+                          clip: float | None) -> torch.Tensor:  # fmt: skip
+    """Mean squared error to the returns; with ``clip``, PPO's pessimistic clipped form around the old values."""
+    if clip is None:
+        return (returns - values).pow(2).mean()
+    clipped = old_values + (values - old_values).clamp(-clip, clip)
+    return torch.max((values - returns).pow(2), (clipped - returns).pow(2)).mean()
+
+
+def soft_bound_loss(actions: torch.Tensor, bound: float) -> torch.Tensor:
+    """mean(relu(|a| - bound)^2): zero inside [-bound, bound], quadratic outside (Puffer-PHC's bound loss)."""
+    return (actions.abs() - bound).clamp(min=0.0).square().mean()
+
+
+class OnPolicyAlgorithm(RslPPO):
+    """Shared update loop; subclasses implement ``act`` and ``policy_loss`` (see the module docstring)."""
+
+    uses_critic: bool = True
+
+    def __init__(
+        self,
+        actor: nn.Module,
+        critic: nn.Module,
+        storage,
+        reward_scale: float = 1.0,
+        value_clip_param: float | None = None,
+        reshuffle_each_epoch: bool = False,
+        joint_grad_clip: bool = False,
+        lr_decay_rate: float = 0.0,
+        lr_decay_floor: float = 0.2,
+        bound_coef: float = 0.0,
+        bound: float = 0.9,
+        **ppo_kwargs,
+    ) -> None:
+        for name in ("rnd_cfg", "symmetry_cfg"):
+            if ppo_kwargs.get(name):
+                raise ValueError(
+                    f"{type(self).__name__} does not support {name}; remove '{name}' from the algorithm config "
+                    "(or set it to None)."
+                )
+        if getattr(critic, "is_recurrent", False) or getattr(actor, "is_recurrent", False):
+            raise ValueError(f"{type(self).__name__} supports feed-forward actors and critics only.")
+        super().__init__(actor, critic, storage, **ppo_kwargs)
+        self.reward_scale = float(reward_scale)
+        self.value_clip_param = self.clip_param if value_clip_param is None else float(value_clip_param)
+        self.reshuffle_each_epoch = bool(reshuffle_each_epoch)
+        self.joint_grad_clip = bool(joint_grad_clip)
+        self.lr_decay_rate = float(lr_decay_rate)
+        self.lr_decay_floor = float(lr_decay_floor)
+        self.bound_coef = float(bound_coef)
+        self.bound = float(bound)
+        self.base_learning_rate = float(self.learning_rate)
+        self.num_updates = 0
+        self.store = TransitionStore(storage.num_transitions_per_env, storage.num_envs, self.device)
+
+    # ------------------------------------------------------------------------------------------------ rollout
+    def process_env_step(
+        self, obs: TensorDict, rewards: torch.Tensor, dones: torch.Tensor, extras: dict[str, torch.Tensor]
+    ) -> None:
+        # The runner hands the same reward tensor to its logger afterwards: scale a copy, never in place.
+        super().process_env_step(obs, rewards * self.reward_scale, dones, extras)
+
+    # ------------------------------------------------------------------------------------------------ subclass API
+    def before_update(self) -> None:
+        """Work on the whole rollout before the first gradient step (e.g. ReFPO's old CFM losses)."""
+
+    def policy_loss(self, batch: Minibatch) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """The policy's loss on ``batch`` and its statistics (scalar tensors; see the module docstring for names)."""
+        raise NotImplementedError
+
+    def kl_estimate(self, stats: dict[str, torch.Tensor]) -> torch.Tensor | None:
+        """The minibatch's KL estimate that drives the adaptive learning-rate schedule (None: no adaptation)."""
+        return stats.get("approx_kl")
+
+    # ------------------------------------------------------------------------------------------------ update
+    def value_loss(self, batch: Minibatch) -> torch.Tensor:
+        clip = self.value_clip_param if self.use_clipped_value_loss else None
+        return value_regression_loss(self.critic(batch.observations), batch.values, batch.returns, clip)
+
+    def minibatches(self):
+        st = self.storage
+        observations = st.observations.flatten(0, 1)
+        actions, values = st.actions.flatten(0, 1), st.values.flatten(0, 1)
+        returns, advantages = st.returns.flatten(0, 1), st.advantages.flatten(0, 1).squeeze(-1)
+        for idx in minibatch_indices(actions.shape[0], self.num_mini_batches, self.num_learning_epochs, self.device,
+                                     self.reshuffle_each_epoch):  # fmt: skip
+            adv = advantages[idx]
+            if self.normalize_advantage_per_mini_batch:
+                adv = (adv - adv.mean()) / (adv.std() + 1e-8)
+            yield Minibatch(observations[idx], actions[idx], values[idx], returns[idx], adv, idx, self.store)
+
+    def update(self) -> dict[str, float]:
+        self.before_update()
+        device_type = torch.device(self.device).type
+        means: dict[str, list[torch.Tensor]] = {}
+        maxima: dict[str, torch.Tensor] = {}
+        for batch in self.minibatches():
+            with torch.autocast(device_type=device_type, enabled=self.use_mixed_precision, dtype=torch.bfloat16):
+                loss, stats = self.policy_loss(batch)
+                if self.uses_critic:
+                    stats["value"] = self.value_loss(batch)
+                    loss = loss + self.value_loss_coef * stats["value"]
+            if not torch.isfinite(loss):
+                raise NonFiniteLossError(
+                    f"Non-finite {type(self).__name__} loss ("
+                    + ", ".join(f"{k}={float(v.detach()):.4g}" for k, v in stats.items())
+                    + "); the update was stopped before applying it."
+                )
+            self.optimizer.zero_grad()
+            loss.backward()
+            if self.is_multi_gpu:
+                self.reduce_parameters()
+            if self.joint_grad_clip:
+                nn.utils.clip_grad_norm_(list(self.actor.parameters()) + list(self.critic.parameters()),
+                                         self.max_grad_norm)  # fmt: skip
+            else:
+                nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
+                nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
+            self._adapt_learning_rate(self.kl_estimate(stats))
+            self.optimizer.step()
+            for key, value in stats.items():
+                value = value.detach().float()
+                if key.endswith("_max"):
+                    maxima[key] = torch.maximum(maxima[key], value) if key in maxima else value
+                else:
+                    means.setdefault(key, []).append(value)
+
+        # Normalisers follow the data after the update, as in rsl_rl's PPO.
+        obs = self.storage.observations.flatten(0, 1)
+        self.actor.update_normalization(obs)
+        self.critic.update_normalization(obs)
+        self.storage.clear()
+        self.num_updates += 1
+        if self.lr_decay_rate > 0:
+            decay = max(math.exp(-self.lr_decay_rate * self.num_updates), self.lr_decay_floor)
+            self._set_learning_rate(self.base_learning_rate * decay)
+
+        out = {}
+        if means:  # one host read for all statistics
+            keys = list(means)
+            values = torch.stack([torch.stack(means[k]).mean() for k in keys]).cpu().tolist()
+            out.update(zip(keys, values))
+        out.update({k: float(v) for k, v in maxima.items()})
+        return out
+
+    # ------------------------------------------------------------------------------------------------ learning rate
+    def _set_learning_rate(self, lr: float) -> None:
+        self.learning_rate = lr
+        for group in self.optimizer.param_groups:
+            group["lr"] = lr
+
+    def _adapt_learning_rate(self, kl: torch.Tensor | None) -> None:
+        """rsl_rl's adaptive schedule (lr / 1.5 above 2 x desired_kl, x 1.5 below half of it), decided on rank 0."""
+        if kl is None or self.desired_kl is None or self.schedule != "adaptive":
+            return
+        kl = kl.detach().clone()
+        if self.is_multi_gpu:
+            torch.distributed.all_reduce(kl, op=torch.distributed.ReduceOp.SUM)
+            kl /= self.gpu_world_size
+        lr = self.learning_rate
+        if self.gpu_global_rank == 0:
+            if kl > self.desired_kl * 2.0:
+                lr = max(1e-5, lr / 1.5)
+            elif 0.0 < kl < self.desired_kl / 2.0:
+                lr = min(1e-2, lr * 1.5)
+        if self.is_multi_gpu:
+            lr_tensor = torch.tensor(lr, device=self.device)
+            torch.distributed.broadcast(lr_tensor, src=0)
+            lr = lr_tensor.item()
+        self._set_learning_rate(lr)
+
+    # ------------------------------------------------------------------------------------------------ checkpoints
+    def save(self) -> dict:
+        saved = super().save()
+        saved["num_updates"] = self.num_updates
+        return saved
+
+    def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
+        out = super().load(loaded_dict, load_cfg, strict)
+        self.num_updates = int(loaded_dict.get("num_updates", 0))
+        return out

@@ -1,0 +1,30 @@
+"""PhcMLPModel: rsl_rl's ``MLPModel`` with two options of the Puffer-PHC networks (its Gaussian actor and critics).
+
+- ``head_init_gain``: the output head (the mean, for a Gaussian actor) starts orthogonal with this gain and zero bias
+  (Puffer-PHC: 0.01, so a Gaussian actor's first actions are its fixed std's noise around ~0);
+- ``obs_clip``: the normalised observation is clamped to [-obs_clip, obs_clip] (Puffer-PHC's RunningNorm: 10).
+Everything else, the distribution included (``distribution_cfg``, e.g. a fixed std with ``learn_std: false``), and
+the JIT/ONNX exports are rsl_rl's.
+"""
+
+from __future__ import annotations
+
+import torch
+from rsl_rl.models import MLPModel
+from torch import nn
+
+from refpo_warp.models.normalization import with_clip
+
+
+class PhcMLPModel(MLPModel):
+    """``MLPModel`` plus ``head_init_gain`` and ``obs_clip`` (see the module docstring)."""
+
+    def __init__(self, *args, head_init_gain: float | None = None, obs_clip: float | None = None, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.obs_normalizer = with_clip(self.obs_normalizer, obs_clip)
+        if head_init_gain is not None:
+            head = [m for m in self.mlp.modules() if isinstance(m, nn.Linear)][-1]
+            rows = self.distribution.output_dim if self.distribution is not None else head.out_features
+            with torch.no_grad():
+                nn.init.orthogonal_(head.weight[:rows], gain=float(head_init_gain))
+                head.bias[:rows].zero_()
