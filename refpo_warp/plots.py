@@ -1,4 +1,5 @@
-"""Training-curve figures from ``progress.jsonl``: returns (with the 10-step/1-step gap) and flow diagnostics.
+"""Training-curve figures from ``progress.jsonl``: returns (with the 10-step/1-step gap), episode lengths, success
+and flow diagnostics.
 
 Several runs can share one figure (e.g. FPO vs ReFPO): each run dir is one coloured line.
 """
@@ -9,9 +10,11 @@ import json
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib import ticker  # noqa: E402
 
 DIAGNOSTICS = (
     ("Flow/ratio_max", "max ratio per update"),
@@ -33,35 +36,78 @@ def _series(rows: list[dict], key: str) -> tuple[list[float], list[float]]:
     return [p[0] for p in pts], [p[1] for p in pts]
 
 
+def _seed_series(seeds: list[list[dict]], key: str):
+    """(x, mean, low, high) of ``key`` over the seeds' runs, on the env-step grid they share (None if absent)."""
+    series = [_series(rows, key) for rows in seeds]
+    series = [s for s in series if s[0]]
+    if not series:
+        return None
+    n = min(len(x) for x, _ in series)
+    x = np.asarray(series[0][0][:n], dtype=float)
+    y = np.asarray([v[:n] for _, v in series], dtype=float)
+    return x, y.mean(axis=0), y.min(axis=0), y.max(axis=0)
+
+
 def _label(run_dir: Path) -> str:
     return f"{run_dir.parent.name}/{run_dir.name}" if run_dir.parent.name else run_dir.name
 
 
-def return_curves(runs: dict[str, list[dict]], path: Path, low: str = "eval/return_N1",
-                  high: str = "eval/return_N10") -> Path:  # fmt: skip
-    """Evaluation returns at N=10 and N=1 over env steps, the gap between them shaded (training return if absent)."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+def _as_seeds(rows_or_seeds: list) -> list[list[dict]]:
+    return rows_or_seeds if rows_or_seeds and isinstance(rows_or_seeds[0], list) else [rows_or_seeds]
+
+
+def _band(ax, stats, color, label, **line) -> None:
+    x, mean, low, high = stats
+    ax.plot(x, mean, color=color, label=label, **line)
+    if not np.array_equal(low, high):
+        ax.fill_between(x, low, high, color=color, alpha=0.12, lw=0)
+
+
+def training_curves(runs: dict[str, list], path: Path) -> Path:
+    """Return, episode length and (where the task has it) success over env steps, one colour per run.
+
+    A run is its ``progress.jsonl`` rows, or a list of such lists (seeds): then the line is the seeds' mean and the
+    band their range. Returns are the periodic evaluation's at N = 10 and N = 1 with the gap shaded (paper Figure 3),
+    else the Gaussian policy's evaluation return, else the training return; episode length and success are the
+    training episodes'.
+    """
+    seeds = {label: _as_seeds(rows) for label, rows in runs.items()}
+    rows = [r for group in seeds.values() for run in group for r in run]
+    success_key = next((k for k in ("Episode/success", "Episode/success_rate") if any(k in r for r in rows)), None)
+    panels = ["return", "episode length"] + (["success"] if success_key else [])
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 3.6), squeeze=False)
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for (label, rows), color in zip(runs.items(), colors * 4):
-        x_hi, y_hi = _series(rows, high)
-        x_lo, y_lo = _series(rows, low)
-        if x_hi and x_lo and x_hi == x_lo:
-            ax.plot(x_hi, y_hi, color=color, lw=1.8, label=f"{label} (10-step)")
-            ax.plot(x_lo, y_lo, color=color, lw=1.0, ls="--", label=f"{label} (1-step)")
-            ax.fill_between(x_hi, y_lo, y_hi, color=color, alpha=0.2)
+    for (label, group), color in zip(seeds.items(), colors * 4):
+        high, low = _seed_series(group, "eval/return_N10"), _seed_series(group, "eval/return_N1")
+        if high and low and len(high[0]) == len(low[0]):
+            _band(axes[0, 0], high, color, f"{label} 10-step", lw=1.8)
+            _band(axes[0, 0], low, color, f"{label} 1-step", lw=1.0, ls="--")
+            axes[0, 0].fill_between(high[0], low[1], high[1], color=color, alpha=0.2, lw=0)
         else:
-            x, y = _series(rows, "eval/return")
-            if not x:
-                x, y = _series(rows, "reward_mean")
-            ax.plot(x, y, color=color, lw=1.5, label=label)
-    ax.set_xlabel("env steps")
-    ax.set_ylabel("episode return")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+            stats = _seed_series(group, "eval/return") or _seed_series(group, "reward_mean")
+            if stats:
+                _band(axes[0, 0], stats, color, label, lw=1.5)
+        for ax, key in zip(axes[0, 1:], ["episode_length_mean", success_key]):
+            stats = _seed_series(group, key) if key else None
+            if stats:
+                _band(ax, stats, color, label, lw=1.5)
+    for ax, title in zip(axes[0], panels):
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel("env steps")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)
     return path
+
+
+def readable_log_axis(ax) -> None:
+    """Log scale with ticks at 1, 2, 5 x 10^k printed as plain numbers (not 10^k superscripts)."""
+    ax.set_yscale("log")
+    ax.yaxis.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax.yaxis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.yaxis.set_minor_formatter(ticker.NullFormatter())
 
 
 def diagnostic_curves(runs: dict[str, list[dict]], path: Path) -> Path:
@@ -74,7 +120,7 @@ def diagnostic_curves(runs: dict[str, list[dict]], path: Path) -> Path:
                 ax.plot(x, y, lw=1.0, label=label)
         ax.set_title(title, fontsize=10)
         ax.grid(alpha=0.3)
-    axes[0, 0].set_yscale("log")
+    readable_log_axis(axes[0, 0])
     for ax in axes[1]:
         ax.set_xlabel("env steps")
     axes[0, 0].legend(fontsize=7)
@@ -108,12 +154,12 @@ def figure_grid(run_dirs: list[Path], path: Path) -> Path | None:
 
 
 def plot_runs(run_dirs: list[str | Path], out_dir: str | Path | None = None) -> list[Path]:
-    """Write ``curves_return.png``, ``curves_diagnostics.png`` (flow runs) and, when every run has the same
-    evaluation figures, ``figures_grid.png`` tiling them; default out dir: the first run's."""
+    """Write ``curves.png`` (return, episode length, success), ``curves_diagnostics.png`` (flow runs) and, when
+    every run has the same evaluation figures, ``figures_grid.png`` tiling them; default out dir: the first run's."""
     runs = {_label(Path(d)): read_progress(d) for d in run_dirs}
     out = Path(out_dir or run_dirs[0])
     out.mkdir(parents=True, exist_ok=True)
-    written = [return_curves(runs, out / "curves_return.png")]
+    written = [training_curves(runs, out / "curves.png")]
     if any(key in row for rows in runs.values() for row in rows for key, _ in DIAGNOSTICS):
         written.append(diagnostic_curves(runs, out / "curves_diagnostics.png"))
     grid = figure_grid([Path(d) for d in run_dirs], out / "figures_grid.png")

@@ -169,13 +169,29 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         "results": results,
         "diagnostics": {**training_diagnostics(run_dir), **flow_diagnostics(cfg, actor, visited)} if flow else {},
     }
-    report = family_report(cfg["task"])
-    if report is not None and hasattr(report, "figures"):
-        out["figures"] = [str(p) for p in report.figures(run_dir, actor, cfg)]
+    out["figures"] = [str(p) for p in run_figures(run_dir, actor, cfg)]
     write_json(out, run_dir / "eval.json")
     runner.alg.train_mode()
     _print_results(out)
     return out
+
+
+def run_figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
+    """Every run's training curves (``curves.png``, and ``curves_diagnostics.png`` for flows) plus the task family's
+    own figures."""
+    from refpo_warp import plots
+
+    figures = []
+    if (run_dir / "progress.jsonl").exists():
+        rows = plots.read_progress(run_dir)
+        label = f"{cfg['task']} {cfg['algo']}"
+        figures.append(plots.training_curves({label: rows}, run_dir / "curves.png"))
+        if any(key in row for row in rows for key, _ in plots.DIAGNOSTICS):
+            figures.append(plots.diagnostic_curves({label: rows}, run_dir / "curves_diagnostics.png"))
+    report = family_report(cfg["task"])
+    if report is not None and hasattr(report, "figures"):
+        figures += report.figures(run_dir, actor, cfg)
+    return figures
 
 
 def _print_results(results: dict) -> None:

@@ -26,7 +26,7 @@ def test_refpo_balances_the_cartpole_with_ten_and_one_flow_steps(tmp_run_dir, tw
     for setting, summary in results["results"].items():
         assert summary["return_mean"] >= 800, (setting, summary)
         assert summary["length_mean"] == 1000 and summary["nonfinite_resets_mean"] == 0
-    assert (tmp_run_dir / "eval.json").exists() and (tmp_run_dir / "reward_curve.png").exists()
+    assert (tmp_run_dir / "eval.json").exists() and (tmp_run_dir / "curves.png").exists()
 
 
 @pytest.mark.slow

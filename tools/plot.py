@@ -1,9 +1,10 @@
 #!/usr/bin/env python
 """Training curves: python tools/plot.py run_dir=PATH [run_dir=PATH2 ...] [out=DIR]
 
-Reads progress.jsonl of each run and writes curves_return.png (evaluation returns at 10 and 1 flow steps with the
-gap shaded, or the training return) and curves_diagnostics.png (max ratio, clip fraction, Explosion Rate,
-Straightness Error). Several run dirs share one figure, e.g. FPO vs ReFPO on the same task.
+Reads progress.jsonl of each run and writes curves.png (evaluation returns at 10 and 1 flow steps with the gap
+shaded, or the training return; training episode length; success where the task has it) and curves_diagnostics.png
+(max ratio, clip fraction, Explosion Rate, Straightness Error). Several run dirs share one figure, e.g. FPO vs ReFPO
+on the same task.
 """
 
 import sys
