@@ -1,13 +1,16 @@
 #!/usr/bin/env python
-"""Benchmarks: python tools/bench.py <gridworld|dmc|humanoid|all> [options of that benchmark]
+"""Benchmarks: python tools/bench.py <gridworld|dmc|humanoid|all|latency> [options of that benchmark]
 
 Each family's benchmark lives in tasks/<family>/bench.py; `python tools/bench.py dmc --help` shows its options.
+`all` runs the three families. `latency` (refpo_warp/latency.py) times action generation at N = 10 vs N = 1 for
+chosen tasks and algorithms; `--json PATH` writes the rows for `tools/report.py` (the latency figure).
 """
 
 import importlib
 import sys
 
 FAMILIES = ("gridworld", "dmc", "humanoid")
+OTHERS = {"latency": "refpo_warp.latency"}  # benchmarks that are not a task family
 
 
 def main(argv: list[str]) -> int:
@@ -15,14 +18,17 @@ def main(argv: list[str]) -> int:
         print(__doc__)
         return 0
     family, rest = argv[0], argv[1:]
-    if family not in FAMILIES + ("all",):
+    if family not in FAMILIES + ("all", *OTHERS):
         from refpo_warp.errors import unknown
 
-        print(f"error: {unknown('benchmark', family, FAMILIES + ('all',))}", file=sys.stderr)
+        print(f"error: {unknown('benchmark', family, FAMILIES + ('all', *OTHERS))}", file=sys.stderr)
         return 2
     from refpo_warp.device import set_torch_threads
 
     set_torch_threads()
+    if family in OTHERS:
+        importlib.import_module(OTHERS[family]).main(rest)
+        return 0
     for name in FAMILIES if family == "all" else (family,):
         print(f"\n=== {name} ===", flush=True)
         importlib.import_module(f"tasks.{name}.bench").main(rest)
