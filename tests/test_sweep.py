@@ -1,0 +1,142 @@
+"""Sweep runner: grid expansion, validation before anything starts, the named sweeps, and real tiny gridworld runs
+(separate tools/train.py processes) that finish, are skipped when done, or really fail and are retried once."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from refpo_warp.config import parse_overrides, resolve_config
+from refpo_warp.errors import ConfigError
+from refpo_warp.sweep import run_sweep
+from refpo_warp.sweep_spec import cli_value, load_sweep, validate
+
+ROOT = Path(__file__).resolve().parents[1]
+TINY = {"max_iterations": 2, "num_envs": 4, "runner.num_steps_per_env": 8, "eval.num_envs": 4,
+        "eval.flow_steps": [10, 1], "eval.interval": 1, "eval.interval_num_envs": 4}  # fmt: skip
+
+
+def write_spec(path: Path, **spec) -> Path:
+    path.write_text(yaml.safe_dump({"device": "cpu", "tasks": ["gridworld"], "seeds": [1], **spec}))
+    return path
+
+
+def test_grid_expands_tasks_methods_seeds_and_list_overrides(tmp_path):
+    spec = write_spec(tmp_path / "grid.yaml", tasks=["gridworld", "dmc_point_mass"], seeds=[1, 2], methods=[
+        {"label": "ppo", "algo": "ppo", "name": "PPO"},
+        {"label": "refpo_l{algorithm.reflow_coef}", "algo": "refpo", "name": "ReFPO, λ={algorithm.reflow_coef}",
+         "overrides": {"algorithm": {"reflow_coef": [0.02, 0.08]}, "eval.flow_steps": [10, 1]}},
+        {"label": "fpo", "algo": "fpo", "overrides": {"eval.flow_steps": [[10, 1], [20, 1]]}}])  # fmt: skip
+    sweep = load_sweep(str(spec), [f"out={tmp_path / 'out'}"])
+    labels = [m.label for m in sweep.methods]
+    # A list expands the grid; eval.flow_steps takes a list, so only a list of lists expands it.
+    assert labels == ["ppo", "refpo_l0.02", "refpo_l0.08", "fpo_flow_steps10-1", "fpo_flow_steps20-1"]
+    assert [m.name for m in sweep.methods][1:4] == ["ReFPO, λ=0.02", "ReFPO, λ=0.08", "fpo (flow_steps=10-1)"]
+    assert sweep.methods[1].overrides == {"algorithm.reflow_coef": 0.02, "eval.flow_steps": [10, 1]}
+    assert len(sweep.runs) == 2 * 5 * 2
+    assert [r.key for r in sweep.runs[:6]] == [  # seed-major: a first full table as early as possible
+        "gridworld/ppo/seed1", "gridworld/refpo_l0.02/seed1", "gridworld/refpo_l0.08/seed1",
+        "gridworld/fpo_flow_steps10-1/seed1", "gridworld/fpo_flow_steps20-1/seed1", "dmc_point_mass/ppo/seed1"]
+    run = sweep.runs[2]
+    assert run.run_dir == tmp_path / "out" / "gridworld" / "refpo_l0.08" / "seed1"
+    assert "algorithm.reflow_coef=0.08" in run.args and "eval.flow_steps=[10, 1]" in run.args
+    cfg = resolve_config(parse_overrides(list(run.args)))  # the arguments resolve as tools/train.py reads them
+    assert cfg["algorithm"]["reflow_coef"] == 0.08 and cfg["seed"] == 1 and cfg["run_dir"] == str(run.run_dir)
+    # Command-line values: run options for every run (a list expands), sweep-level keys narrow the grid.
+    sweep = load_sweep(str(spec), ["methods=refpo_l0.02,ppo", "seeds=[3]", "algorithm.learning_rate=[0.001,0.002]"])
+    assert [m.label for m in sweep.methods] == ["ppo_learning_rate0.001", "ppo_learning_rate0.002",
+                                                "refpo_l0.02_learning_rate0.001", "refpo_l0.02_learning_rate0.002"]
+    assert {r.seed for r in sweep.runs} == {3}
+
+
+def test_cli_values_read_back_unchanged():
+    for value in (0.02, 1e-06, 1e30, 3, True, None, "u", [10, 1], [[1, 2], [3]], {"a": 1.5}, float("inf")):
+        assert parse_overrides([f"k={cli_value(value)}"])["k"] == value
+
+
+def test_a_typo_fails_before_anything_starts(tmp_path):
+    spec = write_spec(tmp_path / "typo.yaml", methods=[{"algo": "refpo", "overrides": {"algorithm.reflow_coeff": 0.1}}])
+    sweep = load_sweep(str(spec), [f"out={tmp_path / 'out'}"])
+    with pytest.raises(ConfigError, match=r"gridworld/refpo/seed1.*Did you mean 'algorithm.reflow_coef'"):
+        run_sweep(sweep, echo=lambda line: None)
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(ConfigError, match="Did you mean 'refpo'"):
+        load_sweep(str(write_spec(tmp_path / "algo.yaml", methods=[{"algo": "refp"}])))
+    with pytest.raises(ConfigError, match="use 'seeds="):
+        load_sweep(str(spec), ["seed=3"])
+
+
+def test_named_sweeps_resolve():
+    paper = load_sweep("paper_dmc")
+    assert len(paper.tasks) == 10 and paper.seeds == [1, 2, 3, 4, 5] and paper.device == "cuda"
+    assert [m.label for m in paper.methods] == ["ppo", "fpo", "refpo", "refpo_l0.02", "refpo_l0.08", "refpo_l0.12"]
+    assert len(validate(paper)) == 300
+    cfg = resolve_config(parse_overrides([*paper.runs[2].args, "device=cuda"]), device_type="cuda")
+    assert (cfg["num_envs"], cfg["total_env_steps"], cfg["algorithm"]["reflow_coef"]) == (2048, 100_000_000, 0.04)
+    cpu = load_sweep("cpu_dmc")
+    assert len(cpu.tasks) >= 3 and all(t.startswith("dmc_") for t in cpu.tasks) and cpu.seeds == [1, 2, 3]
+    assert [(m.label, m.algo) for m in cpu.methods] == [("ppo", "ppo"), ("fpo", "fpo"), ("refpo", "refpo")]
+    assert cpu.methods[2].overrides == {"algorithm.reflow_coef": 0.04} and cpu.device == "cpu"
+    assert len(validate(cpu)) == len(cpu.tasks) * 9
+
+
+def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
+    spec = write_spec(tmp_path / "tiny.yaml", overrides=TINY, methods=[
+        {"label": "ppo", "algo": "ppo"}, {"label": "refpo", "algo": "refpo"},
+        # Resolves, then really fails at run time: the first Adam step makes the weights non-finite (exit 3).
+        {"label": "broken", "algo": "fpo", "overrides": {"algorithm.learning_rate": 1.0e30}}])  # fmt: skip
+    out = tmp_path / "out"
+    result = subprocess.run([sys.executable, str(ROOT / "tools" / "sweep.py"), str(spec), f"out={out}", "--jobs", "2"],
+                            capture_output=True, text=True, cwd=ROOT, timeout=300)  # fmt: skip
+    text = result.stdout
+    assert result.returncode == 1, text + result.stderr
+    broken = out / "gridworld" / "broken" / "seed1"
+    assert f"FAILED gridworld/broken/seed1 (attempt 1, exit 3" in text and f"log: {broken / 'train.log'}" in text
+    assert "retrying gridworld/broken/seed1 from scratch (attempt 2)" in text
+    assert "FAILED gridworld/broken/seed1 (attempt 2, exit 3" in text
+    assert "finished 2 run(s), skipped 0 already done, failed 1" in text
+    assert "failed gridworld/broken/seed1: exit 3, 2 attempt(s)" in text
+    assert "Non-finite" in (broken / "train.attempt1.log").read_text()
+    assert "attempt 2" in (broken / "train.log").read_text() and "Non-finite" in (broken / "train.log").read_text()
+    status = json.loads((out / "status.json").read_text())
+    assert status["gridworld/broken/seed1"]["state"] == "failed"
+    assert status["gridworld/broken/seed1"]["exit_codes"] == [3, 3]
+    progress = [line for line in text.splitlines() if line.startswith("[sweep ")]
+    assert progress[0].startswith("[sweep 1/3] done gridworld/")
+    assert "ETA" in text
+    for label in ("ppo", "refpo"):
+        report = json.loads((out / "gridworld" / label / "seed1" / "eval.json").read_text())
+        assert (report["task"], report["algo"]) == ("gridworld", label)
+    spec_file = yaml.safe_load((out / "sweep.yaml").read_text())
+    assert [r["run_dir"] for r in spec_file["runs"]] == [f"gridworld/{m}/seed1" for m in ("broken", "ppo", "refpo")]
+
+    # Again (in-process, same executor): the finished runs are skipped, nothing is launched or rewritten.
+    evals = {label: out / "gridworld" / label / "seed1" / "eval.json" for label in ("ppo", "refpo")}
+    stamps = {label: path.stat().st_mtime_ns for label, path in evals.items()}
+    lines: list[str] = []
+    summary = run_sweep(load_sweep(str(spec), [f"out={out}", "methods=ppo,refpo"]), jobs=2, echo=lines.append)
+    assert summary.ok and summary.skipped == ["gridworld/ppo/seed1", "gridworld/refpo/seed1"] and not summary.finished
+    assert "2 done (skipped)" in "\n".join(lines)
+    assert {label: path.stat().st_mtime_ns for label, path in evals.items()} == stamps
+
+    # A changed config makes a finished run stale; a run without its eval.json is unfinished (both rerun).
+    evals["refpo"].unlink()
+    lines.clear()
+    run_sweep(load_sweep(str(spec), [f"out={out}", "methods=ppo,refpo", "eval.num_envs=3"]), dry_run=True,
+              echo=lines.append)  # fmt: skip
+    assert "2 stale: config changed (rerun from scratch)" in lines[1]
+    lines.clear()
+    run_sweep(load_sweep(str(spec), [f"out={out}", "methods=ppo,refpo"]), dry_run=True, echo=lines.append)
+    assert "1 done (skipped), 1 unfinished (rerun from scratch)" in lines[1]
+
+    # The report lists the crashed run as missing, with its log.
+    result = subprocess.run([sys.executable, str(ROOT / "tools" / "report.py"), str(out)], capture_output=True,
+                            text=True, cwd=ROOT)  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    report = (out / "report" / "report.md").read_text()
+    assert "| ppo | 1/1 |" in report and "| broken | 0/1 | -- | -- | -- | -- |" in report
+    assert f"- gridworld / broken / seed 1: failed: exit codes [3, 3]; log {broken / 'train.log'}" in report
+    assert "- gridworld / refpo / seed 1: missing" in report

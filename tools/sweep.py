@@ -1,0 +1,61 @@
+#!/usr/bin/env python
+"""Run a sweep: python tools/sweep.py <sweep name or file> [key=value ...] [--jobs N] [--dry-run] [--launcher CMD]
+
+A grid of tasks x methods x seeds (x list-valued overrides), each run a separate tools/train.py process in
+<sweep dir>/<task>/<label>/seed<k> (default sweep dir: runs/sweeps/<name>). Every run's config is resolved before
+anything starts. Finished runs are skipped; a failed run is reported with its log and retried once from scratch.
+
+Named sweeps (configs/sweep/): cpu_dmc (the CPU-scale DMC reproduction), paper_dmc (the paper's DMC grid, CUDA).
+
+Examples:
+    python tools/sweep.py cpu_dmc                                  # then: python tools/report.py runs/sweeps/cpu_dmc
+    python tools/sweep.py cpu_dmc tasks=dmc_point_mass seeds=[1]   # a subset of the grid
+    python tools/sweep.py cpu_dmc methods=refpo algorithm.reflow_coef=[0.02,0.08] out=runs/sweeps/lambda
+    python tools/sweep.py paper_dmc --dry-run                      # list the runs and their states, train nothing
+    cpuslot 2 python tools/sweep.py cpu_dmc --launcher "cpuslot 1" # on a machine that shares its cores
+
+Sweep-level keys: tasks=, seeds=, methods= (labels to keep), device=, out= (the sweep dir); any other key=value is
+a run option for every run (tools/train.py's keys); a list expands the grid unless the option itself takes a list.
+Options: --jobs N runs at a time (default: the CPU cores; 1 on CUDA, several share the GPUs round-robin),
+--retries N (default 1), --launcher "CMD" prefixes each training command, --dry-run.
+"""
+
+import argparse
+import signal
+import sys
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(prog="tools/sweep.py", add_help=False)
+    parser.add_argument("sweep", nargs="?")
+    parser.add_argument("--jobs", type=int, default=None)
+    parser.add_argument("--retries", type=int, default=1)
+    parser.add_argument("--launcher", default="")
+    parser.add_argument("--dry-run", action="store_true")
+    parser.add_argument("-h", "--help", action="store_true")
+    args, rest = parser.parse_known_args(argv)
+    if args.help or args.sweep is None:
+        print(__doc__)
+        return 0 if args.help else 2
+    unknown = [a for a in rest if "=" not in a]
+    if unknown:
+        print(f"error: unknown option(s) {unknown}; see python tools/sweep.py --help", file=sys.stderr)
+        return 2
+    from refpo_warp.errors import ConfigError
+    from refpo_warp.sweep import run_sweep
+    from refpo_warp.sweep_spec import load_sweep
+
+    signal.signal(signal.SIGTERM, signal.default_int_handler)  # stop the runs cleanly on SIGTERM too
+    try:
+        summary = run_sweep(load_sweep(args.sweep, rest), jobs=args.jobs, retries=args.retries,
+                            launcher=args.launcher, dry_run=args.dry_run)  # fmt: skip
+    except ConfigError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    if summary.interrupted:
+        return 130
+    return 0 if summary.ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
