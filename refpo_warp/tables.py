@@ -1,0 +1,231 @@
+"""The paper's DMC tables from per-run ``eval.json`` files: which numbers, how they are aggregated and printed.
+
+Per run (``eval.json``, the project's shared format):
+- 10-step reward: ``results["N=<n>"].return_mean`` for the largest n > 1 (ReinFlow: N = 4, marked in the cell);
+  a Gaussian policy's ``results["mean_action"].return_mean``;
+- 1-step reward: ``results["N=1"].return_mean``;
+- Straightness: ``diagnostics.straightness_error``; Explosion and Ratio Expl.: ``diagnostics.explosion_rate``
+  (per action, the paper's number); Jac. Expl., Mean Jac. Norm, Jac. Norm P95: ``diagnostics.jacobian_*``.
+A number a run does not have (e.g. PPO's diagnostics) is left out and prints as ``--``.
+
+Aggregation (``AGGREGATION`` says it in the reports): the method table pools all finished (task, seed) runs of a
+method: mean over them and population standard deviation (ddof = 0) over them, so the spread holds task-to-task and
+seed-to-seed differences (our reading of the paper's "mean ± std across 10 tasks"). The CSV adds the std over
+per-task means and over per-seed means (mean over tasks for each seed). Per-task rows: mean ± std over seeds.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import statistics
+from dataclasses import dataclass, field
+from pathlib import Path
+
+MISSING = "--"
+METRIC_TITLES = {
+    "return_multi": "10-step Reward",
+    "return_1": "1-step Reward",
+    "straightness": "Straightness",
+    "explosion": "Explosion",
+    "jac_expl": "Jac. Expl.",
+    "ratio_expl": "Ratio Expl.",
+    "jac_norm_mean": "Mean Jac. Norm",
+    "jac_norm_p95": "Jac. Norm P95",
+}
+DIAGNOSTIC_KEYS = {
+    "straightness": "straightness_error",
+    "explosion": "explosion_rate",
+    "jac_expl": "jacobian_explosion_rate",
+    "ratio_expl": "explosion_rate",
+    "jac_norm_mean": "jacobian_norm_mean",
+    "jac_norm_p95": "jacobian_norm_p95",
+}
+MAIN_METRICS = ("return_multi", "return_1", "straightness", "explosion")
+APPENDIX_C_METRICS = ("jac_expl", "ratio_expl", "jac_norm_mean", "jac_norm_p95")
+AGGREGATION = (
+    "Each method cell pools the method's finished (task, seed) runs: mean over them ± population standard deviation "
+    "(ddof = 0) over them, so the spread includes task-to-task and seed-to-seed differences; diagnostics show the mean "
+    "only, as the paper does (their std is in the CSV). The CSV also gives the std over per-task means (`_std_tasks`) "
+    "and over per-seed means across tasks (`_std_seeds`). Per-task cells: mean ± population std over seeds. "
+    "`Runs` counts finished runs / runs in the sweep; `--`: no run of that method has the number."
+)
+
+SOURCES_MAIN = (
+    "Sources per run (`eval.json`): 10-step Reward = `results[\"N=<largest N>\"].return_mean` (Gaussian policies: "
+    "`results[\"mean_action\"]`; `(N=4)` marks a multi-step N other than 10), 1-step Reward = "
+    "`results[\"N=1\"].return_mean`, Straightness = `diagnostics.straightness_error`, Explosion = "
+    "`diagnostics.explosion_rate`."
+)
+SOURCES_APPENDIX_C = (
+    "Means over the same runs as above (std in `appendix_c.csv`). Sources: `diagnostics.jacobian_explosion_rate`, "
+    "`explosion_rate`, `jacobian_norm_mean`, `jacobian_norm_p95`."
+)
+
+
+@dataclass
+class RunRecord:
+    """One run of the grid: its eval.json numbers, or why it has none (``status`` other than ``ok``)."""
+
+    task: str
+    label: str
+    seed: int
+    run_dir: Path
+    status: str = "ok"  # ok | missing | failed | stale | unreadable
+    note: str = ""
+    metrics: dict[str, float] = field(default_factory=dict)
+    multi_n: int | None = None  # the multi-step N of the 10-step column (None: Gaussian mean action)
+
+
+@dataclass
+class Stat:
+    mean: float | None = None
+    std: float | None = None
+    n: int = 0
+    std_tasks: float | None = None
+    std_seeds: float | None = None
+
+
+def _finite(value) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return float(value) if math.isfinite(value) else None
+
+
+def run_metrics(report: dict) -> tuple[dict[str, float], int | None]:
+    """The table numbers of one ``eval.json`` and the multi-step N used for the 10-step column."""
+    results = report.get("results") or {}
+    steps = sorted(int(k[2:]) for k in results if k.startswith("N=") and k[2:].isdigit())
+    raw: dict[str, object] = {}
+    multi = steps[-1] if steps and steps[-1] > 1 else None
+    if multi is not None:
+        raw["return_multi"] = results[f"N={multi}"].get("return_mean")
+    elif "mean_action" in results:
+        raw["return_multi"] = results["mean_action"].get("return_mean")
+    if 1 in steps:
+        raw["return_1"] = results["N=1"].get("return_mean")
+    diagnostics = report.get("diagnostics") or {}
+    for metric, key in DIAGNOSTIC_KEYS.items():
+        raw[metric] = diagnostics.get(key)
+    metrics = {k: v for k, v in ((k, _finite(v)) for k, v in raw.items()) if v is not None}
+    return metrics, multi
+
+
+def aggregate(points: list[tuple[str, int, float]]) -> Stat:
+    """Mean and population stds of (task, seed, value) points: over all points, per-task means, per-seed means."""
+    if not points:
+        return Stat()
+    values = [v for _, _, v in points]
+    by_task: dict[str, list[float]] = {}
+    by_seed: dict[int, list[float]] = {}
+    for task, seed, value in points:
+        by_task.setdefault(task, []).append(value)
+        by_seed.setdefault(seed, []).append(value)
+    task_means = [statistics.fmean(v) for v in by_task.values()]
+    seed_means = [statistics.fmean(v) for v in by_seed.values()]
+    return Stat(statistics.fmean(values), statistics.pstdev(values), len(values), statistics.pstdev(task_means),
+                statistics.pstdev(seed_means))  # fmt: skip
+
+
+def fmt_number(x: float | None) -> str:
+    if x is None:
+        return MISSING
+    if abs(x) >= 100:
+        return f"{x:.0f}"
+    return "0" if x == 0 else f"{x:.3g}"
+
+
+def fmt_stat(stat: Stat, with_std: bool = True) -> str:
+    if stat.n == 0:
+        return MISSING
+    if not with_std or stat.n == 1:
+        return fmt_number(stat.mean)
+    return f"{fmt_number(stat.mean)} ± {fmt_number(stat.std)}"
+
+
+def _points(records: list[RunRecord], metric: str) -> list[tuple[str, int, float]]:
+    return [(r.task, r.seed, r.metrics[metric]) for r in records if r.status == "ok" and metric in r.metrics]
+
+
+def _multi_note(records: list[RunRecord]) -> str:
+    steps = sorted({r.multi_n for r in records if r.status == "ok" and r.multi_n is not None})
+    return "" if not steps or steps == [10] else f" (N={','.join(map(str, steps))})"
+
+
+def _runs_cell(records: list[RunRecord]) -> str:
+    return f"{sum(r.status == 'ok' for r in records)}/{len(records)}"
+
+
+def method_rows(records: list[RunRecord], methods: list[tuple[str, str]], metrics=MAIN_METRICS) -> list[dict]:
+    """One row per method (label, display name): a Stat per metric over all its runs."""
+    rows = []
+    for label, name in methods:
+        mine = [r for r in records if r.label == label]
+        stats = {m: aggregate(_points(mine, m)) for m in metrics}
+        rows.append({"label": label, "name": name, "records": mine, "stats": stats})
+    return rows
+
+
+def task_rows(records: list[RunRecord], methods: list[tuple[str, str]], tasks: list[str]) -> list[dict]:
+    """One row per (task, method): a Stat over seeds per metric of the main table."""
+    rows = []
+    for task in tasks:
+        for row in method_rows([r for r in records if r.task == task], methods):
+            if row["records"]:
+                rows.append({**row, "task": task})
+    return rows
+
+
+def markdown_table(header: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    lines += ["| " + " | ".join(cells) + " |" for cells in rows]
+    return "\n".join(lines) + "\n"
+
+
+def main_markdown(rows: list[dict]) -> str:
+    """The paper's DMC table: rewards as mean ± std, diagnostics as means."""
+    header = ["Method", "Runs"] + [METRIC_TITLES[m] for m in MAIN_METRICS]
+    body = []
+    for row in rows:
+        s = row["stats"]
+        body.append([row["name"], _runs_cell(row["records"]),
+                     fmt_stat(s["return_multi"]) + (_multi_note(row["records"]) if s["return_multi"].n else ""),
+                     fmt_stat(s["return_1"]), fmt_stat(s["straightness"], False), fmt_stat(s["explosion"], False)])
+    return markdown_table(header, body)
+
+
+def task_markdown(rows: list[dict]) -> str:
+    header = ["Task", "Method", "Runs"] + [METRIC_TITLES[m] for m in MAIN_METRICS]
+    body = [[row["task"], row["name"], _runs_cell(row["records"])]
+            + [fmt_stat(row["stats"][m]) for m in MAIN_METRICS] for row in rows]  # fmt: skip
+    return markdown_table(header, body)
+
+
+def appendix_c_markdown(rows: list[dict]) -> str:
+    header = ["Method", "Runs"] + [METRIC_TITLES[m] for m in APPENDIX_C_METRICS]
+    body = [[row["name"], _runs_cell(row["records"])] + [fmt_stat(row["stats"][m], False) for m in APPENDIX_C_METRICS]
+            for row in rows]  # fmt: skip
+    return markdown_table(header, body)
+
+
+def to_csv(rows: list[dict], metrics, per_task: bool = False) -> str:
+    """Full-precision CSV: per metric ``_mean``, ``_std``, ``_n`` (and ``_std_tasks``, ``_std_seeds`` per method)."""
+    extra = ("std_tasks", "std_seeds") if not per_task else ()
+    fields = (["task"] if per_task else []) + ["method", "label", "runs_finished", "runs_total"]
+    fields += [f"{m}_{part}" for m in metrics for part in ("mean", "std", "n", *extra)]
+    out = io.StringIO()
+    writer = csv.DictWriter(out, fieldnames=fields, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        line = {"method": row["name"], "label": row["label"], "runs_total": len(row["records"]),
+                "runs_finished": sum(r.status == "ok" for r in row["records"])}  # fmt: skip
+        if per_task:
+            line["task"] = row["task"]
+        for m in metrics:
+            stat = row["stats"][m]
+            for part in ("mean", "std", "n", *extra):
+                value = getattr(stat, part)
+                line[f"{m}_{part}"] = "" if value is None else (value if part == "n" else repr(value))
+        writer.writerow(line)
+    return out.getvalue()
