@@ -292,9 +292,13 @@ def run_sweep(sweep: Sweep, jobs: int | None = None, retries: int = 1, launcher:
               echo=print) -> Summary:  # fmt: skip
     """Validate the whole grid, then train what is not done yet; returns what finished, was skipped or failed."""
     prints = validate(sweep)
-    cuda = device_type(sweep.device) == "cuda"
-    if jobs is None:
-        jobs = 1 if cuda else (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count())
+    if jobs is None:  # one run per CPU core (one torch thread each), or one per GPU
+        if device_type(sweep.device) == "cuda":
+            import torch
+
+            jobs = max(1, torch.cuda.device_count())
+        else:
+            jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     shape = f"{len(sweep.tasks)} task(s) x {len(sweep.methods)} method(s) x {len(sweep.seeds)} seed(s)"
     echo(f"[sweep] {sweep.name}: {len(sweep.runs)} runs ({shape}) in {sweep.out_dir}; every config resolves")
     words = {"done": "done (skipped)", "new": "new", "unfinished": "unfinished (rerun from scratch)",

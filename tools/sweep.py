@@ -16,7 +16,7 @@ Examples:
 
 Sweep-level keys: tasks=, seeds=, methods= (labels to keep), device=, out= (the sweep dir); any other key=value is
 a run option for every run (tools/train.py's keys); a list expands the grid unless the option itself takes a list.
-Options: --jobs N runs at a time (default: the CPU cores; 1 on CUDA, several share the GPUs round-robin),
+Options: --jobs N runs at a time (default: the CPU cores; on CUDA one per GPU; more share the GPUs round-robin),
 --retries N (default 1), --launcher "CMD" prefixes each training command, --dry-run.
 """
 
