@@ -100,14 +100,17 @@ def readable_log_axis(ax) -> None:
 
 
 def ratio_spikes(panels: dict[str, dict[str, list[dict]]], path: Path, seed: int) -> Path:
-    """Figure 4: per task (columns) the training return per update (top) and the largest proxy ratio of each
-    update on a log axis (bottom), one line per method, for one seed; the dashed line is exp(3)."""
+    """Figure 4: per task (columns) the training return per update with the periodic 10-step evaluations as dots
+    (top) and the largest proxy ratio of each update on a log axis (bottom), one colour per method, for one seed;
+    the dashed line is exp(3)."""
     fig, axes = plt.subplots(2, len(panels), figsize=(3.8 * len(panels), 5.0), squeeze=False, sharex="col")
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for col, (task, methods) in enumerate(panels.items()):
         top, bottom = axes[0, col], axes[1, col]
         for (name, rows), color in zip(methods.items(), colors * 4):
-            top.plot(*series(rows, "reward_mean"), color=color, lw=1.0, label=name)
+            top.plot(*series(rows, "reward_mean"), color=color, lw=1.0, label=f"{name} (training)")
+            top.plot(*series(rows, "eval/return_N10"), color=color, ls="none", marker="o", ms=3,
+                     label=f"{name} (evaluation, N=10)")  # fmt: skip
             key = ratio_key(rows)
             if key:
                 bottom.plot(*series(rows, key), color=color, lw=0.9, label=name)
@@ -119,8 +122,9 @@ def ratio_spikes(panels: dict[str, dict[str, list[dict]]], path: Path, seed: int
         for ax in (top, bottom):
             ax.grid(alpha=0.3, which="both" if ax is bottom else "major")
             ax.tick_params(labelsize=7)
-    axes[0, 0].set_ylabel("training return per update", fontsize=8)
+    axes[0, 0].set_ylabel("episode return", fontsize=8)
     axes[1, 0].set_ylabel("max proxy ratio per update", fontsize=8)
+    axes[0, 0].legend(fontsize=6)
     axes[1, 0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
@@ -134,14 +138,14 @@ def latency_bars(latency: dict, path: Path, names: dict[str, str] | None = None)
     groups: dict[tuple[str, int], list[dict]] = {}
     for row in latency["rows"]:
         groups.setdefault((row["task"], row["batch"]), []).append(row)
-    fig, axes = plt.subplots(1, len(groups), figsize=(3.6 * len(groups), 3.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(groups), figsize=(3.6 * len(groups), 3.8), squeeze=False)
     for ax, ((task, batch), rows) in zip(axes[0], groups.items()):
-        labels = [names.get(r["algo"], r["algo"]) + (f"\nN={r['flow_steps']}" if r.get("flow_steps") else "\nmean")
+        labels = [names.get(r["algo"], r["algo"]) + (f", N={r['flow_steps']}" if r.get("flow_steps") else ", mean")
                   for r in rows]  # fmt: skip
         values = [r["latency_ms"] for r in rows]
         bars = ax.bar(range(len(rows)), values, color=["C0" if r.get("flow_steps") != 1 else "C2" for r in rows])
         ax.bar_label(bars, labels=[f"{v:.3g}" for v in values], fontsize=7)
-        ax.set_xticks(range(len(rows)), labels, fontsize=7)
+        ax.set_xticks(range(len(rows)), labels, fontsize=7, rotation=30, ha="right")
         ax.set_title(f"{task.removeprefix('dmc_')}, {batch} obs per call", fontsize=9)
         ax.set_ylabel("latency per action batch (ms)", fontsize=8)
         ax.tick_params(axis="y", labelsize=7)

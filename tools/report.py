@@ -49,9 +49,9 @@ def main(argv: list[str]) -> int:
     except (FileNotFoundError, ValueError, ConfigError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    print(written[0].read_text())
-    for path in written:
-        print(path)
+    text = written[0].read_text()  # report.md: print its title and the DMC table, then the files
+    print(text[: text.index("Each method cell")].rstrip() if "Each method cell" in text else text)
+    print("\nwritten:\n" + "\n".join(f"  {path}" for path in written))
     return 0
 
 
