@@ -49,7 +49,7 @@ def policy_latency(task: str, algo: str, device: str, batches: list[int], flow_s
     obs = env.get_observations().to(device)
     rows = []
     for n in flow_steps if is_flow(actor) else [None]:
-        policy = make_policy(actor, n, stochastic=True)
+        policy = make_policy(actor, n)  # random initial noise, no perturbation: the evaluation protocol
         for batch in batches:
             part = obs[:batch]
             with torch.inference_mode():
