@@ -131,14 +131,7 @@ class SweepExecutor:
     def __init__(self, sweep: Sweep, jobs: int, retries: int = 1, launcher: str = "", echo=print) -> None:
         self.sweep, self.jobs, self.retries, self.echo = sweep, max(1, jobs), retries, echo
         self.launcher = shlex.split(launcher)
-        self.gpus = 0
-        if device_type(sweep.device) == "cuda":
-            import torch
-
-            self.gpus = torch.cuda.device_count()
-            if not self.gpus:
-                raise ConfigError(f"Sweep '{sweep.name}' trains on CUDA (device: {sweep.device}) but no CUDA device "
-                                  "is available here (--dry-run validates it without training)")  # fmt: skip
+        self.gpus = cuda_devices(sweep)
         status_path = sweep.out_dir / STATUS_FILE
         self.status: dict[str, dict] = json.loads(status_path.read_text()) if status_path.exists() else {}
         self.durations: dict[str, float] = {}
@@ -260,6 +253,18 @@ class SweepExecutor:
         return summary
 
 
+def cuda_devices(sweep: Sweep) -> int:
+    """GPUs the sweep's runs share (0 for a CPU sweep); a CUDA sweep without a GPU is an error."""
+    if device_type(sweep.device) != "cuda":
+        return 0
+    import torch
+
+    if not torch.cuda.device_count():
+        raise ConfigError(f"Sweep '{sweep.name}' trains on CUDA (device: {sweep.device}) but no CUDA device is "
+                          "available here (--dry-run validates it without training)")  # fmt: skip
+    return torch.cuda.device_count()
+
+
 def plan(sweep: Sweep, prints: dict[str, str]) -> tuple[list[Run], list[Run], dict[str, list[str]]]:
     """(runs to train, runs already done, run keys per state) for the current state of the sweep dir."""
     states: dict[str, list[str]] = {}
@@ -292,13 +297,9 @@ def run_sweep(sweep: Sweep, jobs: int | None = None, retries: int = 1, launcher:
               echo=print) -> Summary:  # fmt: skip
     """Validate the whole grid, then train what is not done yet; returns what finished, was skipped or failed."""
     prints = validate(sweep)
-    if jobs is None:  # one run per CPU core (one torch thread each), or one per GPU
-        if device_type(sweep.device) == "cuda":
-            import torch
-
-            jobs = max(1, torch.cuda.device_count())
-        else:
-            jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    gpus = 0 if dry_run else cuda_devices(sweep)
+    if jobs is None:  # one run per GPU, or one per CPU core (one torch thread each)
+        jobs = gpus or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
     shape = f"{len(sweep.tasks)} task(s) x {len(sweep.methods)} method(s) x {len(sweep.seeds)} seed(s)"
     echo(f"[sweep] {sweep.name}: {len(sweep.runs)} runs ({shape}) in {sweep.out_dir}; every config resolves")
     words = {"done": "done (skipped)", "new": "new", "unfinished": "unfinished (rerun from scratch)",

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import pytest
+import torch
 import yaml
 
 from refpo_warp.config import parse_overrides, resolve_config
@@ -67,6 +68,15 @@ def test_a_typo_fails_before_anything_starts(tmp_path):
         load_sweep(str(write_spec(tmp_path / "algo.yaml", methods=[{"algo": "refp"}])))
     with pytest.raises(ConfigError, match="use 'seeds="):
         load_sweep(str(spec), ["seed=3"])
+    if not torch.cuda.is_available():  # a CUDA sweep validates anywhere but trains only with a GPU
+        cuda_spec = write_spec(tmp_path / "cuda.yaml", device="cuda", methods=[{"algo": "ppo"}])
+        cuda = load_sweep(str(cuda_spec), [f"out={tmp_path / 'cuda'}"])
+        lines: list[str] = []
+        run_sweep(cuda, dry_run=True, echo=lines.append)
+        assert "1 new" in lines[1]
+        with pytest.raises(ConfigError, match="no CUDA device is available"):
+            run_sweep(cuda, echo=lambda line: None)
+        assert not (tmp_path / "cuda").exists()
 
 
 def test_named_sweeps_resolve():
