@@ -11,7 +11,7 @@ import math
 import statistics
 from pathlib import Path
 
-from refpo_warp.plots import plt
+from refpo_warp.plots import plt, readable_log_axis
 
 RATIO_KEYS = ("Flow/ratio_max", "loss/ratio_max")  # the shared name, then the name of runs logged before it
 CURVE_KEYS = ("eval/return_N10", "eval/return_N1", "eval/return", "reward_mean")
@@ -84,21 +84,6 @@ def reward_curve_grid(curves: dict[str, dict[str, dict[str, tuple[list, list]]]]
     return path
 
 
-def _log_ticks(value: float, _pos) -> str:
-    return f"{value:g}" if 1e-3 <= value < 1e5 else f"1e{round(math.log10(value))}"
-
-
-def readable_log_axis(ax) -> None:
-    """Plain-number ticks on a log y axis: 1-2-5 steps within up to three decades, else one per decade."""
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-
-    low, high = ax.get_ylim()
-    decades = math.log10(max(high, 1e-12) / max(low, 1e-12))
-    ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0) if decades <= 3 else (1.0,)))
-    ax.yaxis.set_major_formatter(FuncFormatter(_log_ticks))
-    ax.yaxis.set_minor_formatter(NullFormatter())
-
-
 def ratio_spikes(panels: dict[str, dict[str, list[dict]]], path: Path, seed: int) -> Path:
     """Figure 4: per task (columns) the training return per update with the periodic 10-step evaluations as dots
     (top) and the largest proxy ratio of each update on a log axis (bottom), one colour per method, for one seed;
@@ -115,7 +100,6 @@ def ratio_spikes(panels: dict[str, dict[str, list[dict]]], path: Path, seed: int
             if key:
                 bottom.plot(*series(rows, key), color=color, lw=0.9, label=name)
         bottom.axhline(EXPLOSION_RATIO, color="0.4", ls="--", lw=0.8, label="exp(3)")
-        bottom.set_yscale("log")
         readable_log_axis(bottom)
         top.set_title(f"{task.removeprefix('dmc_')} (seed {seed})", fontsize=9)
         bottom.set_xlabel("env steps", fontsize=8)
