@@ -36,16 +36,23 @@ def _series(rows: list[dict], key: str) -> tuple[list[float], list[float]]:
     return [p[0] for p in pts], [p[1] for p in pts]
 
 
+def seed_stats(curves: list[tuple[list[float], list[float]]]):
+    """(steps, mean, low, high) over seeds' (env steps, values) curves, at the env-step counts every seed has; if
+    they share none (runs of different lengths), at each count over the seeds that have it."""
+    curves = [c for c in curves if c[0]]
+    if not curves:
+        return [], [], [], []
+    tables = [dict(zip(x, y)) for x, y in curves]
+    common = set(tables[0]).intersection(*tables[1:])
+    steps = sorted(common) if common else sorted(set().union(*tables))
+    values = [[t[s] for t in tables if s in t] for s in steps]
+    return steps, [float(np.mean(v)) for v in values], [min(v) for v in values], [max(v) for v in values]
+
+
 def _seed_series(seeds: list[list[dict]], key: str):
-    """(x, mean, low, high) of ``key`` over the seeds' runs, on the env-step grid they share (None if absent)."""
-    series = [_series(rows, key) for rows in seeds]
-    series = [s for s in series if s[0]]
-    if not series:
-        return None
-    n = min(len(x) for x, _ in series)
-    x = np.asarray(series[0][0][:n], dtype=float)
-    y = np.asarray([v[:n] for _, v in series], dtype=float)
-    return x, y.mean(axis=0), y.min(axis=0), y.max(axis=0)
+    """``seed_stats`` of ``key`` over the seeds' runs as arrays (None if no run has the key)."""
+    steps, mean, low, high = seed_stats([_series(rows, key) for rows in seeds])
+    return (np.asarray(steps, float), np.asarray(mean), np.asarray(low), np.asarray(high)) if steps else None
 
 
 def _label(run_dir: Path) -> str:

@@ -8,10 +8,9 @@ Curves come from each run's ``progress.jsonl`` (``eval/return_N10``, ``eval/retu
 from __future__ import annotations
 
 import math
-import statistics
 from pathlib import Path
 
-from refpo_warp.plots import plt, readable_log_axis
+from refpo_warp.plots import plt, readable_log_axis, seed_stats
 
 RATIO_KEYS = ("Flow/ratio_max", "loss/ratio_max")  # the shared name, then the name of runs logged before it
 CURVE_KEYS = ("eval/return_N10", "eval/return_N1", "eval/return", "reward_mean")
@@ -29,15 +28,9 @@ def ratio_key(rows: list[dict]) -> str | None:
 
 
 def seed_mean(curves: list[tuple[list[float], list[float]]]) -> tuple[list[float], list[float]]:
-    """Mean over seeds at the env-step counts every seed has; if they share none, at each count over the seeds
-    that have it (runs of different lengths)."""
-    curves = [c for c in curves if c[0]]
-    if not curves:
-        return [], []
-    tables = [dict(zip(x, y)) for x, y in curves]
-    common = set(tables[0]).intersection(*tables[1:])
-    steps = sorted(common) if common else sorted(set().union(*tables))
-    return steps, [statistics.fmean(t[s] for t in tables if s in t) for s in steps]
+    """Mean over seeds at the env-step counts every seed has (``plots.seed_stats``)."""
+    steps, mean, _, _ = seed_stats(curves)
+    return steps, mean
 
 
 def _grid(n: int, cols: int, width: float, height: float):
