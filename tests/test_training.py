@@ -107,3 +107,26 @@ def test_nan_loss_stops_training_and_keeps_last_good_checkpoint(tmp_run_dir, mon
     assert latest_checkpoint(tmp_run_dir).name == "model_1.pt"
     good = torch.load(tmp_run_dir / "model_1.pt", weights_only=False)
     assert all(torch.isfinite(v).all() for v in good["actor_state_dict"].values())
+
+
+def test_dmc_learner_stores_the_pre_tanh_action_the_env_squashes():
+    """With the DMC default action transform, rollout storage keeps the sampled (unbounded) flow action and the
+    physics receives tanh of it."""
+    import warp as wp
+
+    from refpo_warp.config import resolve_config
+    from refpo_warp.training import build_runner
+
+    cfg = resolve_config(["task=dmc_cartpole_balance", "algo=refpo", "device=cpu", "num_envs=64",
+                          "runner.num_steps_per_env=4"])  # fmt: skip
+    env, runner = build_runner(cfg, None)
+    alg = runner.alg
+    obs = env.get_observations()
+    with torch.inference_mode():
+        actions = alg.act(obs)
+        env.step(actions)
+        stored = alg.transition.actions.clone()
+        alg.process_env_step(obs, torch.zeros(64), torch.zeros(64, dtype=torch.bool), {})
+    torch.testing.assert_close(alg.storage.actions[0], stored)
+    assert stored.abs().max() > 1.0  # an untrained flow samples beyond the env's range; nothing clipped it
+    torch.testing.assert_close(wp.to_torch(env.sim.views.ctrl), torch.tanh(stored))
