@@ -33,6 +33,7 @@ from torch import nn
 
 from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_indices
 from refpo_warp.errors import NonFiniteLossError
+from refpo_warp.rsl_rl_compat import NORMALIZERS_UPDATE_PER_STEP, split_newer_ppo_args
 
 
 @dataclass
@@ -93,7 +94,10 @@ class OnPolicyAlgorithm(RslPPO):
                 )
         if getattr(critic, "is_recurrent", False) or getattr(actor, "is_recurrent", False):
             raise ValueError(f"{type(self).__name__} supports feed-forward actors and critics only.")
+        newer = split_newer_ppo_args(ppo_kwargs, honoured=("use_mixed_precision",))  # rsl-rl-lib < 5.5
         super().__init__(actor, critic, storage, **ppo_kwargs)
+        if not hasattr(self, "use_mixed_precision"):  # this update loop applies it on every rsl_rl version
+            self.use_mixed_precision = bool(newer.get("use_mixed_precision", False))
         self.reward_scale = float(reward_scale)
         self.value_clip_param = self.clip_param if value_clip_param is None else float(value_clip_param)
         self.reshuffle_each_epoch = bool(reshuffle_each_epoch)
@@ -178,10 +182,11 @@ class OnPolicyAlgorithm(RslPPO):
                 else:
                     means.setdefault(key, []).append(value)
 
-        # Normalisers follow the data after the update, as in rsl_rl's PPO.
-        obs = self.storage.observations.flatten(0, 1)
-        self.actor.update_normalization(obs)
-        self.critic.update_normalization(obs)
+        # Normalisers follow the data after the update, as in rsl_rl's PPO (before 5.5 it did so at every env step).
+        if not NORMALIZERS_UPDATE_PER_STEP:
+            obs = self.storage.observations.flatten(0, 1)
+            self.actor.update_normalization(obs)
+            self.critic.update_normalization(obs)
         self.storage.clear()
         self.num_updates += 1
         if self.lr_decay_rate > 0:
