@@ -9,9 +9,15 @@ from refpo_warp.errors import ConfigError, MotionDataError, NonFiniteLossError
 
 
 def _train(args: list[str]) -> None:
+    from refpo_warp.distributed import close_process_group, main_rank_stdout, process_rank
     from refpo_warp.training import train
 
-    train(args)
+    # Under torchrun only rank 0 prints progress; every rank leaves the process group when done.
+    try:
+        with main_rank_stdout(process_rank()):
+            train(args)
+    finally:
+        close_process_group()
 
 
 def _eval(args: list[str]) -> None:

@@ -4,7 +4,8 @@
 - one progress line per iteration (rsl_rl's full report with ``log_full``), plus ``progress.jsonl`` holding
   every logged number, which the plotting tools read;
 - a NaN/inf loss stops training before the next checkpoint, so the last checkpoint on disk stays good;
-- an ``on_iteration`` hook (periodic evaluation) whose numbers go to TensorBoard and ``progress.jsonl``.
+- an ``on_iteration`` hook (periodic evaluation) whose numbers go to TensorBoard and ``progress.jsonl``;
+- multi-process training under torchrun on CUDA (NCCL) and on a CPU (gloo); rsl_rl itself only starts NCCL.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import torch
 from rsl_rl.runners import OnPolicyRunner
 from rsl_rl.utils.logger import Logger
 
+from refpo_warp.distributed import init_process_group, process_rank
 from refpo_warp.errors import NonFiniteLossError
 
 CHECKPOINT_PATTERN = re.compile(r"model_(\d+)\.pt$")
@@ -104,7 +106,8 @@ class ProgressLogger(Logger):
 
 
 class Runner(OnPolicyRunner):
-    """OnPolicyRunner with atomic checkpoints, a progress line per iteration and an evaluation hook."""
+    """OnPolicyRunner with atomic checkpoints, a progress line per iteration, an evaluation hook and a
+    torch.distributed backend that matches the device."""
 
     def __init__(self, env, train_cfg: dict, log_dir: str | None = None, device: str = "cpu",
                  log_full: bool = False) -> None:  # fmt: skip
@@ -116,6 +119,25 @@ class Runner(OnPolicyRunner):
             gpu_global_rank=self.gpu_global_rank, device=device, log_full=log_full,
         )  # fmt: skip
         self.logger.git_status_repos = old.git_status_repos + [__file__]
+
+    def _configure_multi_gpu(self) -> None:
+        """rsl_rl's multi-GPU set-up, with the backend picked by the device: NCCL on CUDA, gloo on a CPU.
+
+        Sets the same attributes as rsl_rl's version (ranks, world size, ``cfg["multi_gpu"]``), which always starts
+        NCCL and so cannot run (or be tested) on a CPU. A process group that already exists is reused.
+        """
+        rank = process_rank()
+        self.gpu_world_size, self.is_distributed = rank.world_size, rank.is_distributed
+        self.gpu_local_rank, self.gpu_global_rank = rank.local_rank, rank.rank
+        if not rank.is_distributed:
+            self.cfg["multi_gpu"] = None
+            return
+        self.cfg["multi_gpu"] = {"global_rank": rank.rank, "local_rank": rank.local_rank, "world_size": rank.world_size}
+        device = torch.device(self.device)
+        if device.type == "cuda" and device != torch.device("cuda", rank.local_rank):
+            raise ValueError(f"Device '{self.device}' does not match the device of local rank {rank.local_rank}: "
+                             f"cuda:{rank.local_rank}")  # fmt: skip
+        init_process_group(rank, self.device)
 
     def save(self, path: str, infos: dict | None = None) -> None:
         """Write the checkpoint atomically: a reader never sees a partial file, a crash keeps the previous one."""

@@ -3,6 +3,9 @@
 ``train(["task=gridworld", "algo=refpo", "seed=1"])`` builds the env and rsl_rl's runner (extended in
 ``refpo_warp.runner``), writes the resolved config next to the checkpoints, trains (or resumes), evaluates at the
 end and returns the evaluation results (also written to ``eval.json`` in the run dir).
+
+Under torchrun every rank trains on its own device (``cuda:LOCAL_RANK``, or the CPU) with seed ``seed + RANK``;
+rank 0 alone writes the run dir (config, checkpoints, logs) and evaluates (``refpo_warp.distributed``).
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ import numpy as np
 import torch
 
 from refpo_warp.config import LEAF_KEYS, dump_config, load_yaml, resolve_config
-from refpo_warp.device import resolve_device
+from refpo_warp.distributed import process_rank, rank_device
 from refpo_warp.errors import ConfigError
 from refpo_warp.registry import make_env
 from refpo_warp.runner import Runner, latest_checkpoint
@@ -81,10 +84,16 @@ def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
 
 
 def build_runner(cfg: dict, log_dir: Path | None, env=None):
-    """Env + rsl_rl runner (with our extensions) for a resolved config; ``env`` hosts the runner instead of a new one."""
-    device = resolve_device(cfg["device"])
+    """Env + rsl_rl runner (with our extensions) for a resolved config; ``env`` hosts the runner instead of a new one.
+
+    Under torchrun: this rank's device and env seed (``seed + RANK``), and a run dir for rank 0 only.
+    """
+    rank = process_rank()
+    device = rank_device(cfg["device"], rank)
     if env is None:
-        env = make_env(cfg["task"], num_envs=cfg["num_envs"], device=device, seed=cfg["seed"], **cfg["env"])
+        env = make_env(cfg["task"], num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank,
+                       **cfg["env"])  # fmt: skip
+    log_dir = log_dir if rank.is_main else None
     runner = Runner(env, rsl_rl_config(cfg), log_dir=str(log_dir) if log_dir else None, device=device,
                     log_full=cfg["runner"]["log_full"])  # fmt: skip
     return env, runner
@@ -109,30 +118,34 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
             f"{run_dir} already holds checkpoints ({checkpoint.name}); pass resume=true to continue that run, "
             "or choose another run_dir"
         )
-    run_dir.mkdir(parents=True, exist_ok=True)
-    if not resume:
-        for stale in ("progress.jsonl", "eval.json"):
-            (run_dir / stale).unlink(missing_ok=True)
+    rank = process_rank()
+    if rank.is_main:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        if not resume:
+            for stale in ("progress.jsonl", "eval.json"):
+                (run_dir / stale).unlink(missing_ok=True)
 
-    seed_everything(cfg["seed"])
+    seed_everything(cfg["seed"] + rank.rank)
     env, runner = build_runner(cfg, run_dir)
-    dump_config(cfg, run_dir / RUN_CONFIG)
+    if rank.is_main:
+        dump_config(cfg, run_dir / RUN_CONFIG)
     start = runner.resume_from(checkpoint) if (resume and checkpoint is not None) else 0
     total = num_iterations(cfg)
     notice = cfg["notice"].format(task=cfg["task"], algo=cfg["algo"]) if cfg["notice"] else None
     if notice:
         print(f"[refpo_warp] NOTE: {notice}", flush=True)
-    print(f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs, "
+    ranks = f" x {rank.world_size} ranks" if rank.is_distributed else ""
+    print(f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs{ranks}, "
           f"iterations {start}..{total - 1} ({total * env.num_envs * cfg['runner']['num_steps_per_env']:,} env "
-          f"steps), run dir {run_dir}", flush=True)  # fmt: skip
+          f"steps per rank), run dir {run_dir}", flush=True)  # fmt: skip
     if cfg["eval"]["interval"] is None:  # periodic evaluation on by default: 10 evaluations per run
         cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
-    if cfg["eval"]["interval"] > 0:
+    if cfg["eval"]["interval"] > 0 and rank.is_main:
         runner.logger.on_iteration = periodic_evaluator(cfg, runner)
     if total > start:
         runner.learn(total - start, init_at_random_ep_len=cfg["runner"]["init_at_random_ep_len"])
     results = {}
-    if cfg["eval"]["at_end"]:
+    if cfg["eval"]["at_end"] and rank.is_main:
         results = evaluate_run(run_dir, cfg=cfg, runner=runner)
         log_final_evaluation(runner, results)
     if notice:

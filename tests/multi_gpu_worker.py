@@ -1,0 +1,48 @@
+"""Run by tests/test_multi_gpu.py under torchrun (not a test itself): one short ReFPO run per rank through
+``refpo_warp.training.build_runner``, twice: with rsl_rl's gradient all-reduce and with it switched off. Each rank
+saves its final actor/critic state, learning rate, device and env seed to ``OUT_DIR/<mode>_rank<r>.pt``.
+
+    torchrun --standalone --nproc_per_node=2 tests/multi_gpu_worker.py OUT_DIR key=value ...
+"""
+
+import sys
+from pathlib import Path
+
+import torch
+
+from refpo_warp.config import parse_overrides, resolve_config
+from refpo_warp.distributed import close_process_group, process_rank
+from refpo_warp.training import build_runner, seed_everything
+
+
+def run(cfg: dict, reduce_gradients: bool) -> dict:
+    rank = process_rank()
+    seed_everything(cfg["seed"] + rank.rank)
+    env, runner = build_runner(cfg, None)
+    if not reduce_gradients:
+        runner.alg.reduce_parameters = lambda: None  # every rank steps on its own gradients
+    runner.learn(cfg["max_iterations"])
+    alg = runner.alg
+    return {
+        "parameters": {f"{name}.{k}": v.detach().clone() for name, model in (("actor", alg.actor), ("critic", alg.critic))
+                       for k, v in model.named_parameters()},
+        "buffers": {f"{name}.{k}": v.detach().clone() for name, model in (("actor", alg.actor), ("critic", alg.critic))
+                    for k, v in model.named_buffers()},
+        "learning_rate": alg.learning_rate,
+        "device": str(env.device),
+        "env_seed": env.seed,
+        "multi_gpu": runner.cfg["multi_gpu"],
+        "backend": torch.distributed.get_backend(),
+    }  # fmt: skip
+
+
+def main(out_dir: Path, overrides: list[str]) -> None:
+    cfg = resolve_config(parse_overrides(overrides))
+    rank = process_rank().rank
+    for mode, reduce_gradients in (("reduced", True), ("unreduced", False)):
+        torch.save(run(cfg, reduce_gradients), out_dir / f"{mode}_rank{rank}.pt")
+    close_process_group()
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]), sys.argv[2:])
