@@ -92,19 +92,3 @@ def test_graph_replay_matches_eager_stepping():
         runs.append(torch.stack([env.step(a)[0]["policy"] for a in actions]))
         assert (env._graph is not None) == capture
     assert torch.equal(runs[0], runs[1])
-
-
-def test_gymnasium_vector_adapter_mirrors_the_warp_env():
-    from refpo_warp.envs.gym_adapter import GymVectorEnv
-
-    warp_env = make_env("gridworld", num_envs=8, device="cpu", seed=4, max_episode_length=5)
-    vec = GymVectorEnv(warp_env)
-    obs, _ = vec.reset(seed=9)
-    assert obs.shape == (8, 2) and vec.single_action_space.shape == (2,)
-    start = warp_env.positions.clone()
-    obs, rew, term, trunc, info = vec.step(np.zeros((8, 2), dtype=np.float32))
-    assert torch.equal(warp_env.positions, start) and not (term | trunc).any()
-    for _ in range(4):
-        obs, rew, term, trunc, info = vec.step(np.zeros((8, 2), dtype=np.float32))
-    assert trunc.all() and not term.any() and (rew == 0).all()  # stayed put for 5 steps: time-out
-    assert set(info) == {"success", "reached_top"}

@@ -5,6 +5,11 @@ reward/termination, auto-reset and observations for all envs at once) and ``_res
 by a boolean mask and write their observations). The base class owns the buffers rsl_rl sees, exposed to the
 kernels as zero-copy Warp views, and replays the whole step as one captured graph after a warm-up step (a CUDA
 graph on GPU, a Warp CPU graph on CPU).
+
+Finished envs are reset inside the step, so the observation a step returns for them already starts the next
+episode. A subclass that sets ``supports_final_observations`` also writes each env's observation *before* that
+reset into ``buffers.final_obs`` (at least while ``record_final_obs`` is set); the gymnasium adapter needs it for
+``final_obs``. rsl_rl never reads it.
 """
 
 from __future__ import annotations
@@ -48,6 +53,7 @@ class EnvBuffers:
     rng: object
     obs: dict
     metrics: dict
+    final_obs: dict
 
 
 class WarpVecEnv(VecEnv):
@@ -56,6 +62,8 @@ class WarpVecEnv(VecEnv):
     cfg_class: ClassVar[type] = EnvCfg
     episode_metrics: ClassVar[tuple[str, ...]] = ()
     """Per-episode values a subclass writes at termination (e.g. ``success``); logged and used by evaluation."""
+    supports_final_observations: ClassVar[bool] = False
+    """Whether ``_step_impl`` writes ``buffers.final_obs`` (see the module docstring) when ``record_final_obs``."""
 
     def __init__(self, cfg: EnvCfg, num_envs: int, device: str = "auto", seed: int = 0) -> None:
         if num_envs < 1:
@@ -79,6 +87,8 @@ class WarpVecEnv(VecEnv):
         self._episode_length = torch.zeros(n, dtype=torch.int32, device=dev)
         self._obs = {name: torch.zeros(n, dim, device=dev) for name, dim in obs_dims.items()}
         self._metrics = {name: torch.zeros(n, device=dev) for name in self.episode_metrics}
+        self._final_obs = {name: torch.zeros(n, dim, device=dev) for name, dim in obs_dims.items()}
+        self.record_final_obs = False
         # rsl_rl keeps the observation of step t while step t+1 runs: hand out alternating copies.
         self._obs_out = [TensorDict({k: v.clone() for k, v in self._obs.items()}, batch_size=[n]) for _ in range(2)]
         self._obs_parity = 0
@@ -93,6 +103,7 @@ class WarpVecEnv(VecEnv):
             rng=wp.from_torch(rng, dtype=wp.uint32),
             obs={k: wp.from_torch(v) for k, v in self._obs.items()},
             metrics={k: wp.from_torch(v) for k, v in self._metrics.items()},
+            final_obs={k: wp.from_torch(v) for k, v in self._final_obs.items()},
         )
         self.reseed(self.seed)
         self._graph = None
@@ -159,6 +170,28 @@ class WarpVecEnv(VecEnv):
     def episode_metric_buffers(self) -> dict[str, torch.Tensor]:
         """Per-env values of ``episode_metrics``, valid for the envs whose episode ended at the last step."""
         return self._metrics
+
+    def enable_final_observations(self) -> None:
+        """Make every step also write the observation each env had before its auto-reset (``final_observations``).
+
+        Off by default, as it may cost an extra observation pass per step. The step graph is captured again.
+        """
+        if not self.supports_final_observations:
+            raise NotImplementedError(
+                f"{type(self).__name__} does not record the observation before an auto-reset "
+                "(supports_final_observations is False), which the gymnasium adapter needs"
+            )
+        if not self.record_final_obs:
+            self.record_final_obs = True
+            self._graph, self._steps_taken = None, 0  # the next step runs eagerly, then is captured with the writes
+
+    @property
+    def final_observations(self) -> dict[str, torch.Tensor]:
+        """Per group, every env's observation after the last step but before its auto-reset (live buffers; equal
+        to the returned observation for envs that did not finish). Needs ``enable_final_observations()``."""
+        if not self.record_final_obs:
+            raise RuntimeError("call enable_final_observations() before stepping to record final observations")
+        return self._final_obs
 
     @property
     def unwrapped(self) -> WarpVecEnv:

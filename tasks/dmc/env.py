@@ -79,6 +79,7 @@ class DmcEnv(WarpVecEnv):
 
     cfg_class = DmcCfg
     episode_metrics = ("nonfinite_resets",)
+    supports_final_observations = True
 
     def _spaces(self):
         if self.cfg.task not in TASKS:
@@ -105,6 +106,7 @@ class DmcEnv(WarpVecEnv):
                              f"{0 if ctrl is None else ctrl.shape[1]}")  # fmt: skip
         self.task = task_class(self.sim, cfg, self.buffers.rng)
         self.task.prepare()
+        self._no_resets = wp.zeros(self.num_envs, dtype=wp.bool)  # observe() mask for the pre-reset observation
 
     def _step_impl(self) -> None:
         b, sim, task = self.buffers, self.sim, self.task
@@ -116,6 +118,8 @@ class DmcEnv(WarpVecEnv):
                   inputs=[sim.views.joint_q, sim.views.joint_qd, self.max_episode_length, b.rewards,
                           b.episode_length, b.terminated, b.truncated, sim.reset_mask,
                           b.metrics["nonfinite_resets"]])  # fmt: skip
+        if self.record_final_obs:  # the observation that ends each episode, before the resets below
+            task.observe(b.final_obs["policy"], self._no_resets)
         self._start_episodes(sim.reset_mask)
 
     def _reset_impl(self, mask) -> None:

@@ -70,6 +70,7 @@ def step_kernel(
     truncated: wp.array(dtype=wp.bool),
     success: wp.array(dtype=float),
     reached_top: wp.array(dtype=float),
+    final_obs: wp.array2d(dtype=float),
 ):
     i = wp.tid()
     p = pos[i]
@@ -85,6 +86,7 @@ def step_kernel(
     truncated[i] = timeout
     success[i] = wp.where(goal, 1.0, 0.0)
     reached_top[i] = wp.where(goal and p[1] >= size - 2, 1.0, 0.0)
+    write_obs(final_obs, i, p, size)  # before the auto-reset (two floats: cheaper to always write than to branch)
 
     if goal or timeout:  # auto-reset: the returned observation starts the next episode
         p = sample_start(rng, i, size)
@@ -115,6 +117,7 @@ class GridWorldEnv(WarpVecEnv):
 
     cfg_class = GridWorldCfg
     episode_metrics = ("success", "reached_top")
+    supports_final_observations = True
 
     def _spaces(self):
         if self.cfg.size < 5:
@@ -132,7 +135,7 @@ class GridWorldEnv(WarpVecEnv):
             dim=self.num_envs,
             inputs=[b.actions, self.pos, b.episode_length, b.rng, c.size, c.max_episode_length, c.goal_reward],
             outputs=[b.obs["policy"], b.rewards, b.terminated, b.truncated, b.metrics["success"],
-                     b.metrics["reached_top"]],
+                     b.metrics["reached_top"], b.final_obs["policy"]],
         )  # fmt: skip
 
     def _reset_impl(self, mask) -> None:
