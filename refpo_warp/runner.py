@@ -73,7 +73,8 @@ class ProgressLogger(Logger):
             "iteration": it,
             "env_steps": self.tot_timesteps,
             "time_s": round(self.tot_time, 3),
-            "steps_per_s": int(self.cfg["num_steps_per_env"] * self.num_envs / max(collect_time + learn_time, 1e-9)),
+            "steps_per_s": int(self.cfg["num_steps_per_env"] * self.num_envs * self.gpu_world_size  # all ranks
+                               / max(collect_time + learn_time, 1e-9)),
         }
         if self.rewbuffer:
             row["reward_mean"] = statistics.mean(self.rewbuffer)

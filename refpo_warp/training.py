@@ -50,11 +50,12 @@ def rsl_rl_config(cfg: dict) -> dict:
     }
 
 
-def num_iterations(cfg: dict) -> int:
-    """Training iterations: ``max_iterations`` if set, else the env-step budget over the batch size."""
+def num_iterations(cfg: dict, world_size: int = 1) -> int:
+    """Training iterations: ``max_iterations`` if set, else the env-step budget over the batch size of all ranks
+    (``total_env_steps`` counts every rank's env steps, as the logged ``env_steps`` do)."""
     if cfg["max_iterations"]:
         return int(cfg["max_iterations"])
-    batch = cfg["num_envs"] * cfg["runner"]["num_steps_per_env"]
+    batch = cfg["num_envs"] * cfg["runner"]["num_steps_per_env"] * world_size
     return max(1, math.ceil(cfg["total_env_steps"] / batch))
 
 
@@ -130,14 +131,14 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
     if rank.is_main:
         dump_config(cfg, run_dir / RUN_CONFIG)
     start = runner.resume_from(checkpoint) if (resume and checkpoint is not None) else 0
-    total = num_iterations(cfg)
+    total = num_iterations(cfg, rank.world_size)
     notice = cfg["notice"].format(task=cfg["task"], algo=cfg["algo"]) if cfg["notice"] else None
     if notice:
         print(f"[refpo_warp] NOTE: {notice}", flush=True)
     ranks = f" x {rank.world_size} ranks" if rank.is_distributed else ""
+    steps = total * env.num_envs * cfg["runner"]["num_steps_per_env"] * rank.world_size
     print(f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs{ranks}, "
-          f"iterations {start}..{total - 1} ({total * env.num_envs * cfg['runner']['num_steps_per_env']:,} env "
-          f"steps per rank), run dir {run_dir}", flush=True)  # fmt: skip
+          f"iterations {start}..{total - 1} ({steps:,} env steps), run dir {run_dir}", flush=True)  # fmt: skip
     if cfg["eval"]["interval"] is None:  # periodic evaluation on by default: 10 evaluations per run
         cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
     if cfg["eval"]["interval"] > 0 and rank.is_main:

@@ -89,3 +89,10 @@ def test_rank_device_under_torchrun():
         assert rank_device("auto", rank1) == "cpu"
     with pytest.raises((ConfigError, RuntimeError)):
         rank_device("cuda:0", rank1)  # rank 1 must not train on rank 0's GPU (or there is no GPU at all)
+
+
+def test_env_step_budget_counts_every_rank():
+    from refpo_warp.training import num_iterations
+
+    cfg = {"max_iterations": None, "total_env_steps": 1000, "num_envs": 10, "runner": {"num_steps_per_env": 10}}
+    assert (num_iterations(cfg), num_iterations(cfg, world_size=2), num_iterations(cfg, world_size=3)) == (10, 5, 4)
