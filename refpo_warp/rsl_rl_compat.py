@@ -10,6 +10,10 @@ Found by diffing the installed 5.0.1 (Isaac Lab's pin) and 5.5.1 packages:
   statistics across ranks. refpo_warp's update loop updates them only where the installed version does not
   (``NORMALIZERS_UPDATE_PER_STEP``), so a normaliser never sees a batch twice.
 - ``torch_compile_mode`` (``PPO.compile``) arrived in 5.1; 5.0.x ignores the key.
+- ``GaussianDistribution`` takes ``learn_std`` (a fixed std) from 5.2 on; ``split_learn_std`` lets a model freeze the
+  std itself on older versions.
+- Before 5.1, rsl_rl pops ``class_name`` out of the config dicts it is given (actor, critic, algorithm,
+  ``distribution_cfg``); callers hand it copies.
 - The logger takes a ``{"class_name": ...}`` writer dict from 5.4 on; 5.0.x knows only the strings
   ``"tensorboard"``, ``"wandb"`` and ``"neptune"``.
 
@@ -25,6 +29,7 @@ import warnings
 from importlib import metadata
 
 from rsl_rl.algorithms import PPO as RslPPO
+from rsl_rl.modules.distribution import GaussianDistribution
 
 
 def _version(dist: str) -> tuple[int, int]:
@@ -39,6 +44,7 @@ HAS_COMPILE = hasattr(RslPPO, "compile")
 # Constructor arguments of newer PPOs, with the value that means "off" (what older versions effectively do).
 NEWER_PPO_ARGS = {"use_mixed_precision": False, "grad_reduce_bucket_mb": 25}
 _PPO_PARAMETERS = frozenset(inspect.signature(RslPPO.__init__).parameters)
+GAUSSIAN_HAS_LEARN_STD = "learn_std" in inspect.signature(GaussianDistribution.__init__).parameters
 
 
 def split_newer_ppo_args(kwargs: dict, honoured: tuple[str, ...] = ()) -> dict:
@@ -56,3 +62,12 @@ def split_newer_ppo_args(kwargs: dict, honoured: tuple[str, ...] = ()) -> dict:
                 stacklevel=3,
             )
     return newer
+
+
+def split_learn_std(distribution_cfg: dict | None) -> tuple[dict | None, bool]:
+    """``(distribution_cfg for the installed rsl_rl, learn_std)``: where its distributions lack ``learn_std``
+    (rsl-rl-lib < 5.2), the key is taken out of a copy and the caller freezes the std when it is False."""
+    if not distribution_cfg or "learn_std" not in distribution_cfg or GAUSSIAN_HAS_LEARN_STD:
+        return distribution_cfg, True
+    cfg = dict(distribution_cfg)
+    return cfg, bool(cfg.pop("learn_std"))

@@ -10,6 +10,7 @@ rank 0 alone writes the run dir (config, checkpoints, logs) and evaluates (``ref
 
 from __future__ import annotations
 
+import copy
 import math
 import random
 from pathlib import Path
@@ -44,9 +45,10 @@ def rsl_rl_config(cfg: dict) -> dict:
         "torch_compile_mode": runner["torch_compile_mode"],
         "obs_groups": {k: list(v) for k, v in runner["obs_groups"].items()},
         "run_name": f"{cfg['task']}/{cfg['algo']}",
-        "actor": dict(cfg["actor"]),
-        "critic": dict(cfg["critic"]),
-        "algorithm": dict(cfg["algorithm"]),
+        # Deep copies: rsl_rl < 5.1 pops class_name out of these dicts and the nested distribution_cfg.
+        "actor": copy.deepcopy(cfg["actor"]),
+        "critic": copy.deepcopy(cfg["critic"]),
+        "algorithm": copy.deepcopy(cfg["algorithm"]),
     }
 
 

@@ -157,6 +157,12 @@ def test_observation_wrappers_need_next_step_autoreset():
     assert env.env.obs_rms.count == pytest.approx(8 * 11, abs=1)  # reset + 10 steps of 8 envs (+ its 1e-4 prior)
 
 
+def test_action_space_follows_the_env_action_transform():
+    assert GymVectorEnv(make_env("gridworld", num_envs=2, device="cpu")).single_action_space.high.tolist() == [1, 1]
+    squashing = make_env("gridworld", num_envs=2, device="cpu", action_transform="tanh")
+    assert np.isinf(GymVectorEnv(squashing).single_action_space.high).all()
+
+
 def test_bad_arguments_are_named():
     warp_env = make_env("gridworld", num_envs=2, device="cpu", seed=0)
     with pytest.raises(ValueError, match="obs_group 'critic'"):

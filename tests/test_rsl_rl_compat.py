@@ -1,6 +1,7 @@
 """What differs between the supported rsl-rl-lib versions (refpo_warp/rsl_rl_compat.py), checked on the installed
 one: CI runs this file on 5.0.1 (Isaac Lab's pin) and on the newest 5.x."""
 
+import copy
 import warnings
 
 import pytest
@@ -14,6 +15,7 @@ NUM_ENVS, STEPS = 8, 16
 
 
 def train_cfg(algorithm: dict, actor: dict) -> dict:
+    algorithm, actor = copy.deepcopy(algorithm), copy.deepcopy(actor)  # rsl_rl < 5.1 pops class_name from them
     return {
         "num_steps_per_env": STEPS, "save_interval": 100, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
         "actor": {"hidden_dims": [16], "obs_normalization": True, **actor},
@@ -50,9 +52,34 @@ def test_newer_ppo_arguments_are_accepted(algorithm, actor):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         runner = OnPolicyRunner(env, cfg, log_dir=None, device="cpu")
-    ignored = [w for w in caught if "use_mixed_precision" in str(w.message)]
-    # ReFPO's own update applies mixed precision on every version; rsl_rl's PPO update only from 5.5 on.
+    # refpo_warp's update loop applies mixed precision itself, so no rsl_rl version ignores it
     assert runner.alg.use_mixed_precision is True
-    assert len(ignored) == int(algorithm is GAUSSIAN[0] and RSL_RL_VERSION < (5, 5))
+    assert not [w for w in caught if "use_mixed_precision" in str(w.message)]
     assert not [w for w in caught if "grad_reduce_bucket_mb" in str(w.message)]  # the default value: no warning
     runner.learn(1)
+
+
+def test_unsupported_newer_argument_values_warn_on_older_versions():
+    from refpo_warp.rsl_rl_compat import split_newer_ppo_args
+
+    kwargs = {"clip_param": 0.1, "grad_reduce_bucket_mb": 50, "use_mixed_precision": True}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        newer = split_newer_ppo_args(kwargs, honoured=("use_mixed_precision",))
+    if RSL_RL_VERSION >= (5, 5):  # accepted by rsl_rl itself: nothing taken out
+        assert newer == {} and len(kwargs) == 3 and not caught
+    else:
+        assert newer == {"grad_reduce_bucket_mb": 50, "use_mixed_precision": True} and kwargs == {"clip_param": 0.1}
+        assert [str(w.message).split("'")[1] for w in caught] == ["grad_reduce_bucket_mb"]
+
+
+def test_fixed_gaussian_std_on_every_version():
+    """``learn_std: false`` (rsl-rl-lib >= 5.2) also fixes the std of a PhcMLPModel on older versions."""
+    env = make_env("gridworld", num_envs=NUM_ENVS, device="cpu", seed=0)
+    actor = {"class_name": "refpo_warp.models:PhcMLPModel",
+             "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 0.3, "learn_std": False}}
+    cfg = train_cfg({"class_name": "refpo_warp.algorithms:PPO", "learning_rate": 1e-2}, actor)
+    runner = OnPolicyRunner(env, cfg, log_dir=None, device="cpu")
+    runner.learn(2)
+    assert torch.allclose(runner.alg.actor.output_std, torch.full((2,), 0.3))
+    assert cfg["actor"]["distribution_cfg"]["learn_std"] is False  # the caller's dict keeps its keys

@@ -37,11 +37,12 @@ class GymVectorEnv(gym.vector.VectorEnv):
         env: The Warp env (its class must record final observations, ``supports_final_observations``).
         obs_group: The observation group returned as the observation.
         autoreset_mode: ``AutoresetMode.SAME_STEP`` (the env's own behaviour) or ``AutoresetMode.NEXT_STEP``.
-        action_bound: Bound of the action Box; the envs clip actions to [-1, 1].
+        action_bound: Bound of the action Box; None: 1 where the env clips actions to [-1, 1], unbounded where it
+            squashes them with tanh (``env.action_transform``).
     """
 
     def __init__(self, env, obs_group: str = "policy", autoreset_mode: AutoresetMode = AutoresetMode.SAME_STEP,
-                 action_bound: float = 1.0) -> None:  # fmt: skip
+                 action_bound: float | None = None) -> None:  # fmt: skip
         if autoreset_mode not in AUTORESET_MODES:
             raise ValueError(f"autoreset_mode must be one of {[m.name for m in AUTORESET_MODES]}, got {autoreset_mode}")
         groups = list(env.get_observations().keys())
@@ -54,6 +55,8 @@ class GymVectorEnv(gym.vector.VectorEnv):
         self.render_mode = None
         self.num_envs = env.num_envs
         obs_dim = env.get_observations()[obs_group].shape[-1]
+        if action_bound is None:
+            action_bound = np.inf if getattr(env.cfg, "action_transform", "clip") == "tanh" else 1.0
         self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_dim,), dtype=np.float32)
         self.single_action_space = gym.spaces.Box(-action_bound, action_bound, shape=(env.num_actions,),
                                                   dtype=np.float32)  # fmt: skip

@@ -14,13 +14,17 @@ from rsl_rl.models import MLPModel
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
+from refpo_warp.rsl_rl_compat import split_learn_std
 
 
 class PhcMLPModel(MLPModel):
     """``MLPModel`` plus ``head_init_gain`` and ``obs_clip`` (see the module docstring)."""
 
     def __init__(self, *args, head_init_gain: float | None = None, obs_clip: float | None = None, **kwargs) -> None:
+        kwargs["distribution_cfg"], learn_std = split_learn_std(kwargs.get("distribution_cfg"))
         super().__init__(*args, **kwargs)
+        if not learn_std:  # rsl-rl-lib < 5.2: its GaussianDistribution has no learn_std, so fix the std here
+            self.distribution.requires_grad_(False)
         self.obs_normalizer = with_clip(self.obs_normalizer, obs_clip)
         if head_init_gain is not None:
             head = [m for m in self.mlp.modules() if isinstance(m, nn.Linear)][-1]
