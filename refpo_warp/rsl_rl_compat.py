@@ -12,7 +12,7 @@ Found by diffing the installed 5.0.1 (Isaac Lab's pin) and 5.5.1 packages:
 - ``torch_compile_mode`` (``PPO.compile``) arrived in 5.1; 5.0.x ignores the key.
 - ``GaussianDistribution`` takes ``learn_std`` (a fixed std) from 5.2 on; ``split_learn_std`` lets a model freeze the
   std itself on older versions.
-- Before 5.1, rsl_rl pops ``class_name`` out of the config dicts it is given (actor, critic, algorithm,
+- Before 5.5, rsl_rl pops ``class_name`` out of the config dicts it is given (actor, critic, algorithm,
   ``distribution_cfg``); callers hand it copies.
 - The logger takes a ``{"class_name": ...}`` writer dict from 5.4 on; 5.0.x knows only the strings
   ``"tensorboard"``, ``"wandb"`` and ``"neptune"``.

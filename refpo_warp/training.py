@@ -45,7 +45,7 @@ def rsl_rl_config(cfg: dict) -> dict:
         "torch_compile_mode": runner["torch_compile_mode"],
         "obs_groups": {k: list(v) for k, v in runner["obs_groups"].items()},
         "run_name": f"{cfg['task']}/{cfg['algo']}",
-        # Deep copies: rsl_rl < 5.1 pops class_name out of these dicts and the nested distribution_cfg.
+        # Deep copies: rsl_rl < 5.5 pops class_name out of these dicts and the nested distribution_cfg.
         "actor": copy.deepcopy(cfg["actor"]),
         "critic": copy.deepcopy(cfg["critic"]),
         "algorithm": copy.deepcopy(cfg["algorithm"]),

@@ -15,7 +15,7 @@ NUM_ENVS, STEPS = 8, 16
 
 
 def train_cfg(algorithm: dict, actor: dict) -> dict:
-    algorithm, actor = copy.deepcopy(algorithm), copy.deepcopy(actor)  # rsl_rl < 5.1 pops class_name from them
+    algorithm, actor = copy.deepcopy(algorithm), copy.deepcopy(actor)  # rsl_rl < 5.5 pops class_name from them
     return {
         "num_steps_per_env": STEPS, "save_interval": 100, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
         "actor": {"hidden_dims": [16], "obs_normalization": True, **actor},
