@@ -8,7 +8,12 @@ Layers, later winning: ``configs/default.yaml`` < ``configs/algo/<algo>.yaml`` <
 Keys are validated where they are consumed: ``env.*`` against the task's env cfg dataclass, ``actor.*``,
 ``critic.*`` and ``algorithm.*`` against the constructor of the class their ``class_name`` selects, and every other
 key against ``default.yaml``. An unknown key is an error that names the closest valid one. Env options may also be
-given without their ``env.`` prefix (``motion_file=...``).
+given without their ``env.`` prefix (``motion_file=...``). A key given twice (on the command line or in one YAML
+mapping) is an error.
+
+Values are checked against the option rules (``refpo_warp.options``): the rules a class, env cfg or
+``refpo_warp.run_options`` declares next to its options, the same ones its constructor checks. So a refused value
+is reported, with the key and the valid range or choices, before anything is built or written.
 """
 
 from __future__ import annotations
@@ -23,6 +28,8 @@ from typing import Any
 import yaml
 
 from refpo_warp.errors import ConfigError, unknown
+from refpo_warp.options import check_options, rules_for
+from refpo_warp.run_options import RUN_RULES, check_combinations
 
 CONFIG_DIR = Path(os.environ.get("REFPO_WARP_CONFIGS", Path(__file__).resolve().parents[1] / "configs"))
 CLASS_SECTIONS = ("actor", "critic", "algorithm")
@@ -33,11 +40,37 @@ LEAF_KEYS = ("obs_groups", "distribution_cfg")
 # Top-level keys of a task file starting with "_" are YAML anchors for reuse inside that file, not options.
 
 
-def load_yaml(path: Path) -> dict:
-    with open(path) as f:
-        data = yaml.safe_load(f) or {}
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """SafeLoader that refuses a key given twice in one mapping (YAML itself keeps the last one silently)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen: dict = {}
+        for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":  # '<<: *anchor' may be repeated and overridden
+                continue
+            key = self.construct_object(key_node, deep=True)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"key '{key}' is given twice (also {seen[key]})", key_node.start_mark
+                )
+            seen[key] = f"line {key_node.start_mark.line + 1}"
+        return super().construct_mapping(node, deep=deep)
+
+
+def load_yaml(path: Path, error: type[Exception] = ConfigError) -> dict:
+    """Read a YAML mapping; any problem (unreadable, not YAML, duplicate key, not a mapping) raises ``error``
+    naming the file."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            data = yaml.load(f, Loader=_UniqueKeyLoader) or {}
+    except FileNotFoundError as err:
+        raise error(f"{path}: no such file") from err
+    except (OSError, UnicodeDecodeError) as err:
+        raise error(f"{path}: cannot be read ({err})") from err
+    except yaml.YAMLError as err:
+        raise error(f"{path}: not valid YAML ({' '.join(str(err).split())})") from err
     if not isinstance(data, dict):
-        raise ConfigError(f"{path}: expected a mapping at the top level")
+        raise error(f"{path}: expected a mapping at the top level")
     return data
 
 
@@ -53,13 +86,22 @@ def merge(base: dict, delta: dict) -> dict:
 
 
 def parse_overrides(args: list[str]) -> dict[str, Any]:
-    """Parse ``key=value`` strings (values are YAML: numbers, bools, lists) into a flat dotted-key dict."""
+    """Parse ``key=value`` strings (values are YAML: numbers, bools, lists) into a flat dotted-key dict.
+
+    ``--key=value`` and ``--key-name=value`` are accepted too; a key given twice is an error.
+    """
     out: dict[str, Any] = {}
+    given: dict[str, str] = {}
     for arg in args:
         if "=" not in arg:
             raise ConfigError(f"Expected key=value, got '{arg}' (example: task=gridworld seed=3 num_envs=256)")
         key, raw = arg.split("=", 1)
         key = key.strip().lstrip("-").replace("-", "_") if key.startswith("--") else key.strip()
+        if not key:
+            raise ConfigError(f"Expected key=value, got '{arg}': the key is empty")
+        if key in given:
+            raise ConfigError(f"'{key}' is given twice on the command line ('{given[key]}' and '{arg}'); give it once")
+        given[key] = arg
         try:
             out[key] = yaml.safe_load(raw) if raw != "" else ""
         except yaml.YAMLError:
@@ -129,14 +171,21 @@ def _coerce(value: Any, default: Any, key: str) -> Any:
     raise ConfigError(f"'{key}' expects a {type(default).__name__} (like {default!r}), got {value!r}")
 
 
-def class_parameters(class_name: str) -> dict[str, Any]:
-    """Constructor keyword parameters (with defaults) of ``class_name`` and of the bases it forwards to."""
+def resolve_class(class_name: str) -> type:
+    """The class a ``class_name`` string selects (``"pkg.mod:Class"``, or a bare rsl_rl name)."""
     from rsl_rl.utils import resolve_callable
 
+    from refpo_warp import rsl_rl_rules  # noqa: F401  (registers the rules of rsl_rl's classes)
+
     try:
-        cls = resolve_callable(class_name)
-    except (ImportError, AttributeError, ValueError) as err:
+        return resolve_callable(class_name)
+    except (ImportError, AttributeError, ValueError, TypeError) as err:
         raise ConfigError(f"Cannot resolve class_name '{class_name}': {err}") from err
+
+
+def class_parameters(class_name: str) -> dict[str, Any]:
+    """Constructor keyword parameters (with defaults) of ``class_name`` and of the bases it forwards to."""
+    cls = resolve_class(class_name)
     params: dict[str, Any] = {}
     for klass in inspect.getmro(cls) if inspect.isclass(cls) else [cls]:
         init = klass.__init__ if inspect.isclass(klass) else klass
@@ -178,10 +227,11 @@ def _validate_class_section(section: str, values: dict) -> dict:
             raise ConfigError(f"{err} (A task file keeps keys that only some algorithms accept under "
                               f"by_algo.<algo>.{section}.)")
         out[key] = _coerce(value, params[key], f"{section}.{key}")
-    return out
+    return {"class_name": out.pop("class_name"), **check_options(rules_for(resolve_class(values["class_name"])),
+                                                                 out, f"{section}.")}  # fmt: skip
 
 
-def _validate_env_section(task: str, values: dict) -> dict:
+def _validate_env_section(task: str, values: dict, prefix: str = "env.") -> dict:
     from refpo_warp.registry import get_task
 
     cfg_class = get_task(task).env_class().cfg_class
@@ -189,11 +239,11 @@ def _validate_env_section(task: str, values: dict) -> dict:
     out = {}
     for key, value in values.items():
         if key not in fields:
-            raise unknown(f"env option for task '{task}'", f"env.{key}", [f"env.{k}" for k in fields])
+            raise unknown(f"env option for task '{task}'", f"{prefix}{key}", [f"{prefix}{k}" for k in fields])
         f = fields[key]
         default = f.default if f.default is not dataclasses.MISSING else None
-        out[key] = _coerce(value, default, f"env.{key}")
-    return out
+        out[key] = _coerce(value, default, f"{prefix}{key}")
+    return check_options(rules_for(cfg_class), out, prefix)
 
 
 def _validate_plain(cfg: dict, schema: dict, prefix: str = "") -> None:
@@ -204,8 +254,12 @@ def _validate_plain(cfg: dict, schema: dict, prefix: str = "") -> None:
             raise unknown("config key", dotted, _flatten_keys(schema, prefix))
         if isinstance(schema[key], dict) and schema[key] and isinstance(value, dict) and key not in LEAF_KEYS:
             _validate_plain(value, schema[key], dotted + ".")
+        elif isinstance(schema[key], dict) and not isinstance(value, dict) and key not in LEAF_KEYS:
+            raise ConfigError(f"'{dotted}' is a section; set its keys ({dotted}.<key>=...), not {dotted}={value!r}")
         else:
             cfg[key] = _coerce(value, schema[key], dotted)
+            if dotted in RUN_RULES:
+                cfg[key] = RUN_RULES[dotted].check(dotted, cfg[key])
 
 
 def _flatten_keys(schema: dict, prefix: str = "") -> list[str]:
@@ -267,17 +321,16 @@ def resolve_config(overrides: list[str] | dict[str, Any] | None = None, device_t
         cfg[section] = _validate_class_section(section, cfg.get(section) or {})
     cfg["env"] = _validate_env_section(task, cfg.get("env") or {})
     if isinstance(cfg.get("eval"), dict):
-        cfg["eval"]["env"] = _validate_env_section(task, cfg["eval"].get("env") or {})
+        cfg["eval"]["env"] = _validate_env_section(task, cfg["eval"].get("env") or {}, "eval.env.")
     plain = {k: v for k, v in cfg.items() if k not in CLASS_SECTIONS + ("env",)}
     _validate_plain(plain, {k: v for k, v in defaults.items() if k not in CLASS_SECTIONS + ("env",)})
     cfg.update(plain)
+    check_combinations(cfg)
     return cfg
 
 
 def dump_config(cfg: dict, path: Path) -> None:
     """Write the resolved config as YAML (atomically), so a run can be reproduced and resumed from it."""
-    path = Path(path)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    with open(tmp, "w") as f:
-        yaml.safe_dump(cfg, f, sort_keys=False)
-    os.replace(tmp, path)
+    from refpo_warp.atomic import write_text
+
+    write_text(path, yaml.safe_dump(cfg, sort_keys=False))

@@ -6,19 +6,30 @@ import os
 
 import torch
 
+from refpo_warp.errors import ConfigError
+
 _CONFIGURED = False
 
 
 def resolve_device(device: str = "auto") -> str:
-    """Map ``"auto"`` to ``"cuda:0"`` when a CUDA device is usable, else ``"cpu"``; validate explicit names."""
+    """Map ``"auto"`` to ``"cuda:0"`` when a CUDA device is usable, else ``"cpu"``; validate explicit names.
+
+    Raises ``ConfigError`` (naming the ``device`` option) for an unknown name or a device that is not available.
+    """
     if device == "auto":
         return "cuda:0" if torch.cuda.is_available() else "cpu"
     if device == "cuda":
         device = "cuda:0"
-    if device.startswith("cuda") and not torch.cuda.is_available():
-        raise RuntimeError(f"device={device} was requested but no CUDA device is available; use device=cpu or auto")
-    if device != "cpu" and not device.startswith("cuda:"):
-        raise ValueError(f"Unknown device '{device}': expected 'auto', 'cpu' or 'cuda:N'")
+    index = device[5:] if isinstance(device, str) and device.startswith("cuda:") else None
+    if device != "cpu" and not (index is not None and index.isdigit()):
+        raise ConfigError(f"device={device!r} is invalid; expected auto, cpu, cuda or cuda:N")
+    if index is not None:
+        if not torch.cuda.is_available():
+            raise ConfigError(f"device={device} was requested but no CUDA device is available; use device=cpu or "
+                              f"device=auto")  # fmt: skip
+        if int(index) >= torch.cuda.device_count():
+            raise ConfigError(f"device={device} is not available: this machine has {torch.cuda.device_count()} "
+                              f"CUDA device(s), cuda:0 .. cuda:{torch.cuda.device_count() - 1}")  # fmt: skip
     return device
 
 

@@ -31,8 +31,10 @@ from rsl_rl.algorithms import PPO as RslPPO
 from tensordict import TensorDict
 from torch import nn
 
+from refpo_warp import rsl_rl_rules  # noqa: F401  (the rules of rsl_rl's PPO arguments, inherited here)
 from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_indices
 from refpo_warp.errors import NonFiniteLossError
+from refpo_warp.options import Flag, Real, checks_options
 from refpo_warp.rsl_rl_compat import NORMALIZERS_UPDATE_PER_STEP, split_newer_ppo_args
 
 
@@ -66,10 +68,21 @@ def soft_bound_loss(actions: torch.Tensor, bound: float) -> torch.Tensor:
     return (actions.abs() - bound).clamp(min=0.0).square().mean()
 
 
+@checks_options  # every subclass's constructor checks its arguments against the option rules
 class OnPolicyAlgorithm(RslPPO):
     """Shared update loop; subclasses implement ``act`` and ``policy_loss`` (see the module docstring)."""
 
     uses_critic: bool = True
+    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.options)
+        "reward_scale": Real(0, 1e6, lo_open=True),
+        "value_clip_param": Real(0, None, lo_open=True, optional=True),
+        "reshuffle_each_epoch": Flag(),
+        "joint_grad_clip": Flag(),
+        "lr_decay_rate": Real(0, 10),
+        "lr_decay_floor": Real(0, 1),
+        "bound_coef": Real(0, 1e6),
+        "bound": Real(0, None, lo_open=True),
+    }
 
     def __init__(
         self,

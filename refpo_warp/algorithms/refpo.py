@@ -28,6 +28,7 @@ from torch import nn
 
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm, soft_bound_loss
 from refpo_warp.models.flow_actor import OUTPUT_MODES, cfm_loss
+from refpo_warp.options import Int, OneOf, Real
 
 TAU_SAMPLING = ("uniform", "discrete", "logit_normal")
 RATIO_MODES = ("mean", "per_sample")
@@ -64,6 +65,18 @@ class ReFPO(OnPolicyAlgorithm):
         explosion_threshold: |log-ratio| above which an action (or pair) counts towards the Explosion Rate.
     """
 
+    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.options)
+        "reflow_coef": Real(0, 1e6),
+        "num_mc_samples": Int(1, 1024),
+        "output_mode": OneOf(None, OUTPUT_MODES),
+        "tau_sampling": OneOf(TAU_SAMPLING),
+        "tau_logit_mean": Real(-10, 10),
+        "tau_logit_std": Real(0, 10, lo_open=True),
+        "ratio_mode": OneOf(RATIO_MODES),
+        "log_ratio_clip": Real(0, 100, lo_open=True, optional=True),
+        "explosion_threshold": Real(0, None, lo_open=True),
+    }
+
     def __init__(
         self,
         actor: nn.Module,
@@ -90,14 +103,6 @@ class ReFPO(OnPolicyAlgorithm):
                 raise TypeError(
                     f"ReFPO needs a flow actor with {method}(); set actor.class_name to refpo_warp.models:FlowActor"
                 )
-        if tau_sampling not in TAU_SAMPLING:
-            raise ValueError(f"tau_sampling must be one of {TAU_SAMPLING}, got '{tau_sampling}'")
-        if ratio_mode not in RATIO_MODES:
-            raise ValueError(f"ratio_mode must be one of {RATIO_MODES}, got '{ratio_mode}'")
-        if output_mode is not None and output_mode not in OUTPUT_MODES:
-            raise ValueError(f"output_mode must be one of {OUTPUT_MODES} or None (the actor's), got '{output_mode}'")
-        if num_mc_samples < 1:
-            raise ValueError(f"num_mc_samples must be >= 1, got {num_mc_samples}")
         if entropy_coef:
             warnings.warn("ReFPO ignores entropy_coef: a flow policy has no closed-form entropy.")
         if schedule == "adaptive":

@@ -14,7 +14,7 @@ reset into ``buffers.final_obs`` (at least while ``record_final_obs`` is set); t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import ClassVar
 
 import torch
@@ -23,7 +23,7 @@ from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
 from refpo_warp.device import init_warp, resolve_device
-
+from refpo_warp.options import Flag, Int, OneOf, check_options, rules_for
 
 ACTION_TRANSFORMS = ("clip", "tanh")
 
@@ -39,6 +39,15 @@ class EnvCfg:
     """What the env does with the policy's actions before its dynamics: ``clip`` to [-1, 1] (the task kernels
     clip), or ``tanh`` first (MuJoCo Playground sends tanh(action) to the env; the learner keeps the pre-tanh
     action, so every algorithm trains on what it sampled)."""
+
+    # Valid values of the fields (refpo_warp.options); a subclass adds the rules of its own fields the same way.
+    option_rules = {"max_episode_length": Int(1, 10_000_000), "graph_capture": Flag(),
+                    "action_transform": OneOf(ACTION_TRANSFORMS)}  # fmt: skip
+
+    def __post_init__(self) -> None:
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        for name, value in check_options(rules_for(type(self)), values, "env.").items():
+            object.__setattr__(self, name, value)
 
 
 @dataclass
@@ -76,8 +85,6 @@ class WarpVecEnv(VecEnv):
         self.seed = int(seed)
         self.max_episode_length = int(cfg.max_episode_length)
 
-        if cfg.action_transform not in ACTION_TRANSFORMS:
-            raise ValueError(f"env.action_transform must be one of {ACTION_TRANSFORMS}, got '{cfg.action_transform}'")
         self.num_actions, obs_dims = self._spaces()
         n, dev = self.num_envs, self.device
         self._actions = torch.zeros(n, self.num_actions, device=dev)

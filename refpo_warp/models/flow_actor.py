@@ -25,7 +25,9 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
-from refpo_warp.models.velocity_field import DATA_GUARD, VelocityField
+from refpo_warp.models.velocity_field import DATA_GUARD, PARAMETERIZATIONS, TIME_CONDITIONINGS, VelocityField
+from refpo_warp.options import Check, Flag, Int, OneOf, Real, checks_options
+from refpo_warp.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS, mapping_or_none
 
 OUTPUT_MODES = ("u", "eps", "data")
 INITIAL_NOISE = ("random", "zero")
@@ -53,6 +55,7 @@ def cfm_loss(terms: CfmTerms, tau: torch.Tensor, output_mode: str, loss_scale: f
     return loss_scale * loss
 
 
+@checks_options
 class FlowActor(nn.Module):
     """Flow-matching actor with the constructor and model protocol of rsl_rl's ``MLPModel``.
 
@@ -74,6 +77,22 @@ class FlowActor(nn.Module):
     """
 
     is_recurrent: bool = False
+    option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.options)
+        "hidden_dims": HIDDEN_DIMS,
+        "activation": OneOf(ACTIVATIONS),
+        "obs_normalization": Flag(),
+        "distribution_cfg": Check(mapping_or_none, "null (ignored: a flow has no distribution)", optional=True),
+        "num_flow_steps": Int(1, 1000, fixed=False),  # any N samples the same flow: may change on resume
+        "time_embed_dim": Int(2, 1024, multiple_of=2),
+        "output_mode": OneOf(OUTPUT_MODES),
+        "output_scale": Real(0, 1e6, lo_open=True),
+        "action_noise_std": Real(0, 1e3, fixed=False),
+        "parameterization": OneOf(PARAMETERIZATIONS),
+        "time_conditioning": OneOf(TIME_CONDITIONINGS),
+        "head_init_gain": Real(0, 1e3, lo_open=True, optional=True),
+        "loss_scale": Real(0, 1e6, lo_open=True),
+        "obs_clip": Real(0, 1e6, lo_open=True, optional=True),
+    }
 
     def __init__(
         self,
@@ -99,12 +118,6 @@ class FlowActor(nn.Module):
         super().__init__()
         if distribution_cfg is not None:
             warnings.warn("FlowActor ignores distribution_cfg: actions are sampled by integrating the flow.")
-        if output_mode not in OUTPUT_MODES:
-            raise ValueError(f"output_mode must be one of {OUTPUT_MODES}, got '{output_mode}'")
-        if int(num_flow_steps) < 1:
-            raise ValueError(f"num_flow_steps must be >= 1, got {num_flow_steps}")
-        if loss_scale <= 0:
-            raise ValueError(f"loss_scale must be > 0, got {loss_scale}")
         self.obs_groups = list(obs_groups[obs_set])
         for group in self.obs_groups:
             if obs[group].dim() != 2:

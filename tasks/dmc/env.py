@@ -16,6 +16,7 @@ import warp as wp
 
 from refpo_warp.envs import EnvCfg, WarpVecEnv
 from refpo_warp.errors import unknown
+from refpo_warp.options import Int, OneOf
 from refpo_warp.sim import MuJoCoWorlds, world_state_finite
 from tasks.dmc.suite import TASKS
 
@@ -33,6 +34,8 @@ class DmcCfg(EnvCfg):
     reset_bank_size: int = 0
     """Settled initial states pre-computed by tasks whose reset lets the model settle first (cheetah);
     0 means max(num_envs, 256)."""
+    option_rules = {"task": OneOf(sorted(TASKS), fixed=True), "solver_iterations": Int(0, 10_000),
+                    "solver_ls_iterations": Int(0, 10_000), "reset_bank_size": Int(0, 10_000_000)}  # fmt: skip
 
 
 @wp.kernel

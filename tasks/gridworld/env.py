@@ -15,6 +15,7 @@ import torch
 import warp as wp
 
 from refpo_warp.envs import EnvCfg, WarpVecEnv
+from refpo_warp.options import Int, Real
 
 
 @dataclass
@@ -22,6 +23,8 @@ class GridWorldCfg(EnvCfg):
     size: int = 25
     goal_reward: float = 20.0
     max_episode_length: int = 200
+    # starts lie in rows 2 .. size - 3, between the goal rows: at least 5 rows
+    option_rules = {"size": Int(5, 100_000), "goal_reward": Real(-1e6, 1e6)}
 
 
 @wp.func

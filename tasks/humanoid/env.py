@@ -16,9 +16,10 @@ import torch
 from refpo_warp.device import configure_warp
 from refpo_warp.envs import EnvCfg, WarpVecEnv
 from refpo_warp.motion import skeleton as sk
+from refpo_warp.options import Flag, Int, OneOf, Real, Text
 from tasks.humanoid import motions
 from tasks.humanoid.model import CONTROL_HZ, EFFORT_LIMIT, HumanoidSim, SimOptions
-from tasks.humanoid.obs_layout import OBS_DIM, conditioning_mask
+from tasks.humanoid.obs_layout import CONDITIONING_REGIMES, OBS_DIM, conditioning_mask
 from tasks.humanoid.observations import observation_kernel
 from tasks.humanoid.tracking_kernels import (
     advance_time_kernel,
@@ -54,6 +55,21 @@ class HumanoidTrackingCfg(EnvCfg):
     njmax: int = 320
     solver_iterations: int = 100
     solver_ls_iterations: int = 50
+    option_rules = {  # valid values (refpo_warp.options)
+        "conditioning": OneOf(CONDITIONING_REGIMES, fixed=True),
+        "motion_file": Text(),
+        "eval_mode": Flag(),
+        "termination_distance": Real(0, 100, lo_open=True),
+        "eval_termination_distance": Real(0, 100, lo_open=True),
+        "power_coef": Real(0, 1e3),
+        "freeze_hands_toes": Flag(),
+        "max_joint_speed": Real(0, 1e6, lo_open=True),
+        "substeps": Int(1, 100),
+        "nconmax": Int(1, 100_000),
+        "njmax": Int(1, 1_000_000),
+        "solver_iterations": Int(1, 10_000),
+        "solver_ls_iterations": Int(0, 10_000),
+    }
 
 
 class HumanoidTrackingEnv(WarpVecEnv):

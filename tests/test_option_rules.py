@@ -1,0 +1,160 @@
+"""Option rules (refpo_warp.options): every option has one, the resolver and the constructors apply the same one."""
+
+import dataclasses
+import inspect
+
+import pytest
+import yaml
+
+from refpo_warp.config import CONFIG_DIR, _POSITIONAL, resolve_class, resolve_config
+from refpo_warp.errors import ConfigError
+from refpo_warp.options import Check, Flag, Int, ListOf, OneOf, Real, checks_options, rules_for
+from refpo_warp.registry import get_task, list_tasks
+from refpo_warp.run_dir import fixed_changes
+from refpo_warp.run_options import NOT_RULED, RUN_RULES
+
+# Constructor arguments rsl_rl passes itself (never a config option).
+_PASSED_BY_RSL_RL = {"device", "multi_gpu_cfg"}
+
+
+def _constructor_options(cls) -> set[str]:
+    names = set()
+    for klass in inspect.getmro(cls):
+        if klass is object or "__init__" not in vars(klass):
+            continue
+        params = inspect.signature(klass.__init__).parameters
+        names |= {n for n, p in params.items() if n != "self" and p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
+        if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
+            break
+    return names
+
+
+def _selected_classes():
+    for path in sorted((CONFIG_DIR / "algo").glob("*.yaml")):
+        data = yaml.safe_load(path.read_text())
+        for section in ("actor", "critic", "algorithm"):
+            yield section, resolve_class(data[section]["class_name"])
+
+
+@pytest.mark.parametrize("section,cls", list(_selected_classes()), ids=lambda x: getattr(x, "__name__", x))
+def test_every_constructor_option_has_a_rule(section, cls):
+    options = _constructor_options(cls) - set(_POSITIONAL[section]) - _PASSED_BY_RSL_RL
+    missing = sorted(options - set(rules_for(cls)))
+    assert not missing, f"{cls.__name__} options without a rule (add them to its option_rules): {missing}"
+
+
+@pytest.mark.parametrize("task", list_tasks())
+def test_every_env_option_has_a_rule(task):
+    cfg_class = get_task(task).env_class().cfg_class
+    missing = sorted({f.name for f in dataclasses.fields(cfg_class)} - set(rules_for(cfg_class)))
+    assert not missing, f"{cfg_class.__name__} fields without a rule (add them to its option_rules): {missing}"
+
+
+def test_every_run_option_has_a_rule():
+    def keys(node, prefix=""):
+        for key, value in node.items():
+            dotted = prefix + key
+            if dotted in NOT_RULED:
+                continue
+            if isinstance(value, dict) and value and dotted != "runner.obs_groups":
+                yield from keys(value, dotted + ".")
+            else:
+                yield dotted
+
+    missing = sorted(set(keys(yaml.safe_load((CONFIG_DIR / "default.yaml").read_text()))) - set(RUN_RULES))
+    assert not missing, f"configs/default.yaml keys without a rule in refpo_warp/run_options.py: {missing}"
+
+
+@pytest.mark.parametrize(
+    "rule,value,expected",
+    [
+        (Int(1, 10), 1, 1),
+        (Int(1, 10), 10.0, 10),  # a whole float is an integer
+        (Real(0, 1, lo_open=True), "3e-4", 3e-4),  # YAML reads 3e-4 as a string
+        (Real(0, 1), 1, 1.0),
+        (OneOf("a", "b"), "b", "b"),
+        (OneOf(None, "a"), None, None),
+        (ListOf(Int(1, 5), min_len=2, max_len=2), (1, 5), [1, 5]),
+        (Int(2, 8, multiple_of=2), 8, 8),
+        (Flag(), False, False),
+    ],
+)
+def test_rules_accept_and_normalise(rule, value, expected):
+    got = rule.check("k", value)
+    assert got == expected and type(got) is type(expected)
+
+
+@pytest.mark.parametrize(
+    "rule,value,message",
+    [
+        (Int(1, 10), 0, "k=0 is invalid: out of range; expected an integer in [1, 10]"),
+        (Int(1, 10), 11, "expected an integer in [1, 10]"),
+        (Int(1, 10), 2.5, "not a whole number"),
+        (Int(1, 10), True, "k=true is invalid"),
+        (Int(1, 10), None, "k=null is invalid"),
+        (Real(0, 1, lo_open=True), 0.0, "expected a number in (0, 1]"),
+        (Real(0, None, lo_open=True), -1, "expected a number > 0"),
+        (Real(0, 1), float("nan"), "not a finite number"),
+        (Real(0, 1), float("inf"), "not a finite number"),
+        (Real(0, 1), "fast", "k='fast' is invalid"),
+        (OneOf("a", "b"), "c", "expected one of 'a', 'b'"),
+        (ListOf(Int(1, 5)), [], "0 items"),
+        (ListOf(Int(1, 5)), [1, 0], "k[1]=0 is invalid"),
+        (Int(2, 8, multiple_of=2), 7, "not a multiple of 2"),
+        (Flag(), "yes", "expected true or false"),
+    ],
+)
+def test_rules_refuse_with_key_and_valid_range(rule, value, message):
+    with pytest.raises(ConfigError) as err:
+        rule.check("k", value)
+    assert message in str(err.value)
+
+
+def test_constructor_and_resolver_apply_the_same_rule():
+    from refpo_warp.algorithms import ReFPO
+    from tasks.gridworld.env import GridWorldCfg
+
+    with pytest.raises(ConfigError, match=r"algorithm\.num_mc_samples=0 is invalid.*\[1, 1024\]"):
+        resolve_config(["task=gridworld", "algorithm.num_mc_samples=0"])
+    with pytest.raises(ConfigError, match=r"ReFPO\.num_mc_samples=0 is invalid.*\[1, 1024\]"):
+        ReFPO(None, None, None, num_mc_samples=0)  # refused before any argument is used
+    with pytest.raises(ConfigError, match=r"env\.size=2 is invalid.*\[5, 100,000\]"):
+        GridWorldCfg(size=2)
+    with pytest.raises(ConfigError, match=r"ReFPO\.learning_rate=-1"):  # an inherited (rsl_rl PPO) rule
+        ReFPO(None, None, None, learning_rate=-1)
+
+
+def test_undecorated_subclass_is_checked_with_its_own_rules():
+    @checks_options
+    class Base:
+        option_rules = {"a": Int(0, 1)}
+
+        def __init__(self, a=0, **kwargs):
+            self.a, self.kwargs = a, kwargs
+
+    class Child(Base):
+        option_rules = {"b": OneOf("x")}
+
+        def __init__(self, b="x", **kwargs):
+            super().__init__(**kwargs)
+
+    assert Child(b="x", a=1).a == 1
+    with pytest.raises(ConfigError, match="Child.b='y'"):
+        Child(b="y")
+    with pytest.raises(ConfigError, match="Child.a=2"):
+        Child(a=2)
+
+
+def test_custom_rule_gets_the_key():
+    rule = Check(lambda key, v: v if v % 2 else (_ for _ in ()).throw(ConfigError(f"{key} must be odd")), "odd")
+    assert rule.check("x.y", 3) == 3
+    with pytest.raises(ConfigError, match="x.y must be odd"):
+        rule.check("x.y", 4)
+
+
+def test_resume_fixes_the_networks_but_frees_sampling_and_training_options():
+    saved = resolve_config(["task=gridworld"])
+    changed = resolve_config(["task=gridworld", "actor.num_flow_steps=3", "algorithm.learning_rate=1e-4",
+                              "num_envs=8", "actor.hidden_dims=[8]", "critic.activation=tanh"])  # fmt: skip
+    assert [c.split(":")[0] for c in fixed_changes(saved, changed)] == ["actor.hidden_dims", "critic.activation"]
+    assert fixed_changes(saved, resolve_config(["task=gridworld"])) == []
