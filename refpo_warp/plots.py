@@ -16,6 +16,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
+from refpo_warp.atomic import save_figure  # noqa: E402
+from refpo_warp.errors import DataFileError  # noqa: E402
+from refpo_warp.progress import read_rows  # noqa: E402
+
 DIAGNOSTICS = (
     ("Flow/ratio_max", "max ratio per update"),
     ("Flow/clip_fraction", "clip fraction"),
@@ -25,10 +29,8 @@ DIAGNOSTICS = (
 
 
 def read_progress(run_dir: str | Path) -> list[dict]:
-    path = Path(run_dir) / "progress.jsonl"
-    if not path.exists():
-        raise FileNotFoundError(f"{path} not found: train with tools/train.py first")
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    """The rows of a run's ``progress.jsonl`` (a torn last line is skipped; see ``refpo_warp.progress``)."""
+    return read_rows(run_dir)
 
 
 def _series(rows: list[dict], key: str) -> tuple[list[float], list[float]]:
@@ -104,7 +106,7 @@ def training_curves(runs: dict[str, list], path: Path) -> Path:
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    save_figure(fig, path, dpi=130)
     plt.close(fig)
     return path
 
@@ -132,7 +134,7 @@ def diagnostic_curves(runs: dict[str, list[dict]], path: Path) -> Path:
         ax.set_xlabel("env steps")
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    save_figure(fig, path, dpi=130)
     plt.close(fig)
     return path
 
@@ -142,20 +144,27 @@ def figure_grid(run_dirs: list[Path], path: Path) -> Path | None:
     names = []
     for run_dir in run_dirs:
         report = Path(run_dir) / "eval.json"
-        figures = json.loads(report.read_text()).get("figures", []) if report.exists() else []
-        names.append([Path(f).name for f in figures])
+        try:
+            figures = json.loads(report.read_text()).get("figures", []) if report.exists() else []
+            names.append([Path(f).name for f in figures])
+        except (OSError, ValueError, AttributeError, TypeError) as err:
+            raise DataFileError(f"{report}: not a readable eval.json ({err})") from None
     if not names[0] or any(n != names[0] for n in names):
         return None
     rows, cols = len(run_dirs), len(names[0])
     fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 3.3 * rows), squeeze=False)
     for r, run_dir in enumerate(run_dirs):
         for c, name in enumerate(names[0]):
-            axes[r, c].imshow(plt.imread(Path(run_dir) / name))
+            try:
+                axes[r, c].imshow(plt.imread(Path(run_dir) / name))
+            except (OSError, ValueError, SyntaxError) as err:
+                plt.close(fig)
+                raise DataFileError(f"{Path(run_dir) / name}: cannot be read as a figure ({err})") from None
             axes[r, c].axis("off")
         axes[r, 0].text(-0.04, 0.5, _label(Path(run_dir)), transform=axes[r, 0].transAxes, rotation=90,
                         va="center", ha="right", fontsize=10)  # fmt: skip
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, dpi=80)
     plt.close(fig)
     return path
 

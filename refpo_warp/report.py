@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import importlib
 import json
-import os
 from functools import partial
 from pathlib import Path
 
@@ -132,27 +131,34 @@ def training_diagnostics(run_dir: Path) -> dict[str, float]:
 
 
 def write_json(data: dict, path: Path) -> None:
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(data, indent=2))
-    os.replace(tmp, path)
+    from refpo_warp.atomic import write_text
+
+    write_text(path, json.dumps(data, indent=2))
 
 
 def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, checkpoint: str | Path | None = None,
                  overrides: dict | None = None) -> dict:  # fmt: skip
-    """Evaluate a run's policy (the in-memory one, or a checkpoint) and write ``eval.json`` and the figures."""
-    from refpo_warp.runner import latest_checkpoint
+    """Evaluate a run's policy (the in-memory one, or a checkpoint) and write ``eval.json`` and the figures.
+
+    Without ``checkpoint`` the newest usable checkpoint of the run is evaluated (newer unusable ones are skipped
+    with a warning); a given ``checkpoint`` must be usable. Overrides may not change the run's task or model.
+    """
+    from refpo_warp.checkpoints import latest_checkpoint, load_latest
+    from refpo_warp.errors import ConfigError
     from refpo_warp.training import build_runner, load_run_config
 
     run_dir = Path(run_dir)
     if cfg is None:
         cfg = load_run_config(run_dir, overrides or {})
+    if runner is None and checkpoint is None and latest_checkpoint(run_dir) is None:
+        raise ConfigError(f"run_dir={run_dir} holds no checkpoint (model_<iteration>.pt) to evaluate")
     env = make_eval_env(cfg)
     if runner is None:
-        checkpoint = Path(checkpoint) if checkpoint else latest_checkpoint(run_dir)
-        if checkpoint is None:
-            raise FileNotFoundError(f"No checkpoint (model_*.pt) in {run_dir}")
         _, runner = build_runner(cfg, None, env=env)
-        runner.load(str(checkpoint), map_location=runner.device)
+        if checkpoint is not None:
+            runner.load(str(checkpoint), map_location=runner.device)
+        else:
+            load_latest(runner, run_dir, cfg["task"], cfg["algo"])
     actor = runner.get_inference_policy(device=runner.device)
     flow = is_flow(actor)
     results, visited = evaluate_actor(cfg, actor, env, cfg["eval"]["flow_steps"],

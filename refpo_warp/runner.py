@@ -1,8 +1,11 @@
 """rsl_rl's OnPolicyRunner, extended (not forked) for long unattended runs.
 
-- checkpoints are written atomically (temp file + rename), so a crash never leaves a truncated ``model_*.pt``;
+- checkpoints are written atomically (temp file + rename), so a crash never leaves a truncated ``model_*.pt``,
+  and carry the task, algorithm, env-step count and training time (``refpo_warp.checkpoints.META_KEY``);
+- checkpoints are read only through ``refpo_warp.checkpoints`` (``weights_only``: a file cannot run code);
+  rsl_rl's ``load`` is replaced;
 - one progress line per iteration (rsl_rl's full report with ``log_full``), plus ``progress.jsonl`` holding
-  every logged number, which the plotting tools read;
+  every logged number, which the plotting tools read; a resumed run continues its iterations and env steps;
 - a NaN/inf loss stops training before the next checkpoint, so the last checkpoint on disk stays good;
 - an ``on_iteration`` hook (periodic evaluation) whose numbers go to TensorBoard and ``progress.jsonl``;
 - multi-process training under torchrun on CUDA (NCCL) and on a CPU (gloo); rsl_rl itself only starts NCCL.
@@ -12,28 +15,21 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 import math
-import os
-import re
 import statistics
 from collections.abc import Callable
-from pathlib import Path
 
 import torch
 from rsl_rl.runners import OnPolicyRunner
 from rsl_rl.utils.logger import Logger
 
+from refpo_warp.atomic import atomic_write
+from refpo_warp.checkpoints import META_KEY, apply_checkpoint, check_fits, latest_checkpoint, read_checkpoint
 from refpo_warp.distributed import init_process_group, process_rank
 from refpo_warp.errors import NonFiniteLossError
+from refpo_warp.progress import append_row
 
-CHECKPOINT_PATTERN = re.compile(r"model_(\d+)\.pt$")
-
-
-def latest_checkpoint(run_dir: str | Path) -> Path | None:
-    """The checkpoint with the highest iteration in ``run_dir`` (temp files of interrupted writes are ignored)."""
-    found = [(int(m.group(1)), p) for p in Path(run_dir).glob("model_*.pt") if (m := CHECKPOINT_PATTERN.search(p.name))]
-    return max(found)[1] if found else None
+__all__ = ["ProgressLogger", "Runner", "latest_checkpoint"]
 
 
 def _episode_means(ep_extras: list[dict]) -> dict[str, float]:
@@ -87,8 +83,7 @@ class ProgressLogger(Logger):
             for key, value in evaluated.items():
                 self.writer.add_scalar(key, value, it)
             row.update(evaluated)
-        with open(Path(self.log_dir) / "progress.jsonl", "a") as f:
-            f.write(json.dumps(row) + "\n")
+        append_row(self.log_dir, row)
         if not self.log_full:
             print(self._progress_line(it, total_it, row), flush=True)
 
@@ -107,11 +102,14 @@ class ProgressLogger(Logger):
 
 
 class Runner(OnPolicyRunner):
-    """OnPolicyRunner with atomic checkpoints, a progress line per iteration, an evaluation hook and a
-    torch.distributed backend that matches the device."""
+    """OnPolicyRunner with atomic, safely loaded checkpoints, a progress line per iteration, an evaluation hook and
+    a torch.distributed backend that matches the device.
+
+    ``run_info`` (``{"task", "algo"}``) is written into every checkpoint and checked when one is loaded.
+    """
 
     def __init__(self, env, train_cfg: dict, log_dir: str | None = None, device: str = "cpu",
-                 log_full: bool = False) -> None:  # fmt: skip
+                 log_full: bool = False, run_info: dict | None = None) -> None:  # fmt: skip
         super().__init__(env, train_cfg, log_dir=log_dir, device=device)
         old = self.logger
         self.logger = ProgressLogger(
@@ -120,6 +118,7 @@ class Runner(OnPolicyRunner):
             gpu_global_rank=self.gpu_global_rank, device=device, log_full=log_full,
         )  # fmt: skip
         self.logger.git_status_repos = old.git_status_repos + [__file__]
+        self.run_info = dict(run_info or {})
 
     def _configure_multi_gpu(self) -> None:
         """rsl_rl's multi-GPU set-up, with the backend picked by the device: NCCL on CUDA, gloo on a CPU.
@@ -145,13 +144,22 @@ class Runner(OnPolicyRunner):
         saved = self.alg.save()
         saved["iter"] = self.current_learning_iteration
         saved["infos"] = infos
-        tmp = f"{path}.tmp"
-        torch.save(saved, tmp)
-        os.replace(tmp, path)
+        saved[META_KEY] = {**self.run_info, "env_steps": int(self.logger.tot_timesteps),
+                           "time_s": float(self.logger.tot_time)}  # fmt: skip
+        with atomic_write(path) as f:
+            torch.save(saved, f)
         self.logger.save_model(path, self.current_learning_iteration)
 
-    def resume_from(self, path: str | Path) -> int:
-        """Load a checkpoint and continue after the iteration it was written at; returns that next iteration."""
-        self.load(str(path), map_location=self.device)
-        self.current_learning_iteration += 1
+    def load(self, path: str, load_cfg: dict | None = None, strict: bool = True, map_location: str | None = None):
+        """rsl_rl's ``load`` without unpickling arbitrary objects, refusing files of another task or shape."""
+        data = read_checkpoint(path, map_location=map_location or self.device)
+        check_fits(path, data, self.alg, self.run_info.get("task"), self.run_info.get("algo"))
+        apply_checkpoint(self, path, data, load_cfg, strict)
+        return data.get("infos")
+
+    def continue_after(self, iteration: int, env_steps: int, time_s: float) -> int:
+        """Set the counters of a run resumed from the checkpoint of ``iteration``; returns the next iteration."""
+        self.current_learning_iteration = iteration + 1
+        self.logger.tot_timesteps = int(env_steps)
+        self.logger.tot_time = float(time_s)
         return self.current_learning_iteration

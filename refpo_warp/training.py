@@ -4,12 +4,16 @@
 ``refpo_warp.runner``), writes the resolved config next to the checkpoints, trains (or resumes), evaluates at the
 end and returns the evaluation results (also written to ``eval.json`` in the run dir).
 
+Order of work: everything that can refuse a run (options, run dir, resume compatibility, env, runner, checkpoint)
+happens before the first byte is written, so a refused run leaves the disk as it was.
+
 Under torchrun every rank trains on its own device (``cuda:LOCAL_RANK``, or the CPU) with seed ``seed + RANK``;
 rank 0 alone writes the run dir (config, checkpoints, logs) and evaluates (``refpo_warp.distributed``).
 """
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 import random
@@ -19,13 +23,17 @@ from typing import Any
 import numpy as np
 import torch
 
-from refpo_warp.config import LEAF_KEYS, dump_config, load_yaml, resolve_config
+from refpo_warp.atomic import remove_stale_temp_files
+from refpo_warp.checkpoints import checkpoint_progress, latest_checkpoint, load_latest
+from refpo_warp.config import dump_config, parse_overrides, resolve_config
 from refpo_warp.distributed import process_rank, rank_device
-from refpo_warp.errors import ConfigError
+from refpo_warp.errors import ConfigError, NonFiniteLossError, tag_run_dir
+from refpo_warp.progress import progress_path, truncate_after
 from refpo_warp.registry import make_env
-from refpo_warp.runner import Runner, latest_checkpoint
+from refpo_warp.run_dir import RUN_CONFIG, check_writable, flatten, load_run_config, run_lock
+from refpo_warp.runner import Runner
 
-RUN_CONFIG = "config.yaml"
+__all__ = ["RUN_CONFIG", "build_runner", "flatten", "load_run_config", "num_iterations", "rsl_rl_config", "train"]
 
 
 def seed_everything(seed: int) -> None:
@@ -65,74 +73,123 @@ def default_run_dir(cfg: dict) -> Path:
     return Path("runs") / cfg["task"] / f"{cfg['algo']}_seed{cfg['seed']}"
 
 
-def flatten(cfg: dict, prefix: str = "") -> dict[str, Any]:
-    """Dotted-key view of a nested config (``LEAF_KEYS`` mappings stay whole)."""
-    out: dict[str, Any] = {}
-    for key, value in cfg.items():
-        if isinstance(value, dict) and value and key not in LEAF_KEYS:
-            out.update(flatten(value, f"{prefix}{key}."))
-        else:
-            out[f"{prefix}{key}"] = value
-    return out
-
-
-def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
-    """The saved config of a run with ``overrides`` applied on top (used to resume and to evaluate)."""
-    saved = run_dir / RUN_CONFIG
-    if not saved.exists():
-        raise ConfigError(f"{saved} not found: '{run_dir}' is not a refpo_warp run directory")
-    flat = flatten(load_yaml(saved))
-    flat.update(overrides)
-    return resolve_config(flat)
+def check_obs_groups(cfg: dict, env) -> None:
+    """Every observation group named in ``runner.obs_groups`` must be one the env provides."""
+    available = sorted(env.get_observations().keys())
+    for name, groups in cfg["runner"]["obs_groups"].items():
+        missing = [g for g in groups if g not in available]
+        if missing:
+            raise ConfigError(f"runner.obs_groups.{name}={groups}: the {cfg['task']} env has no observation group "
+                              f"{', '.join(map(repr, missing))}; its groups are {', '.join(available)}")  # fmt: skip
 
 
 def build_runner(cfg: dict, log_dir: Path | None, env=None):
     """Env + rsl_rl runner (with our extensions) for a resolved config; ``env`` hosts the runner instead of a new one.
 
-    Under torchrun: this rank's device and env seed (``seed + RANK``), and a run dir for rank 0 only.
+    Nothing is written to ``log_dir`` until training starts. Under torchrun: this rank's device and env seed
+    (``seed + RANK``), and a run dir for rank 0 only.
     """
     rank = process_rank()
     device = rank_device(cfg["device"], rank)
     if env is None:
         env = make_env(cfg["task"], num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank,
                        **cfg["env"])  # fmt: skip
+    check_obs_groups(cfg, env)
     log_dir = log_dir if rank.is_main else None
+    run_info = {"task": cfg["task"], "algo": cfg["algo"]}  # written into and checked against every checkpoint
     runner = Runner(env, rsl_rl_config(cfg), log_dir=str(log_dir) if log_dir else None, device=device,
-                    log_full=cfg["runner"]["log_full"])  # fmt: skip
+                    log_full=cfg["runner"]["log_full"], run_info=run_info)  # fmt: skip
     return env, runner
 
 
+def resolve_run(flat: dict[str, Any]) -> dict:
+    """The config of the run ``flat`` asks for: a new one, or a resumed one (its saved config + the overrides)."""
+    resume = flat.get("resume", False)
+    if resume not in (True, False):
+        raise ConfigError(f"resume={resume!r} is invalid; expected true or false")
+    if not resume:
+        cfg = resolve_config(flat)
+    else:
+        run_dir = Path(flat["run_dir"]) if flat.get("run_dir") else default_run_dir(resolve_config(flat))
+        cfg = load_run_config(run_dir, {**flat, "run_dir": str(run_dir)})
+    cfg["run_dir"] = str(cfg["run_dir"] or default_run_dir(cfg))
+    return cfg
+
+
 def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
-    """Train (or resume) a run and evaluate it; returns the evaluation results (``{}`` if ``eval.at_end`` is off)."""
-    from refpo_warp.config import parse_overrides
+    """Train (or resume) a run and evaluate it; returns the evaluation results (``{}`` if ``eval.at_end`` is off).
+
+    ``resume=true`` continues the newest usable checkpoint of ``run_dir``; it is an error when the run dir has no
+    checkpoint (nothing is started from scratch behind the user's back). Without it, a run dir that already holds
+    checkpoints is refused.
+    """
     from refpo_warp.report import evaluate_run, periodic_evaluator
 
     flat = parse_overrides(overrides) if isinstance(overrides, list) else dict(overrides or {})
-    resume = bool(flat.get("resume", False))
-    if resume and flat.get("run_dir") and (Path(flat["run_dir"]) / RUN_CONFIG).exists():
-        cfg = load_run_config(Path(flat["run_dir"]), flat)
-    else:
-        cfg = resolve_config(flat)
-    run_dir = Path(cfg["run_dir"] or default_run_dir(cfg))
-    cfg["run_dir"] = str(run_dir)
-    checkpoint = latest_checkpoint(run_dir) if run_dir.exists() else None
+    cfg = resolve_run(flat)
+    run_dir, resume = Path(cfg["run_dir"]), cfg["resume"]
+    check_writable(run_dir)
+    checkpoint = latest_checkpoint(run_dir) if run_dir.is_dir() else None
     if checkpoint is not None and not resume:
-        raise ConfigError(
-            f"{run_dir} already holds checkpoints ({checkpoint.name}); pass resume=true to continue that run, "
-            "or choose another run_dir"
-        )
+        raise ConfigError(f"{run_dir} already holds checkpoints ({checkpoint.name}); pass resume=true to continue "
+                          f"that run, or choose another run_dir")  # fmt: skip
+    if checkpoint is None and resume:
+        raise ConfigError(f"resume=true, but {run_dir} holds no checkpoint (model_<iteration>.pt) to continue from; "
+                          f"start it again without resume=true (that replaces its config.yaml and progress.jsonl)")
     rank = process_rank()
-    if rank.is_main:
-        run_dir.mkdir(parents=True, exist_ok=True)
-        if not resume:
-            for stale in ("progress.jsonl", "eval.json"):
-                (run_dir / stale).unlink(missing_ok=True)
+    with contextlib.ExitStack() as stack:
+        locked = rank.is_main and run_dir.is_dir()
+        if locked:
+            stack.enter_context(run_lock(run_dir))
+        seed_everything(cfg["seed"] + rank.rank)
+        env, runner = build_runner(cfg, run_dir)
+        start = 0
+        if resume:  # every rank loads the checkpoint
+            start = _resume(runner, cfg, run_dir, flat, rank.world_size)
+        # --- everything below writes (rank 0 only); everything above could refuse the run without touching the disk
+        if rank.is_main:
+            run_dir.mkdir(parents=True, exist_ok=True)
+            if not locked:  # the directory did not exist before
+                stack.enter_context(run_lock(run_dir))
+            remove_stale_temp_files(run_dir)
+            if not resume:
+                for stale in (progress_path(run_dir), run_dir / "eval.json"):
+                    stale.unlink(missing_ok=True)
+            else:
+                truncate_after(run_dir, start - 1)
+            dump_config(cfg, run_dir / RUN_CONFIG)
+        with tag_run_dir(run_dir):
+            return _train_and_evaluate(cfg, env, runner, run_dir, start, evaluate_run, periodic_evaluator)
 
-    seed_everything(cfg["seed"] + rank.rank)
-    env, runner = build_runner(cfg, run_dir)
-    if rank.is_main:
-        dump_config(cfg, run_dir / RUN_CONFIG)
-    start = runner.resume_from(checkpoint) if (resume and checkpoint is not None) else 0
+
+def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: int = 1) -> int:
+    """Load the newest usable checkpoint, apply a learning-rate override, restore the counters; returns the next
+    iteration."""
+    path, data = load_latest(runner, run_dir, cfg["task"], cfg["algo"])
+    iteration = int(data["iter"])
+    env_steps, time_s = checkpoint_progress(data)
+    if env_steps is None:  # not written by refpo_warp: read the count from the progress log, or assume this batch
+        from refpo_warp.progress import read_rows
+
+        rows = [r for r in read_rows(run_dir) if r["iteration"] == iteration] if progress_path(run_dir).exists() else []
+        batch = cfg["num_envs"] * cfg["runner"]["num_steps_per_env"] * world_size
+        env_steps = rows[-1]["env_steps"] if rows else (iteration + 1) * batch
+        time_s = rows[-1].get("time_s", 0.0) if rows else 0.0
+    alg = runner.alg
+    if "algorithm.learning_rate" in flat:  # rsl_rl restored the checkpoint's rate with the optimizer state
+        restored = alg.optimizer.param_groups[0]["lr"]
+        alg.learning_rate = float(cfg["algorithm"]["learning_rate"])
+        for group in alg.optimizer.param_groups:
+            group["lr"] = alg.learning_rate
+        print(f"[refpo_warp] learning_rate {alg.learning_rate:g} from the command line replaces {restored:g} "
+              f"restored from {path.name}", flush=True)  # fmt: skip
+    print(f"[refpo_warp] resuming {run_dir} from {path.name}: iteration {iteration}, {env_steps:,} env steps",
+          flush=True)  # fmt: skip
+    return runner.continue_after(iteration, env_steps, time_s or 0.0)
+
+
+def _train_and_evaluate(cfg, env, runner, run_dir, start, evaluate_run, periodic_evaluator) -> dict:
+    rank = process_rank()
     total = num_iterations(cfg, rank.world_size)
     notice = cfg["notice"].format(task=cfg["task"], algo=cfg["algo"]) if cfg["notice"] else None
     if notice:
@@ -146,7 +203,15 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
     if cfg["eval"]["interval"] > 0 and rank.is_main:
         runner.logger.on_iteration = periodic_evaluator(cfg, runner)
     if total > start:
-        runner.learn(total - start, init_at_random_ep_len=cfg["runner"]["init_at_random_ep_len"])
+        try:
+            runner.learn(total - start, init_at_random_ep_len=cfg["runner"]["init_at_random_ep_len"])
+        except NonFiniteLossError as err:  # the CLI's message says what survives and how to go on
+            err.checkpoint, err.run_dir = latest_checkpoint(run_dir), run_dir
+            err.learning_rate = float(runner.alg.learning_rate)
+            raise
+    else:
+        print(f"[refpo_warp] nothing to train: the run is at iteration {start} and the budget is {total} iterations "
+              f"(raise max_iterations or total_env_steps to continue)", flush=True)  # fmt: skip
     results = {}
     if cfg["eval"]["at_end"] and rank.is_main:
         results = evaluate_run(run_dir, cfg=cfg, runner=runner)

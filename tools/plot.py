@@ -9,26 +9,27 @@ on the same task.
 
 import sys
 
-from refpo_warp.plots import plot_runs
+from refpo_warp.cli import EXIT_USAGE, run_guarded
 
 
 def main(argv: list[str]) -> int:
     if not argv or any(a in ("-h", "--help") for a in argv):
         print(__doc__)
-        return 0 if argv else 2
+        return 0 if argv else EXIT_USAGE
     runs = [a.split("=", 1)[1] for a in argv if a.startswith("run_dir=")]
     out = next((a.split("=", 1)[1] for a in argv if a.startswith("out=")), None)
     unknown = [a for a in argv if not a.startswith(("run_dir=", "out="))]
     if unknown or not runs:
         print(f"error: expected run_dir=PATH [out=DIR], got {unknown or argv}", file=sys.stderr)
-        return 2
-    try:
+        return EXIT_USAGE
+
+    def plot() -> None:
+        from refpo_warp.plots import plot_runs
+
         for path in plot_runs(runs, out):
             print(path)
-    except FileNotFoundError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    return 0
+
+    return run_guarded(plot)
 
 
 if __name__ == "__main__":

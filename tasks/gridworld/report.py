@@ -11,6 +11,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import torch  # noqa: E402
 from tensordict import TensorDict  # noqa: E402
 
+from refpo_warp.atomic import save_figure  # noqa: E402
+
 FIGURE_STARTS = ((17, 12), (11, 13), (6, 9), (20, 17))  # (x, y) starts of the paper's trajectory panel
 FIGURE_FLOW_STEPS = (10, 1)
 
@@ -106,7 +108,7 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
                       width=0.004, alpha=0.35, color="#1f4e9c")  # fmt: skip
         ax.set_title(f"Sampled actions, {policy}")
         path = Path(run_dir) / f"gridworld_field{suffix}.png"
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        save_figure(fig, path, dpi=120, bbox_inches="tight")
         plt.close(fig)
         written.append(path)
 
@@ -121,7 +123,7 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
             ax.plot(x, y, "o", color=c, ms=8, mec="k")
         ax.set_title(f"Rollouts from fixed starts, {policy}")
         path = Path(run_dir) / f"gridworld_trajectories{suffix}.png"
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        save_figure(fig, path, dpi=120, bbox_inches="tight")
         plt.close(fig)
         written.append(path)
     return written
