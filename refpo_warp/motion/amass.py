@@ -6,7 +6,7 @@
   ``pose_eye``, ``poses (N, 165)``, ``trans``, ``mocap_frame_rate``, ``betas``, ``gender``, ...
 Only the root orientation, the 21 body joints, the translation and the frame rate are used (hands, face and body
 shape are dropped: the skeleton is the SMPL neutral mean shape). Every problem raises ``MotionDataError`` naming
-the file, before any of the file is used.
+the file, before any of the file is used; implausible rates, lengths and magnitudes too (``motion/limits.py``).
 """
 
 from __future__ import annotations
@@ -17,7 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+from refpo_warp.atomic import atomic_write
 from refpo_warp.errors import MotionDataError
+from refpo_warp.motion.limits import check_source
 
 NUM_BODY_POSE = 63  # 21 body joints x 3 (axis-angle), after the 3 root values
 SMPLH_POSE_DIM = 156
@@ -81,9 +83,9 @@ def read_amass(path: str | Path) -> AmassMotion:
         raise MotionDataError(
             f"{path}: frame counts differ: pose has {root_orient.shape[0]} frames, 'trans' has {trans.shape[0]}"
         )
-    if trans.shape[0] == 0:
-        raise MotionDataError(f"{path}: the motion has zero frames")
-    return AmassMotion(path, schema, _frame_rate(path, arrays, keys), root_orient, body_pose, trans)
+    fps, fps_key = _frame_rate(path, arrays, keys)
+    check_source(path, fps, fps_key, trans.shape[0], trans, np.concatenate([root_orient, body_pose], axis=1))
+    return AmassMotion(path, schema, fps, root_orient, body_pose, trans)
 
 
 def load_npz(path: Path, wanted: set[str]) -> tuple[set[str], dict[str, np.ndarray]]:
@@ -117,7 +119,7 @@ def _matrix(path: Path, arrays: dict, key: str, width: int | None) -> np.ndarray
     return value
 
 
-def _frame_rate(path: Path, arrays: dict, keys: set) -> float:
+def _frame_rate(path: Path, arrays: dict, keys: set) -> tuple[float, str]:
     key = next((k for k in _FPS_KEYS if k in keys), None)
     if key is None:
         raise MotionDataError(f"{path}: missing frame rate key ('mocap_framerate' or 'mocap_frame_rate')")
@@ -127,7 +129,7 @@ def _frame_rate(path: Path, arrays: dict, keys: set) -> float:
     fps = float(value.reshape(()))
     if not np.isfinite(fps) or fps <= 0.0:
         raise MotionDataError(f"{path}: key '{key}' must be a positive frame rate, got {fps}")
-    return fps
+    return fps, key
 
 
 def write_amass(
@@ -171,6 +173,6 @@ def write_amass(
     else:
         raise ValueError(f"Unknown AMASS schema '{schema}': expected 'smplh' or 'smplx'")
     path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "wb") as f:  # an open file keeps numpy from appending a second '.npz'
+    with atomic_write(path) as f:  # a file object also keeps numpy from appending a second '.npz'
         np.savez_compressed(f, **arrays)
     return path

@@ -10,6 +10,7 @@ import numpy as np
 
 from refpo_warp.motion import kinematics as kin
 from refpo_warp.motion import rotations as rot
+from refpo_warp.motion.limits import resampled_frame_count
 from refpo_warp.motion.skeleton import BODY_NAMES, FOOT_BODIES, FOOT_SOLE_DEPTH
 
 FOOT_INDICES = np.array([BODY_NAMES.index(n) for n in FOOT_BODIES])
@@ -43,8 +44,7 @@ def resample(
     bracket each time.
     """
     num_src = root_pos.shape[0]
-    duration = (num_src - 1) / src_fps
-    num_out = int(np.floor(duration * fps + 1e-6)) + 1
+    num_out = resampled_frame_count(num_src, src_fps, fps)
     src_index = np.minimum(np.arange(num_out) * (src_fps / fps), num_src - 1)
     i0 = np.floor(src_index).astype(np.int64)
     i1 = np.minimum(i0 + 1, num_src - 1)

@@ -13,8 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
+from refpo_warp.atomic import atomic_write
 from refpo_warp.errors import MotionDataError
 from refpo_warp.motion.amass import load_npz
+from refpo_warp.motion.limits import check_library
 from refpo_warp.motion.skeleton import BODY_NAMES, NUM_BODIES, NUM_DOFS
 
 LIBRARY_SUFFIX = ".motionlib.npz"
@@ -37,7 +39,7 @@ def is_library_file(path: Path) -> bool:
 
 def save_library(path: str | Path, frames: dict[str, np.ndarray], clip_frames: np.ndarray, fps: float,
                  clip_names: list[str], sources: list[str]) -> Path:  # fmt: skip
-    """Write a library file; ``path`` must end in ``.motionlib.npz``."""
+    """Write a library file atomically (a crash keeps the previous file); ``path`` must end in ``.motionlib.npz``."""
     path = Path(path)
     if not is_library_file(path):
         raise ValueError(f"{path}: a motion library file name must end in '{LIBRARY_SUFFIX}'")
@@ -55,7 +57,7 @@ def save_library(path: str | Path, frames: dict[str, np.ndarray], clip_frames: n
     arrays["clip_start"] = np.concatenate([[0], np.cumsum(clip_frames)[:-1]]).astype(np.int64)
     arrays["metadata"] = np.array(json.dumps(metadata))
     path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "wb") as f:  # an open file keeps numpy from appending a second '.npz'
+    with atomic_write(path) as f:  # a file object also keeps numpy from appending a second '.npz'
         np.savez_compressed(f, **arrays)
     return path
 
@@ -95,6 +97,7 @@ def load_library(path: str | Path) -> tuple[dict[str, np.ndarray], np.ndarray, d
     norms = np.linalg.norm(frames["body_rot"], axis=-1)
     if np.max(np.abs(norms - 1.0)) > 1e-3:
         raise MotionDataError(f"{path}: 'body_rot' holds quaternions that are not unit length")
+    check_library(path, float(meta["fps"]), meta["clip_names"], clip_frames, frames)
     return frames, clip_frames.astype(np.int64), meta
 
 

@@ -17,6 +17,7 @@ from refpo_warp.device import configure_warp, init_warp, resolve_device
 from refpo_warp.errors import MotionDataError
 from refpo_warp.motion.clip import MotionClip
 from refpo_warp.motion.library_file import FRAME_ARRAYS, is_library_file, load_library, save_library
+from refpo_warp.motion.limits import check_fps_argument
 from refpo_warp.motion.skeleton import NUM_BODIES, NUM_DOFS
 from refpo_warp.motion.sources import load_amass_clips
 
@@ -50,6 +51,11 @@ class MotionLibrary:
         self.num_clips = len(self.clip_names)
         self.sources = list(sources or [])
         self.clip_num_frames = np.asarray(clip_frames, dtype=np.int64)
+        if self.num_clips < 1 or self.clip_num_frames.shape != (self.num_clips,) or self.clip_num_frames.min() < 1:
+            raise ValueError(f"MotionLibrary needs at least one clip and one frame count >= 1 per clip, got "
+                             f"{self.num_clips} clip names and frame counts {self.clip_num_frames.tolist()[:8]}")
+        if not (np.isfinite(self.fps) and self.fps > 0):
+            raise ValueError(f"MotionLibrary: fps must be a positive number, got {fps}")
         self.clip_duration = (self.clip_num_frames - 1) / self.fps
         self.num_frames = int(self.clip_num_frames.sum())
         self.frames = {key: np.ascontiguousarray(frames[key], dtype=np.float32) for key in FRAME_ARRAYS}
@@ -84,9 +90,7 @@ class MotionLibrary:
             frames, clip_frames, meta = load_library(path)
             return {"frames": frames, "clip_frames": clip_frames, "fps": meta["fps"],
                     "clip_names": meta["clip_names"], "sources": meta["sources"]}  # fmt: skip
-        if not (np.isfinite(fps) and fps > 0):
-            raise ValueError(f"MotionLibrary.load: fps must be a positive number, got {fps}")
-        clips, sources = load_amass_clips(path, float(fps))
+        clips, sources = load_amass_clips(path, check_fps_argument(fps))
         return _concatenate(clips, sources)
 
     @classmethod
@@ -209,13 +213,17 @@ def _sample_kernel(
     if use_mask != 0:
         if not mask[env]:
             return
+    if num_clips < 1:
+        return
+    # Every index is clamped into its array: no clip id, time (NaN included) or frame table can read out of bounds.
     clip = wp.clamp(clip_ids[env], 0, num_clips - 1)
-    last = clip_frames[clip] - 1
+    last = wp.max(clip_frames[clip] - 1, 0)
     f = wp.clamp(times[env] * fps, 0.0, float(last))
-    k0 = wp.clamp(int(f), 0, last)  # the clamp also guards the index against a NaN time
-    a = f - float(k0)
-    g0 = clip_start[clip] + k0
-    g1 = clip_start[clip] + wp.min(k0 + 1, last)
+    k0 = wp.clamp(int(f), 0, last)
+    a = wp.clamp(f - float(k0), 0.0, 1.0)
+    total = body_pos.shape[0] - 1
+    g0 = wp.clamp(clip_start[clip] + k0, 0, total)
+    g1 = wp.clamp(clip_start[clip] + wp.min(k0 + 1, last), 0, total)
 
     out_body_pos[env, body] = wp.lerp(body_pos[g0, body], body_pos[g1, body], a)
     out_body_rot[env, body] = _slerp(body_rot[g0, body], body_rot[g1, body], a)
