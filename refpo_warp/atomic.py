@@ -65,12 +65,14 @@ def append_line(path: str | Path, line: str) -> None:
         os.close(fd)
 
 
-def remove_stale_temp_files(folder: str | Path) -> list[Path]:
-    """Delete temp files that an interrupted ``atomic_write`` left in ``folder``; returns what was removed."""
+def remove_stale_temp_files(folder: str | Path, names: tuple[str, ...] = ("*",)) -> list[Path]:
+    """Delete the temp files an interrupted ``atomic_write`` of a file matching one of ``names`` (glob patterns)
+    left in ``folder``; returns what was removed."""
     removed = []
-    for tmp in Path(folder).glob(f".?*.*{TEMP_SUFFIX}"):
-        if tmp.is_file():
-            with contextlib.suppress(OSError):
-                tmp.unlink()
-                removed.append(tmp)
+    for pattern in names:
+        for tmp in Path(folder).glob(f".{pattern}.*{TEMP_SUFFIX}"):
+            if tmp.is_file():
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
+                    removed.append(tmp)
     return removed

@@ -55,7 +55,7 @@ def read_checkpoint(path: str | Path, map_location: str | None = "cpu") -> dict[
         data = torch.load(path, map_location=map_location, weights_only=True)
     except Exception as err:  # noqa: BLE001  (torch raises many types for a bad file; each becomes one message)
         text = " ".join(str(err).split())
-        if "Weights only load failed" in text:
+        if "Weights only load failed" in text and "GLOBAL" in text:
             found = re.search(r"GLOBAL ([\w.]+)", text)
             what = f" (it asks for {found.group(1)})" if found else ""
             raise CheckpointError(
@@ -98,7 +98,8 @@ def check_fits(path: str | Path, data: dict, alg, task: str | None = None, algo:
     for key, model in (("actor_state_dict", _raw(alg, "actor")), ("critic_state_dict", _raw(alg, "critic"))):
         have = {k: tuple(v.shape) for k, v in model.state_dict().items()}
         got = {k: tuple(v.shape) for k, v in data[key].items()}
-        problems = [f"'{k}' missing" for k in have if k not in got] + [f"'{k}' unexpected" for k in got if k not in have]
+        problems = [f"'{k}' missing" for k in have if k not in got]
+        problems += [f"'{k}' unexpected" for k in got if k not in have]
         problems += [f"'{k}' is {got[k]} in the file, {have[k]} in the model" for k in have
                      if k in got and got[k] != have[k]]  # fmt: skip
         if problems:
@@ -148,7 +149,8 @@ def load_latest(runner, run_dir: str | Path, task: str | None = None, algo: str 
         return path, data
     if not problems:
         raise CheckpointError(f"{run_dir}: no checkpoint (model_<iteration>.pt) found")
-    raise CheckpointError(f"{run_dir}: none of its {len(problems)} checkpoint(s) can be used:\n  " + "\n  ".join(problems))
+    listing = "\n  ".join(problems)
+    raise CheckpointError(f"{run_dir}: none of its {len(problems)} checkpoint(s) can be used:\n  {listing}")
 
 
 def checkpoint_progress(data: dict) -> tuple[int | None, float | None]:

@@ -20,7 +20,8 @@ from pathlib import Path
 
 from refpo_warp.errors import ConfigError, DataFileError, NonFiniteLossError
 
-EXIT_OK, EXIT_UNEXPECTED, EXIT_USAGE, EXIT_NONFINITE, EXIT_BAD_FILE, EXIT_SYSTEM, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 5, 130
+EXIT_OK, EXIT_UNEXPECTED, EXIT_USAGE, EXIT_NONFINITE, EXIT_BAD_FILE, EXIT_SYSTEM = 0, 1, 2, 3, 4, 5
+EXIT_INTERRUPTED = 130
 ERROR_LOG = "error.log"
 
 
@@ -88,7 +89,8 @@ def run_guarded(fn: Callable[[], object]) -> int:
     except KeyboardInterrupt as err:
         latest = _latest(err)
         kept = f" (newest: {latest})" if latest else ""
-        return _fail(f"interrupted; checkpoints written so far are intact{kept}; resume=true continues", EXIT_INTERRUPTED)
+        message = f"interrupted; checkpoints written so far are intact{kept}; resume=true continues"
+        return _fail(message, EXIT_INTERRUPTED)
     except MemoryError:
         return _fail("error: out of memory; lower num_envs, runner.num_steps_per_env or the network sizes", EXIT_SYSTEM)
     except OSError as err:

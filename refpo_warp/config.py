@@ -203,6 +203,22 @@ def class_parameters(class_name: str) -> dict[str, Any]:
     return params
 
 
+def _check_class_kind(section: str, class_name: str) -> None:
+    """A class_name must select a model (actor, critic: a torch Module) or an algorithm (a class with rsl_rl's
+    ``construct_algorithm``), never an arbitrary callable such as ``os:system`` named in an edited config file."""
+    import torch
+
+    cls = resolve_class(class_name)
+    if section in ("actor", "critic"):
+        valid = inspect.isclass(cls) and issubclass(cls, torch.nn.Module)
+        kind = "a model class (a torch.nn.Module, e.g. refpo_warp.models:FlowActor or rsl_rl.models:MLPModel)"
+    else:
+        valid = inspect.isclass(cls) and callable(getattr(cls, "construct_algorithm", None))
+        kind = "an algorithm class with rsl_rl's construct_algorithm (e.g. refpo_warp.algorithms:ReFPO)"
+    if not valid:
+        raise ConfigError(f"{section}.class_name={class_name!r} is invalid; expected {kind}")
+
+
 # Constructor arguments that rsl_rl itself passes positionally; a config must not set them.
 _POSITIONAL = {"actor": ("obs", "obs_groups", "obs_set", "output_dim"),
                "critic": ("obs", "obs_groups", "obs_set", "output_dim"),
@@ -212,6 +228,7 @@ _POSITIONAL = {"actor": ("obs", "obs_groups", "obs_set", "output_dim"),
 def _validate_class_section(section: str, values: dict) -> dict:
     if "class_name" not in values:
         raise ConfigError(f"Section '{section}' needs a class_name (e.g. refpo_warp.models:FlowActor)")
+    _check_class_kind(section, values["class_name"])
     params = class_parameters(values["class_name"])
     for pos in _POSITIONAL[section]:
         params.pop(pos, None)
@@ -295,6 +312,8 @@ def resolve_config(overrides: list[str] | dict[str, Any] | None = None, device_t
 
     env_fields = {f.name for f in dataclasses.fields(get_task(task).env_class().cfg_class)}
     for key in [k for k in flat if "." not in k and k not in defaults and k in env_fields]:
+        if f"env.{key}" in flat:
+            raise ConfigError(f"'{key}' and 'env.{key}' are the same option, given twice; give it once")
         flat[f"env.{key}"] = flat.pop(key)
 
     task_cfg = _task_layers(task)

@@ -78,30 +78,31 @@ class Num(Rule):
         self.lo, self.hi, self.integer = lo, hi, integer
         self.lo_open, self.hi_open, self.multiple_of = lo_open, hi_open, multiple_of
 
-    def _check(self, key: str, value: Any) -> Any:
+    def _check(self, key: str, raw: Any) -> Any:
+        value = raw
         if isinstance(value, bool):
-            raise self.error(key, value)
+            raise self.error(key, raw)
         if isinstance(value, str):  # YAML reads 3e-4 as a string
             try:
                 value = float(value)
             except ValueError:
-                raise self.error(key, value) from None
+                raise self.error(key, raw) from None
         if not isinstance(value, (int, float)):
-            raise self.error(key, value)
+            raise self.error(key, raw)
         if not math.isfinite(value):
-            raise self.error(key, value, "not a finite number")
+            raise self.error(key, raw, "not a finite number")
         if self.integer:
             if value != int(value):
-                raise self.error(key, value, "not a whole number")
+                raise self.error(key, raw, "not a whole number")
             value = int(value)
         else:
             value = float(value)
         below = self.lo is not None and (value <= self.lo if self.lo_open else value < self.lo)
         above = self.hi is not None and (value >= self.hi if self.hi_open else value > self.hi)
         if below or above:
-            raise self.error(key, value, "out of range")
+            raise self.error(key, raw, "out of range")
         if self.multiple_of and value % self.multiple_of:
-            raise self.error(key, value, f"not a multiple of {self.multiple_of}")
+            raise self.error(key, raw, f"not a multiple of {self.multiple_of}")
         return value
 
     def describe(self) -> str:
@@ -109,7 +110,8 @@ class Num(Rule):
         if self.multiple_of:
             kind = f"{kind} multiple of {self.multiple_of}"
         if self.lo is not None and self.hi is not None:
-            return f"{kind} in {'(' if self.lo_open else '['}{_fmt(self.lo)}, {_fmt(self.hi)}{')' if self.hi_open else ']'}"
+            left, right = "(" if self.lo_open else "[", ")" if self.hi_open else "]"
+            return f"{kind} in {left}{_fmt(self.lo)}, {_fmt(self.hi)}{right}"
         if self.lo is not None:
             return f"{kind} {'>' if self.lo_open else '>='} {_fmt(self.lo)}"
         if self.hi is not None:

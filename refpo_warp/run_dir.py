@@ -10,18 +10,21 @@ rate, budget, evaluation, device, ...) may change.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from refpo_warp.config import CLASS_SECTIONS, LEAF_KEYS, load_yaml, resolve_class, resolve_config
+from refpo_warp.config import CLASS_SECTIONS, LEAF_KEYS, class_parameters, load_yaml, resolve_class, resolve_config
 from refpo_warp.errors import ConfigError, DataFileError
 from refpo_warp.options import rules_for
 from refpo_warp.run_options import RUN_RULES
 
 RUN_CONFIG = "config.yaml"
 IDENTITY_KEYS = ("task", "algo")
+# Files a run writes into its directory (glob patterns): only their interrupted temp files are ever removed.
+RUN_FILES = ("model_*.pt", RUN_CONFIG, "progress.jsonl", "eval.json", "error.log", "*.png")
 
 
 def flatten(cfg: dict, prefix: str = "") -> dict[str, Any]:
@@ -71,9 +74,33 @@ def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
 
 
 def fixed_changes(saved: dict, cfg: dict) -> list[str]:
-    """``key: saved -> new`` for every option that may not change on resume and does (keys in both configs)."""
+    """``key: saved -> new`` for every option that may not change on resume and does. An option the saved config
+    does not list (left at its default, or added to the code since) is compared with its default."""
     old, new = flatten(saved), flatten(cfg)
-    return [f"{k}: {old[k]!r} -> {new[k]!r}" for k in new if k in old and old[k] != new[k] and _is_fixed(cfg, k)]
+    changes = []
+    for key, value in new.items():
+        if not _is_fixed(cfg, key):
+            continue
+        before = old[key] if key in old else _default(cfg, key)
+        if before is not _UNKNOWN and before != value:
+            changes.append(f"{key}: {before!r} -> {value!r}")
+    return changes
+
+
+_UNKNOWN = object()
+
+
+def _default(cfg: dict, key: str) -> Any:
+    """The value an option has when a config does not set it (constructor or env cfg default)."""
+    section, _, name = key.partition(".")
+    if section in CLASS_SECTIONS and "." not in name:
+        return class_parameters(cfg[section]["class_name"]).get(name, _UNKNOWN)
+    if section == "env" and "." not in name:
+        from refpo_warp.registry import get_task
+
+        fields = {f.name: f for f in dataclasses.fields(get_task(cfg["task"]).env_class().cfg_class)}
+        return fields[name].default if name in fields else _UNKNOWN
+    return _UNKNOWN
 
 
 def _is_fixed(cfg: dict, key: str) -> bool:
@@ -106,6 +133,21 @@ def check_writable(run_dir: Path) -> None:
         raise ConfigError(f"run_dir={run_dir} cannot be created: {existing} is a file")
     if not os.access(existing, os.W_OK | os.X_OK):
         raise ConfigError(f"run_dir={run_dir} cannot be written: no write permission on {existing}")
+
+
+def check_new_run_dir(run_dir: Path) -> None:
+    """A new run may start in a missing or empty directory, or over a run that never wrote a checkpoint; never
+    into a directory that holds other files (its config.yaml, progress.jsonl or eval.json would be replaced)."""
+    if not run_dir.is_dir() or not any(p for p in run_dir.iterdir() if not p.name.startswith(".")):
+        return
+    try:
+        saved = load_yaml(run_dir / RUN_CONFIG, error=DataFileError)
+        if all(isinstance(saved.get(k), str) for k in IDENTITY_KEYS):
+            return  # a refpo_warp run without checkpoints: starting it again is what the user asks for
+    except DataFileError:
+        pass
+    raise ConfigError(f"run_dir={run_dir} is not empty and is not a refpo_warp run directory (no usable "
+                      f"{RUN_CONFIG}); choose a new or empty directory so that no file in it is replaced")
 
 
 @contextlib.contextmanager

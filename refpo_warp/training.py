@@ -30,7 +30,15 @@ from refpo_warp.distributed import process_rank, rank_device
 from refpo_warp.errors import ConfigError, NonFiniteLossError, tag_run_dir
 from refpo_warp.progress import progress_path, truncate_after
 from refpo_warp.registry import make_env
-from refpo_warp.run_dir import RUN_CONFIG, check_writable, flatten, load_run_config, run_lock
+from refpo_warp.run_dir import (
+    RUN_CONFIG,
+    RUN_FILES,
+    check_new_run_dir,
+    check_writable,
+    flatten,
+    load_run_config,
+    run_lock,
+)
 from refpo_warp.runner import Runner
 
 __all__ = ["RUN_CONFIG", "build_runner", "flatten", "load_run_config", "num_iterations", "rsl_rl_config", "train"]
@@ -136,6 +144,8 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
     if checkpoint is None and resume:
         raise ConfigError(f"resume=true, but {run_dir} holds no checkpoint (model_<iteration>.pt) to continue from; "
                           f"start it again without resume=true (that replaces its config.yaml and progress.jsonl)")
+    if not resume:
+        check_new_run_dir(run_dir)
     rank = process_rank()
     with contextlib.ExitStack() as stack:
         locked = rank.is_main and run_dir.is_dir()
@@ -151,7 +161,9 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
             run_dir.mkdir(parents=True, exist_ok=True)
             if not locked:  # the directory did not exist before
                 stack.enter_context(run_lock(run_dir))
-            remove_stale_temp_files(run_dir)
+            if not resume and latest_checkpoint(run_dir) is not None:  # another process got here first
+                raise ConfigError(f"{run_dir} received checkpoints from another process meanwhile; not touching it")
+            remove_stale_temp_files(run_dir, RUN_FILES)
             if not resume:
                 for stale in (progress_path(run_dir), run_dir / "eval.json"):
                     stale.unlink(missing_ok=True)
