@@ -11,18 +11,25 @@ from refpo_warp.errors import ConfigError
 _CONFIGURED = False
 
 
+def check_device_name(device: str) -> str:
+    """``device`` if it is a device name (auto, cpu, cuda, cuda:N), whether or not this machine has it."""
+    if not (isinstance(device, str) and (device in ("auto", "cpu", "cuda") or
+                                         (device.startswith("cuda:") and device[5:].isdigit()))):  # fmt: skip
+        raise ConfigError(f"device={device!r} is invalid; expected auto, cpu, cuda or cuda:N")
+    return device
+
+
 def resolve_device(device: str = "auto") -> str:
     """Map ``"auto"`` to ``"cuda:0"`` when a CUDA device is usable, else ``"cpu"``; validate explicit names.
 
     Raises ``ConfigError`` (naming the ``device`` option) for an unknown name or a device that is not available.
     """
+    check_device_name(device)
     if device == "auto":
         return "cuda:0" if torch.cuda.is_available() else "cpu"
     if device == "cuda":
         device = "cuda:0"
-    index = device[5:] if isinstance(device, str) and device.startswith("cuda:") else None
-    if device != "cpu" and not (index is not None and index.isdigit()):
-        raise ConfigError(f"device={device!r} is invalid; expected auto, cpu, cuda or cuda:N")
+    index = device[5:] if device.startswith("cuda:") else None
     if index is not None:
         if not torch.cuda.is_available():
             raise ConfigError(f"device={device} was requested but no CUDA device is available; use device=cpu or "

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import fnmatch
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -136,9 +137,13 @@ def check_writable(run_dir: Path) -> None:
 
 
 def check_new_run_dir(run_dir: Path) -> None:
-    """A new run may start in a missing or empty directory, or over a run that never wrote a checkpoint; never
-    into a directory that holds other files (its config.yaml, progress.jsonl or eval.json would be replaced)."""
-    if not run_dir.is_dir() or not any(p for p in run_dir.iterdir() if not p.name.startswith(".")):
+    """A new run may start in a directory without files of the names a run writes (other files, e.g. a sweep's
+    logs, stay untouched), or over a refpo_warp run that never wrote a checkpoint; never where it would replace
+    someone else's config.yaml, progress.jsonl, eval.json or figures."""
+    if not run_dir.is_dir():
+        return
+    clashes = sorted(p.name for p in run_dir.iterdir() if any(fnmatch.fnmatch(p.name, pat) for pat in RUN_FILES))
+    if not clashes:
         return
     try:
         saved = load_yaml(run_dir / RUN_CONFIG, error=DataFileError)
@@ -146,8 +151,8 @@ def check_new_run_dir(run_dir: Path) -> None:
             return  # a refpo_warp run without checkpoints: starting it again is what the user asks for
     except DataFileError:
         pass
-    raise ConfigError(f"run_dir={run_dir} is not empty and is not a refpo_warp run directory (no usable "
-                      f"{RUN_CONFIG}); choose a new or empty directory so that no file in it is replaced")
+    raise ConfigError(f"run_dir={run_dir} is not a refpo_warp run directory (no usable {RUN_CONFIG}) but holds "
+                      f"{', '.join(clashes[:5])}, which a run would replace; choose a new or empty directory")
 
 
 @contextlib.contextmanager

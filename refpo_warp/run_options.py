@@ -10,6 +10,7 @@ import importlib.util
 from typing import Any
 
 from refpo_warp.errors import ConfigError
+from refpo_warp.models.flow_actor import INITIAL_NOISE
 from refpo_warp.options import Check, Flag, Int, ListOf, OneOf, Text
 
 MAX_ENVS = 1 << 22  # 4M envs: far above what one GPU holds, low enough to catch a typo before allocating
@@ -18,12 +19,11 @@ FLOW_STEPS = ListOf(Int(1, 1000), min_len=1, max_len=32)
 
 
 def _check_device(key: str, value: Any) -> str:
-    from refpo_warp.device import resolve_device
+    # The name only: resolve_config checks that the device exists on this machine when it resolves for this
+    # machine (device_type not given); a config resolved for another machine's device type (sweeps) is not.
+    from refpo_warp.device import check_device_name
 
-    if not isinstance(value, str):
-        raise ConfigError(f"{key}={value!r} is invalid; expected auto, cpu, cuda or cuda:N")
-    resolve_device(value)  # raises ConfigError naming the device when it is unknown or not available
-    return value
+    return check_device_name(value)
 
 
 def _check_logger(key: str, value: Any) -> str:
@@ -33,6 +33,17 @@ def _check_logger(key: str, value: Any) -> str:
     if package and importlib.util.find_spec(package) is None:
         raise ConfigError(f"{key}={value} needs the '{package}' package, which is not installed; use tensorboard "
                           f"or pip install {package}")  # fmt: skip
+    return value
+
+
+def _check_notice(key: str, value: Any) -> str:
+    if not isinstance(value, str):
+        raise ConfigError(f"{key}={value!r} is invalid; expected a text")
+    try:
+        value.format(task="task", algo="algo")
+    except (KeyError, IndexError, ValueError) as err:
+        raise ConfigError(f"{key}={value!r} is invalid ({type(err).__name__}: {err}); only {{task}} and {{algo}} are "
+                          f"filled in (write {{{{ and }}}} for literal braces)") from None
     return value
 
 
@@ -48,12 +59,13 @@ def _check_obs_groups(key: str, value: Any) -> dict:
 
 RUN_RULES = {
     "seed": Int(0, 2**32 - 1),  # numpy's seed range
-    "device": Check(_check_device, "auto, cpu, cuda or cuda:N (an available device)"),
+    "device": Check(_check_device, "auto, cpu, cuda or cuda:N"),
     "num_envs": Int(1, MAX_ENVS),
     "total_env_steps": Int(1, 10**13),
     "max_iterations": Int(1, 10**8, optional=True),
     "run_dir": Text(optional=True),
     "resume": Flag(),
+    "notice": Check(_check_notice, "null or a text ({task} and {algo} are filled in)", optional=True),
     "runner.num_steps_per_env": Int(1, 1_000_000),
     "runner.save_interval": Int(1, 10**8),
     "runner.logger": Check(_check_logger, "tensorboard, wandb or neptune"),
@@ -67,8 +79,9 @@ RUN_RULES = {
     "eval.flow_steps": FLOW_STEPS,
     "eval.num_envs": Int(1, MAX_ENVS, optional=True),
     "eval.max_steps": Int(1, 10**8, optional=True),
-    "eval.stochastic": Flag(),
-    "eval.interval": Int(0, 10**8),
+    "eval.initial_noise": OneOf(INITIAL_NOISE),
+    "eval.perturbation": Flag(),
+    "eval.interval": Int(0, 10**8, optional=True),
     "eval.interval_flow_steps": FLOW_STEPS,
     "eval.interval_num_envs": Int(1, MAX_ENVS),
 }

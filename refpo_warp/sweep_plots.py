@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from refpo_warp.atomic import save_figure
 from refpo_warp.plots import plt, readable_log_axis, seed_stats
 
 RATIO_KEYS = ("Flow/ratio_max", "loss/ratio_max")  # the shared name, then the name of runs logged before it
@@ -72,7 +73,7 @@ def reward_curve_grid(curves: dict[str, dict[str, dict[str, tuple[list, list]]]]
     fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=min(4, max(1, len(handles))),
                fontsize=7, frameon=False)  # fmt: skip
     fig.tight_layout(rect=(0, 0.06 + 0.02 * math.ceil(len(handles) / 4), 1, 1))
-    fig.savefig(path, dpi=130)
+    save_figure(fig, path, dpi=130)
     plt.close(fig)
     return path
 
@@ -104,7 +105,7 @@ def ratio_spikes(panels: dict[str, dict[str, list[dict]]], path: Path, seed: int
     axes[0, 0].legend(fontsize=6)
     axes[1, 0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    save_figure(fig, path, dpi=130)
     plt.close(fig)
     return path
 
@@ -129,6 +130,6 @@ def latency_bars(latency: dict, path: Path, names: dict[str, str] | None = None)
         ax.grid(axis="y", alpha=0.3)
     fig.suptitle(f"action latency on {latency.get('device_name', latency.get('device', '?'))}", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    save_figure(fig, path, dpi=130)
     plt.close(fig)
     return path

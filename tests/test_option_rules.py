@@ -30,10 +30,23 @@ def _constructor_options(cls) -> set[str]:
 
 
 def _selected_classes():
-    for path in sorted((CONFIG_DIR / "algo").glob("*.yaml")):
-        data = yaml.safe_load(path.read_text())
-        for section in ("actor", "critic", "algorithm"):
-            yield section, resolve_class(data[section]["class_name"])
+    """(section, class) for every class_name an actor, critic or algorithm section of any config file selects."""
+    found = set()
+
+    def walk(node):
+        if isinstance(node, dict):
+            for key, value in node.items():
+                if key in ("actor", "critic", "algorithm") and isinstance(value, dict) and "class_name" in value:
+                    found.add((key, value["class_name"]))
+                walk(value)
+        elif isinstance(node, list):
+            for item in node:
+                walk(item)
+
+    for path in sorted(CONFIG_DIR.rglob("*.yaml")):
+        walk(yaml.safe_load(path.read_text()))
+    classes = {(section, resolve_class(name)) for section, name in found}
+    return sorted(classes, key=lambda sc: (sc[0], sc[1].__name__))
 
 
 @pytest.mark.parametrize("section,cls", list(_selected_classes()), ids=lambda x: getattr(x, "__name__", x))

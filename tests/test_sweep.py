@@ -96,8 +96,10 @@ def test_named_sweeps_resolve():
 def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     spec = write_spec(tmp_path / "tiny.yaml", overrides=TINY, methods=[
         {"label": "ppo", "algo": "ppo"}, {"label": "refpo", "algo": "refpo"},
-        # Resolves, then really fails at run time: the first Adam step makes the weights non-finite (exit 3).
-        {"label": "broken", "algo": "fpo", "overrides": {"algorithm.learning_rate": 1.0e30}}])  # fmt: skip
+        # Resolves (every value is within its option's range), then really fails at run time: a 1e6 output scale and
+        # a unit learning rate send the log-ratio to its clip of 100, whose exp overflows float32 (exit 3).
+        {"label": "broken", "algo": "fpo", "overrides": {"algorithm.learning_rate": 1.0, "actor.output_scale": 1.0e6,
+                                                         "algorithm.log_ratio_clip": 100.0}}])  # fmt: skip
     out = tmp_path / "out"
     result = subprocess.run([sys.executable, str(ROOT / "tools" / "sweep.py"), str(spec), f"out={out}", "--jobs", "2"],
                             capture_output=True, text=True, cwd=ROOT, timeout=300)  # fmt: skip

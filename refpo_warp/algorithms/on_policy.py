@@ -81,7 +81,7 @@ class OnPolicyAlgorithm(RslPPO):
         "lr_decay_rate": Real(0, 10),
         "lr_decay_floor": Real(0, 1),
         "bound_coef": Real(0, 1e6),
-        "bound": Real(0, None, lo_open=True),
+        "bound": Real(0, None),
     }
 
     def __init__(
