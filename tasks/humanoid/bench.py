@@ -1,8 +1,17 @@
 """Env-stepping throughput of the humanoid tracking env: ``python tools/bench.py humanoid [--num-envs N] ...``.
 
-Timed with ``refpo_warp.benchmarking.env_steps_per_second``: uniform random actions in [-1, 1] drawn ahead of time,
-after warm-up steps (the first step compiles kernels and captures the step graph); counts env steps per second
-including resets of finished episodes. Defaults: 64 envs on CPU, 4096 on CUDA.
+Ours: timed with ``refpo_warp.benchmarking.env_steps_per_second``: uniform random actions in [-1, 1] drawn ahead of
+time, after warm-up steps (the first step compiles kernels and captures the step graph). One env step is the whole
+captured step: PD targets from the actions, the physics substeps (MuJoCo Warp), reference sampling, reward /
+termination / episode metrics, new episodes for finished envs and the observations. Defaults: 64 envs on CPU, 4096
+on CUDA.
+
+Anchor, in the same run: MuJoCo C (``mujoco.rollout``, one thread, as Warp's CPU backend) stepping the model our
+simulator compiled (``tasks/humanoid/mujoco_c.py``: same MJCF, timestep, substeps, integrator, solver and its
+iterations, contacts and PD actuators) on the same number of worlds, with the same random PD targets. Random
+actions end episodes after about two control steps, so the C worlds run episodes of our run's mean length, each
+from the env's reference-state starts. Physics only on the C side: no rewards, observations, resets or reference
+sampling.
 """
 
 from __future__ import annotations
@@ -11,6 +20,7 @@ import argparse
 import json
 import time
 
+import numpy as np
 import torch
 
 from refpo_warp.benchmarking import env_steps_per_second
@@ -31,8 +41,9 @@ class _CountEpisodes:
         return out
 
 
-def measure(task: str, num_envs: int, device: str, steps: int, warmup: int, seed: int = 0, **env_cfg) -> dict:
-    """Build the env, warm up, then time ``steps`` random-action steps; returns the measured numbers."""
+def measure(task: str, num_envs: int, device: str, steps: int, warmup: int, seed: int = 0, with_c: bool = True,
+            **env_cfg) -> dict:  # fmt: skip
+    """Build the env, warm up, time ``steps`` random-action steps, then (``with_c``) the MuJoCo C anchor."""
     start = time.perf_counter()
     env = make_env(task, num_envs=num_envs, device=device, seed=seed, **env_cfg)
     build_s = time.perf_counter() - start
@@ -42,12 +53,43 @@ def measure(task: str, num_envs: int, device: str, steps: int, warmup: int, seed
     warmup_s = time.perf_counter() - start
     counted = _CountEpisodes(env)
     rate = env_steps_per_second(counted, steps=steps, warmup=0, seed=seed)
-    return {
+    ended = int(counted.ended)
+    result = {
         "task": task, "device": env.device, "num_envs": num_envs, "steps": steps,
-        "env_steps_per_s": rate, "ms_per_step": 1e3 * num_envs / rate,
-        "episodes_ended": int(counted.ended), "build_s": build_s, "warmup_s": warmup_s,
-        "graph_captured": env._graph is not None,
+        "env_steps_per_s": rate, "ms_per_step": 1e3 * num_envs / rate, "episodes_ended": ended,
+        "mean_episode_length": steps * num_envs / ended if ended else None, "build_s": build_s,
+        "warmup_s": warmup_s, "graph_captured": env._graph is not None,
     }  # fmt: skip
+    if with_c:
+        length = round(result["mean_episode_length"]) if ended else steps
+        result.update(mujoco_c(env, steps, length, seed))
+        result["ours_over_c"] = rate / result["c_env_steps_per_s"]
+        result["substeps"] = env.sim.substeps
+    return result
+
+
+def mujoco_c(env, steps: int, episode_length: int, seed: int = 0) -> dict:
+    """MuJoCo C env steps per second on ``env``'s model and worlds: ``steps`` control steps in episodes of
+    ``episode_length`` from the env's reference-state starts, uniform random actions mapped to PD targets as ours."""
+    from tasks.humanoid import mujoco_c as mc
+
+    env.reset()  # fresh reference-state starts
+    model = mc.c_model(env.sim)
+    states = mc.c_states(model, env.sim)
+    scale = env.action_scale.numpy()
+    rng = np.random.default_rng(seed)
+    length = max(1, min(episode_length, steps))
+    episodes = -(-steps // length)
+
+    def run(count: int) -> float:
+        targets = scale * rng.uniform(-1.0, 1.0, size=(count, env.num_envs, length, scale.size))
+        start = time.perf_counter()
+        for k in range(count):
+            mc.rollout(model, states, targets[k], env.sim.substeps)
+        return count * length * env.num_envs / (time.perf_counter() - start)
+
+    run(1)  # warm-up
+    return {"c_env_steps_per_s": run(episodes), "c_episode_length": length, "c_settings": mc.solver_settings(model)}
 
 
 def main(argv: list[str]) -> None:
@@ -57,6 +99,7 @@ def main(argv: list[str]) -> None:
     parser.add_argument("--num-envs", type=int, default=None, help="default: 64 on CPU, 4096 on CUDA")
     parser.add_argument("--steps", type=int, default=None, help="timed steps (default: 30 on CPU, 300 on CUDA)")
     parser.add_argument("--warmup", type=int, default=3)
+    parser.add_argument("--no-mujoco-c", action="store_true", help="skip the MuJoCo C anchor")
     parser.add_argument("--json", action="store_true", help="print the result as one JSON line")
     args = parser.parse_args(argv)
 
@@ -64,15 +107,27 @@ def main(argv: list[str]) -> None:
     cpu = device == "cpu"
     num_envs = args.num_envs or (64 if cpu else 4096)
     steps = args.steps or (30 if cpu else 300)
-    result = measure(args.task, num_envs, device, steps, args.warmup)
+    result = measure(args.task, num_envs, device, steps, args.warmup, with_c=not args.no_mujoco_c)
     if args.json:
         print(json.dumps(result))
         return
     print(f"{result['task']} on {result['device']}: {num_envs} envs, {steps} steps after {args.warmup} warm-up "
-          f"(graph captured: {result['graph_captured']})")  # fmt: skip
-    print(f"  {result['env_steps_per_s']:,.0f} env steps/s ({result['ms_per_step']:.1f} ms per step, "
-          f"{result['episodes_ended']} episodes ended); build {result['build_s']:.1f} s, "
-          f"warm-up {result['warmup_s']:.1f} s")  # fmt: skip
+          f"(graph captured: {result['graph_captured']}), uniform random actions in [-1, 1]")  # fmt: skip
+    length = result["mean_episode_length"]
+    print(f"  ours: {result['env_steps_per_s']:,.0f} env steps/s ({result['ms_per_step']:.1f} ms per step, "
+          f"{result['episodes_ended']} episodes ended, mean length {length or float('nan'):.1f}); "
+          f"build {result['build_s']:.1f} s, warm-up {result['warmup_s']:.1f} s")  # fmt: skip
+    print("    includes: PD targets, physics substeps, reference sampling, reward/termination/metrics, resets of "
+          "finished episodes, observations")  # fmt: skip
+    if "c_env_steps_per_s" in result:
+        c = result["c_settings"]
+        print(f"  MuJoCo C (mujoco.rollout, 1 thread): {result['c_env_steps_per_s']:,.0f} env steps/s; same model, "
+              f"{num_envs} worlds, dt {c['timestep']:.5f} s x {result['substeps']} substeps, {c['integrator']}, "
+              f"{c['solver']} {c['iterations']}/{c['ls_iterations']} iterations, tolerance {c['tolerance']:.0e}, "
+              f"{c['cone']}; episodes of {result['c_episode_length']} control steps from the env's "
+              f"reference-state starts")  # fmt: skip
+        print("    physics only: no rewards, observations, resets or reference sampling")
+        print(f"  ours / MuJoCo C: {result['ours_over_c']:.2f}")
 
 
 if __name__ == "__main__":
