@@ -89,8 +89,12 @@ def test_spaces(env):
 
 def test_kinematic_replay_gives_zero_error_and_maximal_reward(env):
     """Sim joint coordinates set to the reference's dof_pos/root pose each step: FK reproduces every body pose."""
+    import dataclasses
+
+    from tasks.humanoid.reward_terms import reward_params
     from tasks.humanoid.tracking_kernels import evaluate_step_kernel
 
+    no_power = reward_params(dataclasses.replace(env.cfg, power_coef=0.0))
     env.reset()
     # Whole frames: between frames the library interpolates body poses and joint angles separately (~1 mm apart).
     start = torch.from_numpy(np.floor(env.ref_time.numpy() * 30.0) / 30.0).float()
@@ -111,10 +115,11 @@ def test_kinematic_replay_gives_zero_error_and_maximal_reward(env):
                   inputs=[s.body_q, s.body_qd, s.body_com, s.joint_q, s.joint_qd, s.joint_target, env.kp, env.kd,
                           500.0, ref.body_pos, ref.body_rot, ref.body_vel, ref.body_angvel, env.eval_body,
                           env.clip_id, env.ref_time, env.motion.clip_duration_device, b.episode_length, 300, 0,
-                          c.termination_distance, c.eval_termination_distance, c.max_joint_speed, 0.0,
-                          env.mpjpe_sum],
+                          c.termination_distance, c.eval_termination_distance, c.max_joint_speed, no_power,
+                          env.mpjpe_sum, env.term_sum],
                   outputs=[b.rewards, b.terminated, b.truncated, s.reset_mask, b.metrics["success"],
-                           b.metrics["mpjpe_mm"], b.metrics["alive_steps"]], device="cpu")  # fmt: skip
+                           b.metrics["mpjpe_mm"], b.metrics["alive_steps"], env.episode_terms],
+                  device="cpu")  # fmt: skip
         rewards.append(env._rewards.clone())
         assert not env._terminated.any()
         assert float(env._metrics["mpjpe_mm"].max()) < 1e-2  # micrometres

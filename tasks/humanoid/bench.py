@@ -76,7 +76,7 @@ def mujoco_c(env, steps: int, episode_length: int, seed: int = 0) -> dict:
     env.reset()  # fresh reference-state starts
     model = mc.c_model(env.sim)
     states = mc.c_states(model, env.sim)
-    scale = env.action_scale.numpy()
+    scale = env.action_scale.numpy() * ~env.frozen_dof.numpy()  # absolute PD targets, as ours
     rng = np.random.default_rng(seed)
     length = max(1, min(episode_length, steps))
     episodes = -(-steps // length)

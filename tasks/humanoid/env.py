@@ -21,6 +21,7 @@ from tasks.humanoid import motions
 from tasks.humanoid.model import CONTROL_HZ, EFFORT_LIMIT, HumanoidSim, SimOptions
 from tasks.humanoid.obs_layout import CONDITIONING_REGIMES, OBS_DIM, conditioning_mask
 from tasks.humanoid.observations import observation_kernel
+from tasks.humanoid.reward_terms import TERMS, reward_params
 from tasks.humanoid.tracking_kernels import (
     advance_time_kernel,
     apply_actions_kernel,
@@ -46,8 +47,26 @@ class HumanoidTrackingCfg(EnvCfg):
     """Training: the episode ends when any body is farther than this (m) from the reference."""
     eval_termination_distance: float = 0.5
     """Eval mode: the episode ends when the mean distance of the 20 non-hand/toe bodies exceeds this (m)."""
+    reward_pos_weight: float = 0.5
+    reward_pos_scale: float = 100.0
+    """Term ``pos``: weight * exp(-scale * mean squared body-position error, m^2)."""
+    reward_rot_weight: float = 0.3
+    reward_rot_scale: float = 10.0
+    """Term ``rot``: weight * exp(-scale * mean squared body-rotation angle, rad^2)."""
+    reward_vel_weight: float = 0.1
+    reward_vel_scale: float = 0.1
+    """Term ``vel``: weight * exp(-scale * mean squared body linear-velocity error, (m/s)^2)."""
+    reward_angvel_weight: float = 0.1
+    reward_angvel_scale: float = 0.1
+    """Term ``angvel``: weight * exp(-scale * mean squared body angular-velocity error, (rad/s)^2)."""
     power_coef: float = 0.0005
+    """Term ``power``: -power_coef * sum over hinges of |PD torque * joint rate| (off for the first 3 steps)."""
     freeze_hands_toes: bool = True
+    """L/R_Hand and L/R_Toe PD targets stay 0 (the reference's freeze_hand / freeze_toe)."""
+    residual_actions: bool = False
+    """PD target = the reference joint angles of the observed frame (one control step ahead) + scale * clip(a, -1, 1),
+    kept within pi/2 of the current joint angles: Puffer-PHC's ``res_action`` (off in the paper's runs, as here by
+    default). Off: PD target = scale * clip(a, -1, 1)."""
     max_joint_speed: float = 100.0
     """A hinge rate above this (rad/s) is a numerical blow-up: the episode ends as a failure."""
     substeps: int = 4
@@ -104,14 +123,15 @@ class HumanoidTrackingEnv(WarpVecEnv):
         self.sim = HumanoidSim(n, dev, options)
         self.ref = self.motion.allocate_frames(n)
 
-        scale = sk.ACTION_SCALE.astype(np.float32).copy()
+        frozen = np.zeros(sk.NUM_DOFS, dtype=bool)
         if c.freeze_hands_toes:
             for name in sk.FROZEN_HAND_TOE:
                 body = sk.body_index(name)
-                scale[3 * (body - 1) : 3 * body] = 0.0
+                frozen[3 * (body - 1) : 3 * body] = True
         gains = np.repeat(sk.PD_GAINS[1:], 3, axis=0).astype(np.float32)
         eval_body = np.array([n_ in sk.EVAL_TERMINATION_BODIES for n_ in sk.BODY_NAMES], dtype=np.float32)
-        self.action_scale = wp.array(scale, dtype=float, device=dev)
+        self.action_scale = wp.array(sk.ACTION_SCALE.astype(np.float32), dtype=float, device=dev)
+        self.frozen_dof = wp.array(frozen, dtype=wp.bool, device=dev)
         self.kp = wp.array(gains[:, 0], dtype=float, device=dev)
         self.kd = wp.array(gains[:, 1], dtype=float, device=dev)
         self.eval_body = wp.array(eval_body, dtype=float, device=dev)
@@ -122,11 +142,18 @@ class HumanoidTrackingEnv(WarpVecEnv):
         self.ref_time = wp.zeros(n, dtype=float, device=dev)
         self.obs_time = wp.zeros(n, dtype=float, device=dev)
         self.mpjpe_sum = wp.zeros(n, dtype=float, device=dev)
+        self.reward_params = reward_params(c)
+        self.term_sum = wp.zeros((n, len(TERMS)), dtype=float, device=dev)  # this episode's sums so far
+        self._episode_terms = torch.zeros(n, len(TERMS), device=self.device)  # read where an episode ended
+        self.episode_terms = wp.from_torch(self._episode_terms)
 
     # ------------------------------------------------------------------------------------------------ stepping
     def _step_impl(self) -> None:
         b, c, s, n = self.buffers, self.cfg, self.sim, self.num_envs
-        wp.launch(apply_actions_kernel, dim=(n, sk.NUM_DOFS), inputs=[b.actions, self.action_scale],
+        # self.ref holds the reference of the observed frame (sampled at obs_time by the last step or reset).
+        wp.launch(apply_actions_kernel, dim=(n, sk.NUM_DOFS),
+                  inputs=[b.actions, self.action_scale, self.frozen_dof, int(c.residual_actions), self.ref.dof_pos,
+                          s.joint_q],
                   outputs=[s.joint_target])  # fmt: skip
         s.simulate()
         wp.launch(advance_time_kernel, dim=n, inputs=[self.start_time, b.episode_length, self.step_dt],
@@ -140,11 +167,19 @@ class HumanoidTrackingEnv(WarpVecEnv):
                     EFFORT_LIMIT, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, self.eval_body, self.clip_id,
                     self.ref_time, self.motion.clip_duration_device, b.episode_length, self.max_episode_length,
                     int(c.eval_mode), c.termination_distance, c.eval_termination_distance, c.max_joint_speed,
-                    c.power_coef, self.mpjpe_sum],
+                    self.reward_params, self.mpjpe_sum, self.term_sum],
             outputs=[b.rewards, b.terminated, b.truncated, s.reset_mask, b.metrics["success"],
-                     b.metrics["mpjpe_mm"], b.metrics["alive_steps"]],
+                     b.metrics["mpjpe_mm"], b.metrics["alive_steps"], self.episode_terms],
         )  # fmt: skip
         self._start_episodes(s.reset_mask)
+
+    def step(self, actions: torch.Tensor):
+        """The base step, plus each reward term's sum over the episodes that ended (``Episode_Reward/<term>``)."""
+        obs, rewards, dones, extras = super().step(actions)
+        if "log" in extras:  # written by the base env when an episode ended
+            ended = self._episode_terms[dones]
+            extras["log"].update({f"Episode_Reward/{t}": ended[:, k] for k, t in enumerate(TERMS)})
+        return obs, rewards, dones, extras
 
     def _reset_impl(self, mask) -> None:
         self._start_episodes(mask)
@@ -157,7 +192,8 @@ class HumanoidTrackingEnv(WarpVecEnv):
             dim=n,
             inputs=[mask, b.rng, self.motion.num_clips, self.motion.clip_duration_device, self.step_dt,
                     int(self.cfg.eval_mode)],
-            outputs=[self.clip_id, self.start_time, self.ref_time, b.episode_length, self.mpjpe_sum, s.reset_mask],
+            outputs=[self.clip_id, self.start_time, self.ref_time, b.episode_length, self.mpjpe_sum, self.term_sum,
+                     s.reset_mask],
         )  # fmt: skip
         # Only the starting envs need the reference at their (new) start; every row is resampled below.
         self.motion.sample(self.clip_id, self.ref_time, r, mask=s.reset_mask)

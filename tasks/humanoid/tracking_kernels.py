@@ -1,9 +1,8 @@
 """Per-step kernels of the tracking env: PD targets from actions, imitation reward, termination, episode metrics,
 episode starts (reference-state initialisation) and writing a reference state into the simulator.
 
-Reward (reference ``compute_imitation_reward``; means over the 24 bodies, and over x/y/z for vectors):
-``0.5 exp(-100 mean dp^2) + 0.3 exp(-10 mean angle^2) + 0.1 exp(-0.1 mean dv^2) + 0.1 exp(-0.1 mean dw^2)
-- power_coef * sum_dof |tau * qdot|``, the power term off for an episode's first 3 steps.
+Reward: the named terms of ``reward_terms.py`` (weights and scales from the cfg), the power term off for an
+episode's first 3 steps.
 """
 
 from __future__ import annotations
@@ -11,6 +10,7 @@ from __future__ import annotations
 from refpo_warp.device import configure_warp
 from refpo_warp.motion import skeleton as sk
 from tasks.humanoid.model import FREE_COORDS, FREE_DOFS
+from tasks.humanoid.reward_terms import RewardParams, imitation_term, term_vector, write_terms
 from tasks.humanoid.rotation_funcs import com_velocity, origin_velocity, quat_angle
 
 wp = configure_warp()
@@ -20,20 +20,33 @@ NDOF = wp.constant(sk.NUM_DOFS)
 QS = wp.constant(FREE_COORDS)  # first hinge coordinate in joint_q
 DS = wp.constant(FREE_DOFS)  # first hinge DoF in joint_qd
 POWER_FREE_STEPS = wp.constant(3)
+HALF_PI = wp.constant(0.5 * 3.141592653589793)
 
 
 @wp.kernel
 def apply_actions_kernel(
     actions: wp.array2d(dtype=float),
     scale: wp.array(dtype=float),
+    frozen: wp.array(dtype=wp.bool),
+    residual: int,
+    ref_dof_pos: wp.array2d(dtype=float),
+    joint_q: wp.array2d(dtype=float),
     joint_target: wp.array2d(dtype=float),
 ):
-    # PD target = scale * clip(a, -1, 1); scale is 0 for frozen hand/toe DoFs (their targets stay at rest).
+    # Absolute: PD target = scale * clip(a, -1, 1). Residual (the reference's res_action): the reference joint angle
+    # of the observed frame + scale * clip(a, -1, 1), kept within pi/2 of the current angle. Frozen hand/toe DoFs
+    # get target 0 either way.
     i, d = wp.tid()
     a = actions[i, d]
     if not wp.isfinite(a):
         a = 0.0
-    joint_target[i, QS + d] = scale[d] * wp.clamp(a, -1.0, 1.0)
+    target = scale[d] * wp.clamp(a, -1.0, 1.0)
+    if residual != 0:
+        q = joint_q[i, QS + d]
+        target = wp.clamp(ref_dof_pos[i, d] + target, q - HALF_PI, q + HALF_PI)
+    if frozen[d]:
+        target = 0.0
+    joint_target[i, QS + d] = target
 
 
 @wp.kernel
@@ -79,6 +92,7 @@ def start_episodes_kernel(
     ref_time: wp.array(dtype=float),
     episode_length: wp.array(dtype=wp.int32),
     mpjpe_sum: wp.array(dtype=float),
+    term_sum: wp.array2d(dtype=float),
     reset_mask: wp.array(dtype=wp.bool),
 ):
     i = wp.tid()
@@ -88,6 +102,8 @@ def start_episodes_kernel(
         ref_time[i] = start_time[i]
         episode_length[i] = 0
         mpjpe_sum[i] = 0.0
+        for k in range(term_sum.shape[1]):
+            term_sum[i, k] = 0.0
 
 
 @wp.kernel
@@ -115,8 +131,9 @@ def evaluate_step_kernel(
     termination_distance: float,
     eval_termination_distance: float,
     max_joint_speed: float,
-    power_coef: float,
+    reward: RewardParams,
     mpjpe_sum: wp.array(dtype=float),
+    term_sum: wp.array2d(dtype=float),
     rewards: wp.array(dtype=float),
     terminated: wp.array(dtype=wp.bool),
     truncated: wp.array(dtype=wp.bool),
@@ -124,6 +141,7 @@ def evaluate_step_kernel(
     success: wp.array(dtype=float),
     mpjpe_mm: wp.array(dtype=float),
     alive_steps: wp.array(dtype=float),
+    episode_terms: wp.array2d(dtype=float),
 ):
     i = wp.tid()
     pos_err = float(0.0)
@@ -151,8 +169,13 @@ def evaluate_step_kernel(
         eval_dist += eval_body[b] * dist
         eval_count += eval_body[b]
     n = float(NB)
-    imitation = (0.5 * wp.exp(-100.0 * pos_err / (3.0 * n)) + 0.3 * wp.exp(-10.0 * rot_err / n)
-                 + 0.1 * wp.exp(-0.1 * vel_err / (3.0 * n)) + 0.1 * wp.exp(-0.1 * angvel_err / (3.0 * n)))  # fmt: skip
+    w = reward.weights
+    k = reward.scales
+    terms = term_vector()
+    terms[0] = imitation_term(w[0], k[0], pos_err, 3.0 * n)
+    terms[1] = imitation_term(w[1], k[1], rot_err, n)
+    terms[2] = imitation_term(w[2], k[2], vel_err, 3.0 * n)
+    terms[3] = imitation_term(w[3], k[3], angvel_err, 3.0 * n)
 
     power = float(0.0)
     fastest = float(0.0)
@@ -165,12 +188,15 @@ def evaluate_step_kernel(
     length = episode_length[i]
     if length <= POWER_FREE_STEPS:
         power = 0.0
-    reward = imitation - power_coef * power
+    terms[4] = -reward.power_coef * power
+    reward_sum = terms[0] + terms[1] + terms[2] + terms[3] + terms[4]
     # A non-finite or runaway state is a numerical failure: end the episode and keep NaN out of the learner.
-    broken = not (fastest <= max_joint_speed) or not wp.isfinite(reward) or not wp.isfinite(sum_dist)
+    broken = not (fastest <= max_joint_speed) or not wp.isfinite(reward_sum) or not wp.isfinite(sum_dist)
     if broken:
-        reward = 0.0
+        reward_sum = 0.0
         sum_dist = 0.0
+        terms = term_vector()
+    write_terms(i, terms, term_sum, episode_terms)
 
     if eval_mode != 0:
         lost = eval_dist / wp.max(eval_count, 1.0) > eval_termination_distance
@@ -182,7 +208,7 @@ def evaluate_step_kernel(
 
     total = mpjpe_sum[i] + sum_dist / n
     mpjpe_sum[i] = total
-    rewards[i] = reward
+    rewards[i] = reward_sum
     terminated[i] = term
     truncated[i] = trunc
     done_mask[i] = term or trunc
