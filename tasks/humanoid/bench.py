@@ -17,6 +17,7 @@ sampling.
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import time
 
@@ -92,6 +93,16 @@ def mujoco_c(env, steps: int, episode_length: int, seed: int = 0) -> dict:
     return {"c_env_steps_per_s": run(episodes), "c_episode_length": length, "c_settings": mc.solver_settings(model)}
 
 
+def _option(item: str) -> tuple[str, object]:
+    key, sep, value = item.partition("=")
+    if not sep:
+        raise SystemExit(f"--env expects KEY=VALUE, got {item!r}")
+    try:
+        return key, ast.literal_eval(value)
+    except (ValueError, SyntaxError):
+        return key, value
+
+
 def main(argv: list[str]) -> None:
     parser = argparse.ArgumentParser(prog="tools/bench.py humanoid", description=__doc__.split("\n\n")[0])
     parser.add_argument("--task", default="humanoid_all")
@@ -99,6 +110,8 @@ def main(argv: list[str]) -> None:
     parser.add_argument("--num-envs", type=int, default=None, help="default: 64 on CPU, 4096 on CUDA")
     parser.add_argument("--steps", type=int, default=None, help="timed steps (default: 30 on CPU, 300 on CUDA)")
     parser.add_argument("--warmup", type=int, default=3)
+    parser.add_argument("--env", action="append", default=[], metavar="KEY=VALUE",
+                        help="env cfg option, e.g. --env njmax=320 (repeatable)")  # fmt: skip
     parser.add_argument("--no-mujoco-c", action="store_true", help="skip the MuJoCo C anchor")
     parser.add_argument("--json", action="store_true", help="print the result as one JSON line")
     args = parser.parse_args(argv)
@@ -107,12 +120,14 @@ def main(argv: list[str]) -> None:
     cpu = device == "cpu"
     num_envs = args.num_envs or (64 if cpu else 4096)
     steps = args.steps or (30 if cpu else 300)
-    result = measure(args.task, num_envs, device, steps, args.warmup, with_c=not args.no_mujoco_c)
+    env_cfg = dict(_option(item) for item in args.env)
+    result = measure(args.task, num_envs, device, steps, args.warmup, with_c=not args.no_mujoco_c, **env_cfg)
     if args.json:
         print(json.dumps(result))
         return
     print(f"{result['task']} on {result['device']}: {num_envs} envs, {steps} steps after {args.warmup} warm-up "
-          f"(graph captured: {result['graph_captured']}), uniform random actions in [-1, 1]")  # fmt: skip
+          f"(graph captured: {result['graph_captured']}), uniform random actions in [-1, 1]"
+          + (f"; env options {env_cfg}" if env_cfg else ""))  # fmt: skip
     length = result["mean_episode_length"]
     print(f"  ours: {result['env_steps_per_s']:,.0f} env steps/s ({result['ms_per_step']:.1f} ms per step, "
           f"{result['episodes_ended']} episodes ended, mean length {length or float('nan'):.1f}); "

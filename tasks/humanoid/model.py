@@ -36,8 +36,8 @@ class SimOptions:
 
     substeps: int = 4
     control_dt: float = 1.0 / CONTROL_HZ
-    nconmax: int = 64  # contact points per world
-    njmax: int = 320  # constraint rows per world (4 per pyramidal contact + joint limits)
+    nconmax: int = 32  # contact points per world (MuJoCo Warp pools nconmax x worlds)
+    njmax: int = 160  # constraint rows per world (4 per pyramidal contact + joint limits)
     iterations: int = 100
     ls_iterations: int = 50
     integrator: str = "implicitfast"
