@@ -82,14 +82,18 @@ class HumanoidTrackingCfg(EnvCfg):
     """Newton solver iteration cap (MuJoCo's default); worlds stop at convergence (1.8 iterations on average).
     Capping at 3 moves bodies by up to 0.15 m in one control step from a cold start: not a safe speed-up."""
     solver_ls_iterations: int = 50
+
     option_rules = {  # valid values (refpo_warp.options)
         "conditioning": OneOf(CONDITIONING_REGIMES, fixed=True),
         "motion_file": Text(),
         "eval_mode": Flag(),
         "termination_distance": Real(0, 100, lo_open=True),
         "eval_termination_distance": Real(0, 100, lo_open=True),
+        **{f"reward_{t}_weight": Real(-1e6, 1e6) for t in TERMS[:4]},
+        **{f"reward_{t}_scale": Real(0, 1e6) for t in TERMS[:4]},
         "power_coef": Real(0, 1e3),
         "freeze_hands_toes": Flag(),
+        "residual_actions": Flag(),
         "max_joint_speed": Real(0, 1e6, lo_open=True),
         "substeps": Int(1, 100),
         "nconmax": Int(1, 100_000),
