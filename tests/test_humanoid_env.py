@@ -209,6 +209,11 @@ def test_observation_is_heading_invariant(env):
 
 
 def test_a_body_off_the_reference_terminates_the_episode(env):
+    # Start from the fixture's fresh state (seed 3, the reset at construction), so the new episode's random start
+    # does not depend on which tests ran before in this process: between frames the library interpolates body
+    # positions and joint angles separately (up to ~5e-5 m apart), and some start times miss the 1e-5 m check below.
+    env.reseed(3)
+    env.reset()
     env.reset()
     env.step(torch.zeros(3, 69))
     # Push world 1's whole body 0.3 m sideways: every body is now more than 0.25 m from the reference.
