@@ -34,14 +34,15 @@ def run_episodes(
             (returned as ``"observations"``, a TensorDict), for on-policy diagnostics.
 
     Returns:
-        Flat tensors over recorded episodes: ``return``, ``length`` and one entry per env episode metric, plus the
-        scalar count ``unfinished``.
+        Flat tensors over recorded episodes: ``return``, ``length`` (in env steps; whole chunks through an
+        action-chunk wrapper) and one entry per env episode metric, plus the scalar count ``unfinished``.
     """
     n = env.num_envs
     obs = env.reset() if reset else env.get_observations()
     max_steps = max_steps or episodes_per_env * int(env.max_episode_length)
     running_return = torch.zeros(n, device=env.device)
     running_length = torch.zeros(n, device=env.device)
+    env_steps_per_step = getattr(env, "env_steps_per_step", 1)  # an ActionChunkWrapper step is H env steps
     finished = torch.zeros(n, dtype=torch.long, device=env.device)
     records: dict[str, list[torch.Tensor]] = {"return": [], "length": []}
     metric_names = list(env.episode_metric_buffers)
@@ -56,7 +57,7 @@ def run_episodes(
         actions = policy(obs)
         obs, rewards, dones, _ = env.step(actions)
         running_return += rewards
-        running_length += 1
+        running_length += env_steps_per_step
         keep = dones & (finished < episodes_per_env)
         if keep.any():  # boolean indexing copies, so the records survive the in-place resets below
             records["return"].append(running_return[keep])

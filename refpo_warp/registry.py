@@ -80,7 +80,14 @@ def make_env(task_id: str, num_envs: int = 64, device: str = "auto", seed: int =
         device: ``"auto"`` (CUDA when available, else CPU), ``"cpu"`` or ``"cuda:N"``.
         seed: Seed of the per-env random streams.
         **env_cfg: Fields of the task's env cfg dataclass to override.
+
+    With ``action_chunk`` above 1 the env comes wrapped in an ``ActionChunkWrapper`` (H env steps per action).
     """
     spec = get_task(task_id)
     cfg = make_env_cfg(task_id, **env_cfg)
-    return spec.env_class()(cfg, num_envs=num_envs, device=device, seed=seed)
+    env = spec.env_class()(cfg, num_envs=num_envs, device=device, seed=seed)
+    if cfg.action_chunk > 1:
+        from refpo_warp.envs.action_chunk import ActionChunkWrapper
+
+        env = ActionChunkWrapper(env, cfg.action_chunk)
+    return env

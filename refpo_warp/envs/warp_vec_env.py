@@ -39,10 +39,17 @@ class EnvCfg:
     """What the env does with the policy's actions before its dynamics: ``clip`` to [-1, 1] (the task kernels
     clip), or ``tanh`` first (MuJoCo Playground sends tanh(action) to the env; the learner keeps the pre-tanh
     action, so every algorithm trains on what it sampled)."""
+    reset_group_size: int = 1
+    """Envs [g G, (g + 1) G) form group g: the k-th episode of every member starts from the same initial state (one
+    random stream per group and episode index; Flow-GRPO's groups). 1: an independent stream per env."""
+    action_chunk: int = 1
+    """Env steps per policy action: above 1, ``refpo_warp.registry.make_env`` wraps the env in an
+    ``ActionChunkWrapper`` whose actions are ``action_chunk`` env actions run open-loop (ReinFlow's horizon)."""
 
     # Valid values of the fields (refpo_warp.options); a subclass adds the rules of its own fields the same way.
     option_rules = {"max_episode_length": Int(1, 10_000_000), "graph_capture": Flag(),
-                    "action_transform": OneOf(ACTION_TRANSFORMS)}  # fmt: skip
+                    "action_transform": OneOf(ACTION_TRANSFORMS), "reset_group_size": Int(1, 1_000_000),
+                    "action_chunk": Int(1, 1000)}  # fmt: skip
 
     def __post_init__(self) -> None:
         values = {f.name: getattr(self, f.name) for f in fields(self)}
@@ -85,6 +92,9 @@ class WarpVecEnv(VecEnv):
         self.seed = int(seed)
         self.max_episode_length = int(cfg.max_episode_length)
 
+        self.reset_group_size = int(cfg.reset_group_size)
+        if self.num_envs % self.reset_group_size:
+            raise ValueError(f"env.reset_group_size ({cfg.reset_group_size}) must divide num_envs ({self.num_envs})")
         self.num_actions, obs_dims = self._spaces()
         n, dev = self.num_envs, self.device
         self._actions = torch.zeros(n, self.num_actions, device=dev)
@@ -112,6 +122,9 @@ class WarpVecEnv(VecEnv):
             metrics={k: wp.from_torch(v) for k, v in self._metrics.items()},
             final_obs={k: wp.from_torch(v) for k, v in self._final_obs.items()},
         )
+        if self.reset_group_size > 1:  # group streams: a per-env base seed and episode index
+            self._group_base = wp.zeros(n, dtype=wp.int32, device=self.wp_device)
+            self._episode_index = wp.zeros(n, dtype=wp.int32, device=self.wp_device)
         self.reseed(self.seed)
         self._graph = None
         self._steps_taken = 0
@@ -158,8 +171,10 @@ class WarpVecEnv(VecEnv):
 
     def reset_envs(self, mask: torch.Tensor) -> None:
         """Reset the envs selected by a boolean mask, leaving the others untouched."""
+        wp_mask = wp.from_torch(mask.to(self.device, torch.bool).contiguous(), dtype=wp.bool)
         with wp.ScopedDevice(self.wp_device):
-            self._reset_impl(wp.from_torch(mask.to(self.device, torch.bool).contiguous(), dtype=wp.bool))
+            self._reset_impl(wp_mask)
+            self._next_group_streams(wp_mask, wp_mask)
         keep = ~mask.to(self.device, torch.bool)
         self._terminated &= keep
         self._truncated &= keep
@@ -227,6 +242,13 @@ class WarpVecEnv(VecEnv):
         if self.cfg.action_transform == "tanh":
             self.transform_actions(self.buffers.actions)
         self._step_impl()
+        self._next_group_streams(self.buffers.terminated, self.buffers.truncated)
+
+    def _next_group_streams(self, ended_a, ended_b) -> None:
+        """After envs (``ended_a`` or ``ended_b``) drew their reset: point them at their group's next episode stream."""
+        if self.reset_group_size > 1:
+            wp.launch(_next_group_streams, dim=self.num_envs, device=self.wp_device,
+                      inputs=[ended_a, ended_b, self._group_base, self._episode_index, self.buffers.rng])  # fmt: skip
 
     def transform_actions(self, actions) -> None:
         """Apply ``action_transform`` in place to a Warp (num_envs, num_actions) array (``clip`` is the tasks')."""
@@ -245,7 +267,11 @@ class WarpVecEnv(VecEnv):
 
     def reseed(self, seed: int) -> None:
         """Restart every env's random stream from ``seed`` (gymnasium's ``reset(seed=...)``)."""
-        wp.launch(_seed_streams, dim=self.num_envs, inputs=[seed, self.buffers.rng], device=self.wp_device)
+        if self.reset_group_size > 1:
+            wp.launch(_seed_group_streams, dim=self.num_envs, device=self.wp_device,
+                      inputs=[seed, self.reset_group_size, self._group_base, self._episode_index, self.buffers.rng])
+        else:
+            wp.launch(_seed_streams, dim=self.num_envs, inputs=[seed, self.buffers.rng], device=self.wp_device)
 
 
 @wp.kernel
@@ -259,3 +285,23 @@ def _seed_streams(seed: int, rng: wp.array(dtype=wp.uint32)):
     # Independent counter-based random stream per env; kernels advance rng[i] in place.
     i = wp.tid()
     rng[i] = wp.rand_init(seed, i)
+
+
+@wp.kernel
+def _seed_group_streams(seed: int, group_size: int, base: wp.array(dtype=wp.int32),
+                        episode: wp.array(dtype=wp.int32), rng: wp.array(dtype=wp.uint32)):  # fmt: skip
+    # Stream of env i's k-th episode: rand_init(base of its group, k); kernels draw resets (and only resets) from it.
+    i = wp.tid()
+    base[i] = wp.int32(wp.rand_init(seed, i // group_size))
+    episode[i] = 0
+    rng[i] = wp.rand_init(base[i], 0)
+
+
+@wp.kernel
+def _next_group_streams(ended_a: wp.array(dtype=wp.bool), ended_b: wp.array(dtype=wp.bool),
+                        base: wp.array(dtype=wp.int32), episode: wp.array(dtype=wp.int32),
+                        rng: wp.array(dtype=wp.uint32)):  # fmt: skip
+    i = wp.tid()
+    if ended_a[i] or ended_b[i]:
+        episode[i] = episode[i] + 1
+        rng[i] = wp.rand_init(base[i], episode[i])

@@ -56,7 +56,7 @@ def action_field(actor, size: int, flow_steps: int | None, samples: int = 8, dev
     """Sampled actions at every cell: (size, size, samples, 2), indexed [y, x]."""
     ys, xs = torch.meshgrid(torch.arange(size), torch.arange(size), indexing="ij")
     cells = torch.stack([xs.reshape(-1), ys.reshape(-1)], dim=-1).repeat_interleave(samples, 0).to(device)
-    actions = _sample(actor, _obs(cells, size), flow_steps).clamp(-1, 1)
+    actions = _sample(actor, _obs(cells, size), flow_steps)[:, :2].clamp(-1, 1)  # an action chunk's first move
     return actions.reshape(size, size, samples, 2).cpu()
 
 
@@ -75,7 +75,7 @@ def rollouts(actor, env, flow_steps: int | None, starts=FIGURE_STARTS, episodes_
         # Positions before the step; an env that finishes this step auto-resets, so read its end cell from
         # the action (the grid moves are deterministic given the clipped, rounded action).
         before = env.positions.cpu().clone()
-        actions = _sample(actor, obs, flow_steps)
+        actions = _sample(actor, obs, flow_steps)[:, :2]  # an action chunk's first move, closed-loop
         obs, _, dones, _ = env.step(actions)
         move = torch.where(actions.abs() > 0.5, actions.sign(), torch.zeros_like(actions)).cpu().int()
         after = (before + move).clamp(0, env.cfg.size - 1)
@@ -94,8 +94,9 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
 
     size = int(cfg["env"].get("size", 25))
     device = next(actor.parameters()).device
+    env_cfg = {**cfg["env"], "action_chunk": 1, "reset_group_size": 1}  # one move per step from the set starts
     env = make_env(cfg["task"], num_envs=len(FIGURE_STARTS) * 20, device=str(device), seed=cfg["seed"] + 20_000,
-                   **cfg["env"])  # fmt: skip
+                   **env_cfg)  # fmt: skip
     written = []
     for n in FIGURE_FLOW_STEPS if hasattr(actor, "num_flow_steps") else (None,):
         suffix, policy = (f"_N{n}", f"{n}-step flow") if n else ("", "Gaussian policy")

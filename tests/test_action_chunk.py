@@ -1,0 +1,59 @@
+"""env.action_chunk (ReinFlow's horizon): one policy action runs H env steps open-loop; rewards add up to the episode's
+end, an episode that ends inside a chunk restarts from a reset state, lengths and metrics are per episode."""
+
+import pytest
+import torch
+
+from refpo_warp.envs.action_chunk import ActionChunkWrapper
+from refpo_warp.evaluation import run_episodes
+from refpo_warp.registry import make_env
+
+
+def test_a_chunk_is_h_env_steps_of_the_wrapped_env():
+    chunked = make_env("dmc_cartpole_swingup", num_envs=4, device="cpu", seed=3, action_chunk=3)
+    plain = make_env("dmc_cartpole_swingup", num_envs=4, device="cpu", seed=3)
+    assert isinstance(chunked, ActionChunkWrapper) and chunked.num_actions == 3 * plain.num_actions
+    assert chunked.max_episode_length == 334 and chunked.step_dt == pytest.approx(3 * plain.step_dt)
+    actions = torch.linspace(-1, 1, 4 * 6).reshape(4, 2, 3)  # (envs, chunks, sub-steps), one actuator
+    for c in range(2):
+        obs, rewards, dones, _ = chunked.step(actions[:, c])
+        expected = torch.zeros(4)
+        for h in range(3):
+            plain_obs, r, _, _ = plain.step(actions[:, c, h : h + 1])
+            expected += r
+        torch.testing.assert_close(rewards, expected)
+        torch.testing.assert_close(obs["policy"], plain_obs["policy"])
+        assert not dones.any()
+
+
+def goal_world(chunk: int, **cfg):
+    env = make_env("gridworld", num_envs=2, device="cpu", seed=1, action_chunk=chunk, **cfg)
+    env.reset_to(torch.tensor([[5, 3], [5, 12]]))  # env 0 two moves down from the bottom goal rows, env 1 in the middle
+    return env
+
+
+def test_an_episode_ending_inside_a_chunk_counts_its_rewards_once_and_restarts_fresh():
+    env = goal_world(3)
+    down = torch.tensor([0.0, -1.0]).repeat(2, 3)  # three moves down
+    obs, rewards, dones, extras = env.step(down)
+    # env 0: y 3 -> 2 -> 1 (goal, +20, done at sub-step 1); the third move ran in a new episode and is discarded
+    assert rewards.tolist() == [20.0, 0.0] and dones.tolist() == [True, False]
+    assert extras["time_outs"].tolist() == [False, False]
+    assert extras["log"]["Episode/success"].tolist() == [1.0] and env.episode_metric_buffers["success"][0] == 1.0
+    assert env.unwrapped.episode_length_buf.tolist() == [0, 3]  # env 0 starts a fresh episode, env 1 moved 3 times
+    assert env.positions[1].tolist() == [5, 9]
+    start = env.positions[0].clone()
+    assert 2 <= start[1] <= 22 and torch.equal(obs["policy"][0], (start.float() - 12) / 12)
+
+
+def test_time_outs_fall_on_chunk_boundaries_and_lengths_count_env_steps():
+    env = goal_world(3, max_episode_length=7)
+    assert env.max_episode_length == 3
+    env.episode_length_buf = torch.tensor([1, 2])  # rsl_rl's random initial lengths, in chunks
+    assert env.unwrapped.episode_length_buf.tolist() == [3, 6]
+    still = torch.zeros(2, 6)
+    _, _, dones, extras = env.step(still)  # env 1 times out at its 7th env step, the chunk's first sub-step
+    assert dones.tolist() == [False, True] and extras["time_outs"].tolist() == [False, True]
+    assert env.unwrapped.episode_length_buf.tolist() == [6, 0]
+    episodes = run_episodes(lambda obs: still, goal_world(3, max_episode_length=7))
+    assert episodes["length"].tolist() == [9.0, 9.0]  # 3 chunks of 3 env steps (the 7-step episode, rounded up)
