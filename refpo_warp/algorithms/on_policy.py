@@ -185,7 +185,8 @@ class OnPolicyAlgorithm(RslPPO):
                                          self.max_grad_norm)  # fmt: skip
             else:
                 nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
-                nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
+                if self.uses_critic:
+                    nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
             self._adapt_learning_rate(self.kl_estimate(stats))
             self.optimizer.step()
             for key, value in stats.items():
