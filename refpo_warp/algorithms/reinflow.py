@@ -1,0 +1,140 @@
+"""ReinFlow: PPO on the normalised log-likelihood of a flow policy's noisy Euler chain (Zhang et al. 2025).
+
+The actor (``refpo_warp.models:ReinFlowActor``) samples the chain x_0..x_K with learned exploration noise and gives
+its normalised log-probability and entropy. The rollout stores the chain and its log-probability in the algorithm's
+``TransitionStore``; each minibatch teacher-forces the stored chain under the current parameters and minimises
+
+    -min(rho A, clip(rho, 1 - e, 1 + e) A) - entropy_coef * H + value_loss_coef * L_value,
+    rho = exp(clamp(log pi_new) - clamp(log pi_old))
+
+with A the GAE advantage normalised per minibatch (``ppoflow.py``), the log-probabilities clamped to ``logprob_clip``
+(ReinFlow's gym configs: [-1, 1]), PPO clip 0.1, entropy 0.05 and value coefficient 0.3 (ReinFlow's 0.5 MSE x 0.6;
+rsl_rl's value loss has no 0.5) from the ReFPO paper's table (d). Action chunks (table (d): 4) come from the env
+option ``action_chunk`` (``refpo_warp.envs.action_chunk``): the actor's action is the whole chunk.
+
+``noise_decay_updates`` turns on ReinFlow's ``learn_decay`` bound: sigma_max is held for ``noise_hold_ratio`` of that
+many updates, then decays by a cosine to sigma_min + ``noise_decay_ratio`` (sigma_max - sigma_min). Off by default:
+the table's noise scheduler is "Linear", not ``learn_decay``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import torch
+from tensordict import TensorDict
+from torch import nn
+
+from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm
+
+
+def decayed_sigma_max(update: int, total: int, sigma_min: float, sigma_max: float, hold_ratio: float,
+                      decay_ratio: float) -> float:  # fmt: skip
+    """ReinFlow's ``learn_decay`` upper bound after ``update`` of ``total`` updates (see the module docstring)."""
+    floor = sigma_min + decay_ratio * (sigma_max - sigma_min)
+    hold = hold_ratio * total
+    if update <= hold:
+        return sigma_max
+    progress = min(1.0, (update - hold) / max(total - hold, 1e-9))
+    return floor + 0.5 * (sigma_max - floor) * (1.0 + math.cos(math.pi * progress))
+
+
+class ReinFlow(OnPolicyAlgorithm):
+    """ReinFlow on rsl_rl's PPO machinery (see the module docstring); defaults from the ReFPO paper's table (d).
+
+    Args (besides the shared ``OnPolicyAlgorithm`` options and rsl_rl's PPO arguments):
+        logprob_clip: [min, max] clamp of the old and new normalised log-probabilities; None: no clamp.
+        noise_decay_updates: Updates over which the noise bound decays (None: constant bounds).
+        noise_hold_ratio, noise_decay_ratio: ReinFlow's hold fraction (0.35) and decayed-bound ratio (0.7).
+        explosion_threshold: |log rho| above which a sample counts towards ``Flow/explosion_rate``.
+    """
+
+    def __init__(
+        self,
+        actor: nn.Module,
+        critic: nn.Module,
+        storage,
+        logprob_clip: list[float] | None = (-1.0, 1.0),
+        noise_decay_updates: int | None = None,
+        noise_hold_ratio: float = 0.35,
+        noise_decay_ratio: float = 0.7,
+        explosion_threshold: float = 3.0,
+        clip_param: float = 0.1,
+        entropy_coef: float = 0.05,
+        value_loss_coef: float = 0.3,
+        learning_rate: float = 3e-5,
+        gamma: float = 0.99,
+        lam: float = 0.95,
+        schedule: str = "fixed",
+        use_clipped_value_loss: bool = False,
+        normalize_advantage_per_mini_batch: bool = True,
+        **kwargs,
+    ) -> None:
+        if not (hasattr(actor, "sample_chain") and hasattr(actor, "chain_log_prob")):
+            raise TypeError("ReinFlow needs a noisy-chain actor; set actor.class_name to "
+                            "refpo_warp.models:ReinFlowActor")  # fmt: skip
+        if logprob_clip is not None and (len(logprob_clip) != 2 or logprob_clip[0] >= logprob_clip[1]):
+            raise ValueError(f"logprob_clip must be [min, max] with min < max, or None; got {logprob_clip}")
+        if noise_decay_updates is not None and noise_decay_updates < 1:
+            raise ValueError(f"noise_decay_updates must be >= 1 or None, got {noise_decay_updates}")
+        super().__init__(actor, critic, storage, clip_param=clip_param, entropy_coef=entropy_coef,
+                         value_loss_coef=value_loss_coef, learning_rate=learning_rate, gamma=gamma, lam=lam,
+                         schedule=schedule, use_clipped_value_loss=use_clipped_value_loss,
+                         normalize_advantage_per_mini_batch=normalize_advantage_per_mini_batch, **kwargs)  # fmt: skip
+        if self.bound_coef > 0:
+            warnings.warn("ReinFlow ignores bound_coef: its chain already clamps the action to [-1, 1].")
+        self.logprob_clip = None if logprob_clip is None else (float(logprob_clip[0]), float(logprob_clip[1]))
+        self.noise_decay_updates = None if noise_decay_updates is None else int(noise_decay_updates)
+        self.noise_hold_ratio = float(noise_hold_ratio)
+        self.noise_decay_ratio = float(noise_decay_ratio)
+        self.explosion_threshold = float(explosion_threshold)
+        self.initial_sigma_max = float(actor.sigma_max)
+
+    # ---------------------------------------------------------------------------------------------- rollout
+    def act(self, obs: TensorDict) -> torch.Tensor:
+        chain, log_prob = self.actor.sample_chain(obs)
+        self.store.write(self.storage.step, chain=chain, old_log_prob=log_prob)
+        t = self.transition
+        t.actions = chain[:, -1]
+        t.values = self.critic(obs).detach()
+        t.actions_log_prob = log_prob
+        t.distribution_params = ()
+        t.observations = obs
+        return t.actions
+
+    # ---------------------------------------------------------------------------------------------- update
+    def clamp_log_prob(self, log_prob: torch.Tensor) -> torch.Tensor:
+        return log_prob if self.logprob_clip is None else log_prob.clamp(*self.logprob_clip)
+
+    def policy_loss(self, batch: Minibatch) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        log_prob, entropy, std = self.actor.chain_log_prob(batch.observations, batch.field("chain"), with_entropy=True)
+        log_ratio = self.clamp_log_prob(log_prob) - self.clamp_log_prob(batch.field("old_log_prob"))
+        ratio = torch.exp(log_ratio)
+        adv = batch.advantages
+        surrogate = torch.max(-adv * ratio, -adv * ratio.clamp(1.0 - self.clip_param, 1.0 + self.clip_param)).mean()
+        entropy = entropy.mean()
+        loss = surrogate - self.entropy_coef * entropy
+        with torch.no_grad():
+            stats = {
+                "Flow/ratio_mean": ratio.mean(),
+                "Flow/ratio_max": ratio.max(),
+                "Flow/clip_fraction": ((ratio - 1.0).abs() > self.clip_param).float().mean(),
+                "Flow/explosion_rate": (log_ratio.abs() > self.explosion_threshold).float().mean(),
+                "Flow/approx_kl": ((ratio - 1.0) - log_ratio).mean(),
+                "Flow/noise_std": std.detach(),
+            }
+        stats.update(surrogate=surrogate, entropy=entropy)
+        return loss, stats
+
+    def kl_estimate(self, stats: dict[str, torch.Tensor]) -> torch.Tensor | None:
+        return stats.get("Flow/approx_kl")
+
+    def update(self) -> dict[str, float]:
+        out = super().update()
+        if self.noise_decay_updates is not None:
+            value = decayed_sigma_max(self.num_updates, self.noise_decay_updates, self.actor.sigma_min,
+                                      self.initial_sigma_max, self.noise_hold_ratio, self.noise_decay_ratio)  # fmt: skip
+            self.actor.sigma_max.fill_(value)
+        out["Flow/sigma_max"] = float(self.actor.sigma_max)
+        return out

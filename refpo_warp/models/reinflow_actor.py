@@ -1,0 +1,263 @@
+"""ReinFlowActor: a flow policy with a learned exploration-noise network, sampled as a noisy Euler chain (ReinFlow).
+
+Following ``ReinFlow/ReinFlow`` (``model/flow/mlp_flow.py`` ``NoisyFlowMLP``, ``ft_ppo/ppoflow.py``), in the project's
+flow time (tau = 0 noise, tau = 1 action) with K = ``num_flow_steps``, t_k = k / K and D = the action size (a whole
+action chunk when the env is wrapped in chunks):
+
+    x_0 ~ N(0, I);   mu_k = clamp(x_k + v(x_k, t_k; o) / K, +-denoised_clip)
+    x_{k+1} = mu_k + std_k * clamp(z, +-randn_clip),   z ~ N(0, I);   x_K clamped to +-action_clip
+
+The noise sigma_k is learned on the last ``ft_denoising_steps`` steps by the noise network (an MLP with Tanh on
+[time embedding of t_k, normalised observation]) and bounded through
+log sigma^2 = log sigma_min^2 + (log sigma_max^2 - log sigma_min^2) (tanh(h) + 1) / 2; earlier steps use the fixed
+schedule (``lin``: 0.1 t, ``vp``: sqrt(0.2 t (1 - t)), ``const``: sigma_min), clamped to [sigma_min, sigma_max].
+The std actually sampled with is std_k = max(sigma_k, ``min_sampling_std``).
+
+Chain log-likelihood and entropy, each divided by the number of terms (K + 1) and by D (ReinFlow's two normalisations):
+    log pi = [log N(x_0; 0, I) + sum_k log N(x_{k+1}; mu_k, std_k^2 I)] / ((K + 1) D)
+    H      = [D c + sum_k sum_d (c + log std_k,d)] / ((K + 1) D),   c = log(2 pi e) / 2
+Both use the time grid and the std the chain was sampled with (our choice: the original recomputes its log-probs on
+another time grid and without the std floor, see docs/algorithms.md).
+
+Deterministic sampling (evaluation) runs the same chain without noise (clamps kept), from random or zero x_0.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import torch
+from rsl_rl.modules import EmpiricalNormalization
+from rsl_rl.utils import resolve_nn_activation
+from tensordict import TensorDict
+from torch import nn
+
+from refpo_warp.models.normalization import with_clip
+from refpo_warp.models.velocity_field import VelocityField
+
+NOISE_SCHEDULES = ("lin", "vp", "const")
+INITIAL_NOISE = ("random", "zero")
+GAUSSIAN_ENTROPY = 0.5 * math.log(2.0 * math.pi * math.e)
+LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
+
+
+def fixed_sigma(t: float, schedule: str, sigma_min: float, sigma_max: float) -> float:
+    """ReinFlow's schedule for the steps without learned noise, clamped to [sigma_min, sigma_max]."""
+    if schedule == "lin":
+        sigma = 0.1 * t
+    elif schedule == "vp":
+        sigma = math.sqrt(0.2 * t * (1.0 - t))
+    elif schedule == "const":
+        sigma = sigma_min
+    else:
+        raise ValueError(f"noise_schedule must be one of {NOISE_SCHEDULES}, got '{schedule}'")
+    return min(max(sigma, sigma_min), sigma_max)
+
+
+class ReinFlowActor(nn.Module):
+    """ReinFlow's noisy flow policy with the constructor and model protocol of rsl_rl's ``MLPModel``.
+
+    Args (besides rsl_rl's obs, obs_groups, obs_set, output_dim):
+        hidden_dims, activation, obs_normalization, obs_clip: The velocity MLP and observation normalisation.
+        distribution_cfg: Accepted for config compatibility and ignored (the chain defines the distribution).
+        num_flow_steps: K, denoising steps (table (d): 4).
+        time_embed_dim: Channels of the time embedding (table (d): 16).
+        output_scale: Multiplier on the velocity head.
+        noise_hidden_dims, noise_activation: The noise network (ReinFlow gym configs: [64, 64], Tanh).
+        ft_denoising_steps: Steps (the last ones) whose noise is learned (table (d): 2).
+        sigma_min, sigma_max: Bounds of sigma (table (d): [0.08, 0.16]).
+        noise_schedule: Fixed sigma of the other steps: ``lin`` (table (d) "Linear"), ``vp`` or ``const``.
+        min_sampling_std: Floor of the std sampled with (table (d): 0.10).
+        denoised_clip: Clamp of every step mean (ReinFlow: 1).
+        randn_clip: Truncation of the noise in stds (ReinFlow: 3).
+        action_clip: Clamp of the final action (table (d) action range [-1, 1]).
+    """
+
+    is_recurrent: bool = False
+
+    def __init__(
+        self,
+        obs: TensorDict,
+        obs_groups: dict[str, list[str]],
+        obs_set: str,
+        output_dim: int,
+        hidden_dims: tuple[int, ...] | list[int] = (256, 256, 256),
+        activation: str = "elu",
+        obs_normalization: bool = False,
+        distribution_cfg: dict | None = None,
+        num_flow_steps: int = 4,
+        time_embed_dim: int = 16,
+        output_scale: float = 1.0,
+        noise_hidden_dims: tuple[int, ...] | list[int] = (64, 64),
+        noise_activation: str = "tanh",
+        ft_denoising_steps: int = 2,
+        sigma_min: float = 0.08,
+        sigma_max: float = 0.16,
+        noise_schedule: str = "lin",
+        min_sampling_std: float = 0.10,
+        denoised_clip: float = 1.0,
+        randn_clip: float = 3.0,
+        action_clip: float = 1.0,
+        obs_clip: float | None = None,
+    ) -> None:
+        super().__init__()
+        if distribution_cfg is not None:
+            warnings.warn("ReinFlowActor ignores distribution_cfg: its noisy Euler chain defines the distribution.")
+        if int(num_flow_steps) < 1:
+            raise ValueError(f"num_flow_steps must be >= 1, got {num_flow_steps}")
+        if not 0 <= int(ft_denoising_steps) <= int(num_flow_steps):
+            raise ValueError(f"ft_denoising_steps must be in [0, num_flow_steps], got {ft_denoising_steps}")
+        if not 0 < sigma_min <= sigma_max:
+            raise ValueError(f"need 0 < sigma_min <= sigma_max, got [{sigma_min}, {sigma_max}]")
+        if noise_schedule not in NOISE_SCHEDULES:
+            raise ValueError(f"noise_schedule must be one of {NOISE_SCHEDULES}, got '{noise_schedule}'")
+        self.obs_groups = list(obs_groups[obs_set])
+        for group in self.obs_groups:
+            if obs[group].dim() != 2:
+                raise ValueError(f"ReinFlowActor needs 1-D observation groups; '{group}' has shape {obs[group].shape}")
+        self.obs_dim = sum(obs[g].shape[-1] for g in self.obs_groups)
+        self.action_dim = int(output_dim)
+        self.obs_normalization = obs_normalization
+        self.obs_normalizer = with_clip(EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity(),
+                                        obs_clip)  # fmt: skip
+        self.velocity = VelocityField(self.obs_dim, self.action_dim, hidden_dims, activation, time_embed_dim,
+                                      output_scale)  # fmt: skip
+        layers, width = [], time_embed_dim + self.obs_dim
+        for hidden in noise_hidden_dims:
+            layers += [nn.Linear(width, hidden), resolve_nn_activation(noise_activation)]
+            width = hidden
+        self.noise_net = nn.Sequential(*layers, nn.Linear(width, self.action_dim))
+        self.num_flow_steps = int(num_flow_steps)
+        self.ft_denoising_steps = int(ft_denoising_steps)
+        self.sigma_min = float(sigma_min)
+        self.register_buffer("sigma_max", torch.tensor(float(sigma_max)))  # decayed by the algorithm, checkpointed
+        self.noise_schedule = noise_schedule
+        self.min_sampling_std = float(min_sampling_std)
+        self.denoised_clip = float(denoised_clip)
+        self.randn_clip = float(randn_clip)
+        self.action_clip = float(action_clip)
+        self._last_actions = torch.zeros(1, self.action_dim)
+
+    # ------------------------------------------------------------------------------------------------ the chain
+    def encode(self, obs: TensorDict) -> torch.Tensor:
+        """Concatenate this actor's observation groups and normalise them (clamped to ``obs_clip`` if set)."""
+        return self.obs_normalizer(torch.cat([obs[g] for g in self.obs_groups], dim=-1))
+
+    def step_std(self, obs_norm: torch.Tensor, k: int, num_steps: int) -> torch.Tensor:
+        """The std step k samples with, max(sigma_k, min_sampling_std), shape (B, D)."""
+        t = k / num_steps
+        if k >= num_steps - self.ft_denoising_steps:
+            time = self.velocity.embedding(obs_norm.new_full((obs_norm.shape[0],), t)).detach()
+            h = torch.tanh(self.noise_net(torch.cat([time, obs_norm], dim=-1)))
+            log_min, log_max = 2.0 * math.log(self.sigma_min), 2.0 * torch.log(self.sigma_max)
+            sigma = torch.exp(0.5 * (log_min + (log_max - log_min) * (h + 1.0) / 2.0))
+        else:
+            fixed = fixed_sigma(t, self.noise_schedule, self.sigma_min, math.inf)
+            sigma = obs_norm.new_full((obs_norm.shape[0], self.action_dim), fixed).minimum(self.sigma_max)
+        return sigma.clamp(min=self.min_sampling_std)
+
+    def step_mean(self, obs_feat: torch.Tensor, x: torch.Tensor, k: int, num_steps: int) -> torch.Tensor:
+        tau = x.new_full(x.shape[:-1], k / num_steps)
+        return (x + self.velocity(obs_feat, x, tau) / num_steps).clamp(-self.denoised_clip, self.denoised_clip)
+
+    def run_chain(self, obs: TensorDict, num_steps: int, noisy: bool, x0: torch.Tensor) -> torch.Tensor:
+        """The chain x_0..x_K (B, K + 1, D) from ``x0``, with the truncated noise if ``noisy``."""
+        obs_norm = self.encode(obs)
+        obs_feat = self.velocity.project_obs(obs_norm)
+        x, chain = x0, [x0]
+        for k in range(num_steps):
+            x = self.step_mean(obs_feat, x, k, num_steps)
+            if noisy:
+                z = torch.randn_like(x).clamp(-self.randn_clip, self.randn_clip)
+                x = x + self.step_std(obs_norm, k, num_steps) * z
+            if k == num_steps - 1:
+                x = x.clamp(-self.action_clip, self.action_clip)
+            chain.append(x)
+        return torch.stack(chain, dim=1)
+
+    def chain_log_prob(self, obs: TensorDict, chain: torch.Tensor, with_entropy: bool = False):
+        """Normalised log pi (B,) of a stored chain (B, K + 1, D), teacher-forced; with ``with_entropy`` also the
+        normalised chain entropy (B,) and the mean std (see the module docstring)."""
+        num_steps = chain.shape[1] - 1
+        obs_norm = self.encode(obs)
+        obs_feat = self.velocity.project_obs(obs_norm)
+        x = chain[:, :-1]
+        tau = (torch.arange(num_steps, device=chain.device, dtype=chain.dtype) / num_steps).expand(x.shape[:-1])
+        mean = (x + self.velocity(obs_feat, x, tau) / num_steps).clamp(-self.denoised_clip, self.denoised_clip)
+        std = torch.stack([self.step_std(obs_norm, k, num_steps) for k in range(num_steps)], dim=1)
+        transitions = -(chain[:, 1:] - mean).square() / (2.0 * std.square()) - torch.log(std) - LOG_SQRT_2PI
+        initial = -0.5 * chain[:, 0].square() - LOG_SQRT_2PI
+        terms = (num_steps + 1) * self.action_dim
+        log_prob = (initial.sum(dim=-1) + transitions.sum(dim=(1, 2))) / terms
+        if not with_entropy:
+            return log_prob
+        entropy = (terms * GAUSSIAN_ENTROPY + torch.log(std).sum(dim=(1, 2))) / terms
+        return log_prob, entropy, std.mean()
+
+    # ------------------------------------------------------------------------------------------------ sampling
+    def sample(self, obs: TensorDict, num_steps: int | None = None, initial_noise: str = "random",
+               perturbation: bool = False, noise: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
+        """Actions from the chain with ``num_steps`` steps (default K) from random, zero or the given x_0: the
+        deterministic chain, or with ``perturbation`` the noisy one the rollout samples."""
+        n = int(num_steps or self.num_flow_steps)
+        if n < 1:
+            raise ValueError(f"num_steps must be >= 1, got {n}")
+        if initial_noise not in INITIAL_NOISE:
+            raise ValueError(f"initial_noise must be one of {INITIAL_NOISE}, got '{initial_noise}'")
+        if noise is None:
+            first = next(iter(obs.values()))
+            shape = (first.shape[0], self.action_dim)
+            noise = torch.randn(shape, device=first.device) if initial_noise == "random" else first.new_zeros(shape)
+        actions = self.run_chain(obs, n, perturbation, noise)[:, -1]
+        self._last_actions = actions.detach()
+        return actions
+
+    def sample_chain(self, obs: TensorDict) -> tuple[torch.Tensor, torch.Tensor]:
+        """A rollout sample: the noisy chain (B, K + 1, D) from random x_0 and its normalised log-probability (B,)."""
+        first = next(iter(obs.values()))
+        chain = self.run_chain(obs, self.num_flow_steps, True, torch.randn(first.shape[0], self.action_dim,
+                                                                            device=first.device))  # fmt: skip
+        self._last_actions = chain[:, -1].detach()
+        return chain, self.chain_log_prob(obs, chain)
+
+    def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False,
+                num_steps: int | None = None) -> torch.Tensor:  # fmt: skip
+        """rsl_rl's model call: the noisy chain from random x_0 with ``stochastic_output``, else the deterministic
+        chain from zero x_0 (what inference uses)."""
+        if stochastic_output:
+            return self.sample(obs, num_steps, "random", perturbation=True)
+        return self.sample(obs, num_steps, "zero", perturbation=False)
+
+    # ------------------------------------------------------------------------------------------------ rsl_rl model protocol
+    def reset(self, dones: torch.Tensor | None = None, hidden_state=None) -> None:
+        pass
+
+    def get_hidden_state(self):
+        return None
+
+    def detach_hidden_state(self, dones: torch.Tensor | None = None) -> None:
+        pass
+
+    def update_normalization(self, obs: TensorDict) -> None:
+        if self.obs_normalization:
+            self.obs_normalizer.update(torch.cat([obs[g] for g in self.obs_groups], dim=-1))
+
+    @property
+    def output_mean(self) -> torch.Tensor:
+        return self._last_actions.mean(dim=0)
+
+    @property
+    def output_std(self) -> torch.Tensor:
+        """Per-dimension spread of the last sampled batch (rsl_rl logs it as the policy's action std)."""
+        if self._last_actions.shape[0] < 2:
+            return torch.zeros(self.action_dim)
+        return self._last_actions.std(dim=0)
+
+    def get_output_log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
+        raise NotImplementedError("ReinFlowActor's likelihood is that of its whole chain; train it with "
+                                  "refpo_warp.algorithms:ReinFlow, not with rsl_rl's PPO.")  # fmt: skip
+
+    @property
+    def output_entropy(self) -> torch.Tensor:
+        raise NotImplementedError("ReinFlowActor's entropy is that of its whole chain (chain_log_prob).")
