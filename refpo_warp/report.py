@@ -168,7 +168,8 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         "algo": cfg["algo"],
         "seed": cfg["seed"],
         "checkpoint_iteration": runner.current_learning_iteration,
-        "env_steps": (runner.current_learning_iteration + 1) * cfg["num_envs"] * cfg["runner"]["num_steps_per_env"],
+        "env_steps": ((runner.current_learning_iteration + 1) * cfg["num_envs"] * cfg["runner"]["num_steps_per_env"]
+                      * cfg["env"].get("action_chunk", 1)),  # a policy step of an action-chunk env is H env steps
         "eval_envs": env.num_envs,
         "protocol": ({"initial_noise": cfg["eval"]["initial_noise"], "perturbation": bool(cfg["eval"]["perturbation"])}
                      if flow else {"mean_action": True}),  # fmt: skip

@@ -1,16 +1,18 @@
 #!/usr/bin/env python
-"""Benchmarks: python tools/bench.py <gridworld|dmc|humanoid|all|latency> [options of that benchmark]
+"""Benchmarks: python tools/bench.py <gridworld|dmc|humanoid|all|latency|algorithms> [options of that benchmark]
 
 Each family's benchmark lives in tasks/<family>/bench.py; `python tools/bench.py dmc --help` shows its options.
 `all` runs the three families. `latency` (refpo_warp/latency.py) times action generation at N = 10 vs N = 1 for
 chosen tasks and algorithms; `--json PATH` writes the rows for `tools/report.py` (the latency figure).
+`algorithms` (refpo_warp/algorithm_bench.py) times the update of every algorithm on one batch size, as ratios to
+FPO.
 """
 
 import importlib
 import sys
 
 FAMILIES = ("gridworld", "dmc", "humanoid")
-OTHERS = {"latency": "refpo_warp.latency"}  # benchmarks that are not a task family
+OTHERS = {"latency": "refpo_warp.latency", "algorithms": "refpo_warp.algorithm_bench"}  # not a task family
 
 
 def main(argv: list[str]) -> int:
