@@ -82,8 +82,9 @@ def test_a_typo_fails_before_anything_starts(tmp_path):
 def test_named_sweeps_resolve():
     paper = load_sweep("paper_dmc")
     assert len(paper.tasks) == 10 and paper.seeds == [1, 2, 3, 4, 5] and paper.device == "cuda"
-    assert [m.label for m in paper.methods] == ["ppo", "fpo", "refpo", "refpo_l0.02", "refpo_l0.08", "refpo_l0.12"]
-    assert len(validate(paper)) == 300
+    assert [m.label for m in paper.methods] == ["ppo", "fpo", "refpo", "refpo_l0.02", "refpo_l0.08", "refpo_l0.12",
+                                                "refpo_aw", "flow_grpo", "reinflow"]  # fmt: skip
+    assert len(validate(paper)) == 450
     cfg = resolve_config(parse_overrides([*paper.runs[2].args, "device=cuda"]), device_type="cuda")
     assert (cfg["num_envs"], cfg["total_env_steps"], cfg["algorithm"]["reflow_coef"]) == (2048, 100_000_000, 0.04)
     cpu = load_sweep("cpu_dmc")

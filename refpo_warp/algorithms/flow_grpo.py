@@ -33,6 +33,7 @@ from torch import nn
 
 from refpo_warp.algorithms.flow_sde import gaussian_log_prob, sample_sde_chain, sde_grid, sde_means
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm
+from refpo_warp.options import Flag, Int, OneOf, Real
 
 KL_REFERENCES = ("rollout", "initial")
 GROUP_STD = ("global", "group")
@@ -89,6 +90,18 @@ class FlowGRPO(OnPolicyAlgorithm):
     """
 
     uses_critic = False
+    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.options)
+        "noise_level": Real(0, 100, lo_open=True),  # the log-probabilities need noise
+        "feather_std": Real(0, 100),
+        "feather_in_chain": Flag(),
+        "kl_coef": Real(0, 1e6),
+        "kl_reference": OneOf(KL_REFERENCES),
+        "group_size": Int(2, 1_000_000, optional=True),
+        "group_std": OneOf(GROUP_STD),
+        "adv_clip": Real(0, None, lo_open=True, optional=True),
+        "timestep_fraction": Real(0, 1, lo_open=True),
+        "explosion_threshold": Real(0, None, lo_open=True),
+    }
 
     def __init__(
         self,
@@ -114,14 +127,6 @@ class FlowGRPO(OnPolicyAlgorithm):
     ) -> None:
         if not (hasattr(actor, "velocity") and hasattr(actor, "encode") and hasattr(actor, "num_flow_steps")):
             raise TypeError("FlowGRPO needs a flow actor; set actor.class_name to refpo_warp.models:FlowActor")
-        if kl_reference not in KL_REFERENCES:
-            raise ValueError(f"kl_reference must be one of {KL_REFERENCES}, got '{kl_reference}'")
-        if group_std not in GROUP_STD:
-            raise ValueError(f"group_std must be one of {GROUP_STD}, got '{group_std}'")
-        if not 0.0 < timestep_fraction <= 1.0:
-            raise ValueError(f"timestep_fraction must be in (0, 1], got {timestep_fraction}")
-        if noise_level <= 0:
-            raise ValueError(f"noise_level must be > 0 (the log-probabilities need noise), got {noise_level}")
         super().__init__(actor, critic, storage, clip_param=clip_param, learning_rate=learning_rate,
                          schedule=schedule, entropy_coef=entropy_coef, value_loss_coef=value_loss_coef,
                          **kwargs)  # fmt: skip

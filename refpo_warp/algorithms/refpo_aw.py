@@ -20,6 +20,7 @@ import torch.nn.functional as F
 
 from refpo_warp.algorithms.on_policy import Minibatch
 from refpo_warp.algorithms.refpo import ReFPO
+from refpo_warp.options import OneOf
 
 REFLOW_WEIGHTINGS = ("positive", "softplus", "relu", "trajectory")
 
@@ -59,9 +60,9 @@ def segment_returns(rewards: torch.Tensor, dones: torch.Tensor) -> torch.Tensor:
 class AdvantageWeightedReFPO(ReFPO):
     """ReFPO with the Reflow term weighted by the advantage (``reflow_weighting``, see the module docstring)."""
 
+    option_rules = {"reflow_weighting": OneOf(REFLOW_WEIGHTINGS)}  # checked by the resolver and the constructor
+
     def __init__(self, actor, critic, storage, reflow_weighting: str = "positive", **kwargs) -> None:
-        if reflow_weighting not in REFLOW_WEIGHTINGS:
-            raise ValueError(f"reflow_weighting must be one of {REFLOW_WEIGHTINGS}, got '{reflow_weighting}'")
         super().__init__(actor, critic, storage, **kwargs)
         self.reflow_weighting = reflow_weighting
 

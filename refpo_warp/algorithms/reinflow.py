@@ -27,6 +27,8 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm
+from refpo_warp.errors import ConfigError
+from refpo_warp.options import Check, Int, ListOf, Real
 
 
 def decayed_sigma_max(update: int, total: int, sigma_min: float, sigma_max: float, hold_ratio: float,
@@ -40,6 +42,13 @@ def decayed_sigma_max(update: int, total: int, sigma_min: float, sigma_max: floa
     return floor + 0.5 * (sigma_max - floor) * (1.0 + math.cos(math.pi * progress))
 
 
+def log_prob_range(key: str, value) -> list[float]:
+    low, high = ListOf(Real(-1e6, 1e6), min_len=2, max_len=2).check(key, value)
+    if low >= high:
+        raise ConfigError(f"{key}={value} is invalid: the minimum must be below the maximum")
+    return [low, high]
+
+
 class ReinFlow(OnPolicyAlgorithm):
     """ReinFlow on rsl_rl's PPO machinery (see the module docstring); defaults from the ReFPO paper's table (d).
 
@@ -49,6 +58,14 @@ class ReinFlow(OnPolicyAlgorithm):
         noise_hold_ratio, noise_decay_ratio: ReinFlow's hold fraction (0.35) and decayed-bound ratio (0.7).
         explosion_threshold: |log rho| above which a sample counts towards ``Flow/explosion_rate``.
     """
+
+    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.options)
+        "logprob_clip": Check(log_prob_range, "null or [min, max] with min < max", optional=True),
+        "noise_decay_updates": Int(1, None, optional=True),
+        "noise_hold_ratio": Real(0, 1),
+        "noise_decay_ratio": Real(0, 1),
+        "explosion_threshold": Real(0, None, lo_open=True),
+    }
 
     def __init__(
         self,
@@ -74,10 +91,6 @@ class ReinFlow(OnPolicyAlgorithm):
         if not (hasattr(actor, "sample_chain") and hasattr(actor, "chain_log_prob")):
             raise TypeError("ReinFlow needs a noisy-chain actor; set actor.class_name to "
                             "refpo_warp.models:ReinFlowActor")  # fmt: skip
-        if logprob_clip is not None and (len(logprob_clip) != 2 or logprob_clip[0] >= logprob_clip[1]):
-            raise ValueError(f"logprob_clip must be [min, max] with min < max, or None; got {logprob_clip}")
-        if noise_decay_updates is not None and noise_decay_updates < 1:
-            raise ValueError(f"noise_decay_updates must be >= 1 or None, got {noise_decay_updates}")
         super().__init__(actor, critic, storage, clip_param=clip_param, entropy_coef=entropy_coef,
                          value_loss_coef=value_loss_coef, learning_rate=learning_rate, gamma=gamma, lam=lam,
                          schedule=schedule, use_clipped_value_loss=use_clipped_value_loss,

@@ -35,6 +35,8 @@ from torch import nn
 
 from refpo_warp.models.normalization import with_clip
 from refpo_warp.models.velocity_field import VelocityField
+from refpo_warp.options import Check, Flag, Int, OneOf, Real, checks_options
+from refpo_warp.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS, mapping_or_none
 
 NOISE_SCHEDULES = ("lin", "vp", "const")
 INITIAL_NOISE = ("random", "zero")
@@ -55,6 +57,7 @@ def fixed_sigma(t: float, schedule: str, sigma_min: float, sigma_max: float) -> 
     return min(max(sigma, sigma_min), sigma_max)
 
 
+@checks_options
 class ReinFlowActor(nn.Module):
     """ReinFlow's noisy flow policy with the constructor and model protocol of rsl_rl's ``MLPModel``.
 
@@ -75,6 +78,26 @@ class ReinFlowActor(nn.Module):
     """
 
     is_recurrent: bool = False
+    option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.options)
+        "hidden_dims": HIDDEN_DIMS,
+        "activation": OneOf(ACTIVATIONS),
+        "obs_normalization": Flag(),
+        "distribution_cfg": Check(mapping_or_none, "null (ignored: the chain defines the distribution)", optional=True),
+        "num_flow_steps": Int(1, 1000),
+        "time_embed_dim": Int(2, 1024, multiple_of=2),
+        "output_scale": Real(0, 1e6, lo_open=True),
+        "noise_hidden_dims": HIDDEN_DIMS,
+        "noise_activation": OneOf(ACTIVATIONS),
+        "ft_denoising_steps": Int(0, 1000),
+        "sigma_min": Real(0, 100, lo_open=True, fixed=False),
+        "sigma_max": Real(0, 100, lo_open=True, fixed=False),
+        "noise_schedule": OneOf(NOISE_SCHEDULES, fixed=False),
+        "min_sampling_std": Real(0, 100, fixed=False),
+        "denoised_clip": Real(0, 1e6, lo_open=True, fixed=False),
+        "randn_clip": Real(0, 1e6, lo_open=True, fixed=False),
+        "action_clip": Real(0, 1e6, lo_open=True, fixed=False),
+        "obs_clip": Real(0, 1e6, lo_open=True, optional=True),
+    }
 
     def __init__(
         self,
@@ -104,14 +127,11 @@ class ReinFlowActor(nn.Module):
         super().__init__()
         if distribution_cfg is not None:
             warnings.warn("ReinFlowActor ignores distribution_cfg: its noisy Euler chain defines the distribution.")
-        if int(num_flow_steps) < 1:
-            raise ValueError(f"num_flow_steps must be >= 1, got {num_flow_steps}")
-        if not 0 <= int(ft_denoising_steps) <= int(num_flow_steps):
-            raise ValueError(f"ft_denoising_steps must be in [0, num_flow_steps], got {ft_denoising_steps}")
-        if not 0 < sigma_min <= sigma_max:
-            raise ValueError(f"need 0 < sigma_min <= sigma_max, got [{sigma_min}, {sigma_max}]")
-        if noise_schedule not in NOISE_SCHEDULES:
-            raise ValueError(f"noise_schedule must be one of {NOISE_SCHEDULES}, got '{noise_schedule}'")
+        if ft_denoising_steps > num_flow_steps:
+            raise ValueError(f"ft_denoising_steps ({ft_denoising_steps}) must not exceed num_flow_steps "
+                             f"({num_flow_steps})")  # fmt: skip
+        if sigma_min > sigma_max:
+            raise ValueError(f"sigma_min ({sigma_min}) must not exceed sigma_max ({sigma_max})")
         self.obs_groups = list(obs_groups[obs_set])
         for group in self.obs_groups:
             if obs[group].dim() != 2:
