@@ -1,7 +1,7 @@
 """Update time of every algorithm on one batch size: python tools/bench.py algorithms [--task T] [--envs E] ...
 
 Each algorithm is built from its config for the task (its own actor, pairs/chain and losses), collects one rollout
-of ``envs x steps`` transitions and times ``update()`` (median of ``--repeats`` fresh rollouts) with the same number
+of ``envs x steps`` transitions and times ``update()`` (median of ``--repeats`` fresh rollouts, 5 by default) with the same number
 of passes and minibatches for all, so the ratio to FPO is the per-transition cost of each method's update. A second
 ratio scales each time to the paper's settings per env step (DMC tables (a)-(d): 16 passes for PPO/FPO/ReFPO, 8 for
 Flow-GRPO and ReinFlow, and ReinFlow's transitions are chunks of 4 env steps).
@@ -66,7 +66,7 @@ def main(argv: list[str]) -> None:
     parser.add_argument("--steps", type=int, default=60, help="policy steps per env and rollout")
     parser.add_argument("--minibatches", type=int, default=8)
     parser.add_argument("--passes", type=int, default=2)
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--algos", nargs="+", default=list(ALGORITHMS), choices=ALGORITHMS)
     parser.add_argument("--device", default="auto")
     args = parser.parse_args(argv)
