@@ -1,8 +1,9 @@
 """Update time of every algorithm on one batch size: python tools/bench.py algorithms [--task T] [--envs E] ...
 
 Each algorithm is built from its config for the task (its own actor, pairs/chain and losses), collects one rollout
-of ``envs x steps`` transitions and times ``update()`` (median of ``--repeats`` fresh rollouts, 5 by default) with the same number
-of passes and minibatches for all, so the ratio to FPO is the per-transition cost of each method's update. A second
+of ``envs x steps`` transitions and times ``update()`` (median of ``--repeats`` fresh rollouts, 5 by default) with
+the same number of passes and minibatches for all, so the ratio to FPO is the per-transition cost of each method's
+update. A second
 ratio scales each time to the paper's settings per env step (DMC tables (a)-(d): 16 passes for PPO/FPO/ReFPO, 8 for
 Flow-GRPO and ReinFlow, and ReinFlow's transitions are chunks of 4 env steps).
 """
@@ -83,7 +84,8 @@ def main(argv: list[str]) -> None:
         seconds[algo] = update_time(alg, env, device, args.repeats)
         chunks[algo] = cfg["env"].get("action_chunk", 1)
     per_env_step = {a: seconds[a] / args.passes * PAPER_PASSES[a] / chunks[a] for a in seconds}
-    rows = [{"algorithm": NAMES[a], "update (s)": f"{seconds[a]:.3f}", "ratio to FPO": f"{seconds[a] / seconds['fpo']:.2f}",
+    rows = [{"algorithm": NAMES[a], "update (s)": f"{seconds[a]:.3f}",
+             "ratio to FPO": f"{seconds[a] / seconds['fpo']:.2f}",
              "paper passes, per env step, ratio to FPO": f"{per_env_step[a] / per_env_step['fpo']:.2f}"}
             for a in seconds]  # fmt: skip
     print_table(rows, ["algorithm", "update (s)", "ratio to FPO", "paper passes, per env step, ratio to FPO"])

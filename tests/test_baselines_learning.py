@@ -42,7 +42,8 @@ def initial_return(overrides: list[str], flow_steps: int) -> float:
 # their checks are kept but not run by default; `pytest -m slow --runxfail tests/test_baselines_learning.py` runs them.
 NOT_MET = {
     "flow_grpo": "measured on 2 cores: N=10 return 312 -> 340 at 450k env steps (47 s); flat (~330) at 1M env steps: "
-                 "group members share only their episode starts, so most group comparisons are between different states",
+                 "group members share only their episode starts, so most group comparisons are between different "
+                 "states",
     "reinflow": "measured on 2 cores: N=4 return 326 -> 187 at 1.47M env steps (a peak of 390, then a collapse); the "
                 "same profile on 1 thread reached 563; unstable at every learning rate tried (1e-3, 3e-4, 1e-4)",
 }

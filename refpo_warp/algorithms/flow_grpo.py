@@ -165,8 +165,8 @@ class FlowGRPO(OnPolicyAlgorithm):
             self.group_size = env_group_size
         elif self.group_size != env_group_size:
             raise ValueError(f"algorithm.group_size={self.group_size} but the env's reset_group_size is "
-                             f"{env_group_size}: group members must share their initial states; set "
-                             "env.reset_group_size to the group size (and leave algorithm.group_size null)")  # fmt: skip
+                             f"{env_group_size}: group members must share their initial states; set env."
+                             "reset_group_size to the group size (and leave algorithm.group_size null)")  # fmt: skip
         if self.group_size < 2:
             raise ValueError("Flow-GRPO needs groups of envs that start from the same states: set "
                              "env.reset_group_size (e.g. 8, table (c)) to a divisor of num_envs")  # fmt: skip

@@ -147,7 +147,7 @@ class ReinFlow(OnPolicyAlgorithm):
         out = super().update()
         if self.noise_decay_updates is not None:
             value = decayed_sigma_max(self.num_updates, self.noise_decay_updates, self.actor.sigma_min,
-                                      self.initial_sigma_max, self.noise_hold_ratio, self.noise_decay_ratio)  # fmt: skip
+                                      self.initial_sigma_max, self.noise_hold_ratio, self.noise_decay_ratio)
             self.actor.sigma_max.fill_(value)
         out["Flow/sigma_max"] = float(self.actor.sigma_max)
         return out

@@ -249,7 +249,7 @@ class ReinFlowActor(nn.Module):
             return self.sample(obs, num_steps, "random", perturbation=True)
         return self.sample(obs, num_steps, "zero", perturbation=False)
 
-    # ------------------------------------------------------------------------------------------------ rsl_rl model protocol
+    # ---------------------------------------------------------------------------------------- rsl_rl model protocol
     def reset(self, dones: torch.Tensor | None = None, hidden_state=None) -> None:
         pass
 
