@@ -97,3 +97,20 @@ def test_trajectory_weighting_uses_segment_returns_relative_to_the_batch():
     st = alg.storage
     totals = segment_returns(st.rewards.squeeze(-1), st.dones.squeeze(-1))
     torch.testing.assert_close(alg.store.flat("trajectory_advantage"), (totals - totals.mean()).flatten())
+
+
+def test_plain_rsl_rl_runner_trains_it_by_class_name():
+    from rsl_rl.runners import OnPolicyRunner
+
+    from refpo_warp import make_env
+
+    cfg = {
+        "num_steps_per_env": 8, "save_interval": 100, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "actor": {"class_name": "refpo_warp.models:FlowActor", "hidden_dims": [16], "num_flow_steps": 4},
+        "critic": {"class_name": "MLPModel", "hidden_dims": [16]},
+        "algorithm": {"class_name": "refpo_warp.algorithms:AdvantageWeightedReFPO", "reflow_weighting": "softplus",
+                      "num_learning_epochs": 1, "num_mini_batches": 2},
+    }  # fmt: skip
+    runner = OnPolicyRunner(make_env("gridworld", num_envs=8, device="cpu", seed=1), cfg, log_dir=None, device="cpu")
+    runner.learn(2)
+    assert runner.alg.num_updates == 2 and runner.alg.reflow_weighting == "softplus"

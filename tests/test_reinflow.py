@@ -156,3 +156,21 @@ def test_noise_bound_decay_hand_worked():
     fill_storage(alg)
     assert alg.update()["Flow/sigma_max"] == pytest.approx(0.148)
     assert float(alg.actor.sigma_max) == pytest.approx(0.148)
+
+
+def test_plain_rsl_rl_runner_trains_it_by_class_name_on_chunked_actions():
+    from rsl_rl.runners import OnPolicyRunner
+
+    from refpo_warp import make_env
+
+    env = make_env("gridworld", num_envs=8, device="cpu", seed=1, action_chunk=2)
+    cfg = {
+        "num_steps_per_env": 8, "save_interval": 100, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "actor": {"class_name": "refpo_warp.models:ReinFlowActor", "hidden_dims": [16]},
+        "critic": {"class_name": "MLPModel", "hidden_dims": [16]},
+        "algorithm": {"class_name": "refpo_warp.algorithms:ReinFlow", "num_learning_epochs": 1, "num_mini_batches": 2},
+    }  # fmt: skip
+    runner = OnPolicyRunner(env, cfg, log_dir=None, device="cpu")
+    assert runner.alg.actor.action_dim == 4  # a chunk of two 2-D moves
+    runner.learn(2)
+    assert runner.alg.num_updates == 2
