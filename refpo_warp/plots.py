@@ -180,3 +180,30 @@ def plot_runs(run_dirs: list[str | Path], out_dir: str | Path | None = None) -> 
         written.append(diagnostic_curves(runs, out / "curves_diagnostics.png"))
     grid = figure_grid([Path(d) for d in run_dirs], out / "figures_grid.png")
     return written + ([grid] if grid else [])
+
+
+def sweep_curves(sweep_dir: str | Path, out_dir: str | Path | None = None, window: int = 5) -> list[Path]:
+    """Per task of a sweep dir (``<task>/<method>/seed<k>``, as tools/sweep.py writes it): ``<task>_curves.png``
+    with one line per method (mean over seeds, band: their range). Prints each seed's training episode length and
+    return at the start and the end (means over the first and the last ``window`` iterations)."""
+    sweep_dir = Path(sweep_dir)
+    out = Path(out_dir or sweep_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for task_dir in sorted(p for p in sweep_dir.iterdir() if p.is_dir()):
+        runs = {}
+        for method_dir in sorted(p for p in task_dir.iterdir() if p.is_dir()):
+            seeds = sorted(p for p in method_dir.glob("seed*") if (p / "progress.jsonl").is_file())
+            runs[method_dir.name] = [read_progress(p) for p in seeds]
+            for seed_dir, rows in zip(seeds, runs[method_dir.name]):
+                length = [r["episode_length_mean"] for r in rows if "episode_length_mean" in r]
+                ret = [r["reward_mean"] for r in rows if "reward_mean" in r]
+                if len(length) >= 2 * window and len(ret) >= 2 * window:
+                    first, last = np.mean(length[:window]), np.mean(length[-window:])
+                    print(f"{task_dir.name} {method_dir.name} {seed_dir.name}: episode length {first:.1f} -> "
+                          f"{last:.1f} ({last / first:.2f}x), return {np.mean(ret[:window]):.2f} -> "
+                          f"{np.mean(ret[-window:]):.2f}, {rows[-1]['env_steps']:,} env steps, "
+                          f"{rows[-1]['time_s']:.0f} s")  # fmt: skip
+        if any(runs.values()):
+            written.append(training_curves({k: v for k, v in runs.items() if v}, out / f"{task_dir.name}_curves.png"))
+    return written

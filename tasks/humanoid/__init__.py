@@ -8,5 +8,7 @@ register_task("humanoid_all", _ENV, description="SMPL humanoid tracking, every b
               conditioning="all")
 register_task("humanoid_root_hands", _ENV,
               description="SMPL humanoid tracking, only pelvis and wrist positions observed", conditioning="root_hands")
+register_task("humanoid_all_residual", _ENV, conditioning="all",
+              description="SMPL humanoid tracking, every body's targets observed, PD targets relative to the reference")
 register_task("humanoid_root", _ENV, description="SMPL humanoid tracking, only the pelvis position observed",
               conditioning="root")
