@@ -65,6 +65,7 @@ RUN_RULES = {
     "max_iterations": Int(1, 10**8, optional=True),
     "run_dir": Text(optional=True),
     "resume": Flag(),
+    "verbose": Flag(),
     "notice": Check(_check_notice, "null or a text ({task} and {algo} are filled in)", optional=True),
     "runner.num_steps_per_env": Int(1, 1_000_000),
     "runner.save_interval": Int(1, 10**8),

@@ -6,6 +6,9 @@
   rsl_rl's ``load`` is replaced;
 - one progress line per iteration (rsl_rl's full report with ``log_full``), plus ``progress.jsonl`` holding
   every logged number, which the plotting tools read; a resumed run continues its iterations and env steps;
+  iterations count from 0 everywhere (progress line, ``progress.jsonl``, ``model_<it>.pt``);
+- rsl_rl's construction and logging-writer messages (model structure, observation sets, git state) only with
+  ``verbose``;
 - a NaN/inf loss stops training before the next checkpoint, so the last checkpoint on disk stays good;
 - an ``on_iteration`` hook (periodic evaluation) whose numbers go to TensorBoard and ``progress.jsonl``;
 - multi-process training under torchrun on CUDA (NCCL) and on a CPU (gloo); rsl_rl itself only starts NCCL.
@@ -25,6 +28,7 @@ from rsl_rl.utils.logger import Logger
 
 from refpo_warp.atomic import atomic_write
 from refpo_warp.checkpoints import META_KEY, apply_checkpoint, check_fits, latest_checkpoint, read_checkpoint
+from refpo_warp.console import quiet_stdout
 from refpo_warp.distributed import init_process_group, process_rank
 from refpo_warp.errors import NonFiniteLossError
 from refpo_warp.progress import append_row
@@ -44,10 +48,17 @@ def _episode_means(ep_extras: list[dict]) -> dict[str, float]:
 class ProgressLogger(Logger):
     """rsl_rl's Logger (TensorBoard) plus a one-line console report, ``progress.jsonl`` and a non-finite check."""
 
-    def __init__(self, *args, log_full: bool = False, **kwargs) -> None:
+    def __init__(self, *args, log_full: bool = False, verbose: bool = False, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.log_full = log_full
+        self.verbose = verbose
         self.on_iteration: Callable[[int, bool], dict[str, float]] | None = None
+
+    def init_logging_writer(self) -> None:
+        # rsl_rl reports the git state of each repository here; W&B / Neptune print links the user wants to see.
+        service = str(self.cfg.get("logger", "tensorboard")).lower() in ("wandb", "neptune")
+        with quiet_stdout(not (self.verbose or service)):
+            super().init_logging_writer()
 
     def log(self, it: int, start_it: int, total_it: int, collect_time: float, learn_time: float,
             loss_dict: dict, **kwargs) -> None:  # fmt: skip
@@ -89,7 +100,10 @@ class ProgressLogger(Logger):
 
     @staticmethod
     def _progress_line(it: int, total_it: int, row: dict) -> str:
-        parts = [f"[{it + 1:>5}/{total_it}]", f"steps {row['env_steps']:>11,}", f"{row['steps_per_s']:>8,} sps"]
+        # 0-based, as model_<it>.pt and progress.jsonl count: the last iteration is total_it - 1
+        width = len(str(total_it - 1))
+        parts = [f"[it {it:>{width}}/{total_it - 1}]", f"steps {row['env_steps']:>11,}",
+                 f"{row['steps_per_s']:>8,} sps"]
         if "reward_mean" in row:
             parts.append(f"return {row['reward_mean']:9.2f}")
             parts.append(f"len {row['episode_length_mean']:6.1f}")
@@ -103,19 +117,21 @@ class ProgressLogger(Logger):
 
 class Runner(OnPolicyRunner):
     """OnPolicyRunner with atomic, safely loaded checkpoints, a progress line per iteration, an evaluation hook and
-    a torch.distributed backend that matches the device.
+    a torch.distributed backend that matches the device; rsl_rl's own messages only with ``verbose``.
 
     ``run_info`` (``{"task", "algo"}``) is written into every checkpoint and checked when one is loaded.
     """
 
     def __init__(self, env, train_cfg: dict, log_dir: str | None = None, device: str = "cpu",
-                 log_full: bool = False, run_info: dict | None = None) -> None:  # fmt: skip
-        super().__init__(env, train_cfg, log_dir=log_dir, device=device)
+                 log_full: bool = False, run_info: dict | None = None,
+                 verbose: bool = False) -> None:  # fmt: skip
+        with quiet_stdout(not verbose):  # rsl_rl prints the observation sets and the models
+            super().__init__(env, train_cfg, log_dir=log_dir, device=device)
         old = self.logger
         self.logger = ProgressLogger(
             log_dir=log_dir, cfg=self.cfg, env_cfg=env.cfg, num_envs=env.num_envs,
             is_distributed=self.is_distributed, gpu_world_size=self.gpu_world_size,
-            gpu_global_rank=self.gpu_global_rank, device=device, log_full=log_full,
+            gpu_global_rank=self.gpu_global_rank, device=device, log_full=log_full, verbose=verbose,
         )  # fmt: skip
         self.logger.git_status_repos = old.git_status_repos + [__file__]
         self.run_info = dict(run_info or {})

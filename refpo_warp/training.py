@@ -106,7 +106,7 @@ def build_runner(cfg: dict, log_dir: Path | None, env=None):
     log_dir = log_dir if rank.is_main else None
     run_info = {"task": cfg["task"], "algo": cfg["algo"]}  # written into and checked against every checkpoint
     runner = Runner(env, rsl_rl_config(cfg), log_dir=str(log_dir) if log_dir else None, device=device,
-                    log_full=cfg["runner"]["log_full"], run_info=run_info)  # fmt: skip
+                    log_full=cfg["runner"]["log_full"], run_info=run_info, verbose=cfg["verbose"])  # fmt: skip
     return env, runner
 
 

@@ -113,7 +113,7 @@ def train(task: str = "gridworld", num_envs: int = 64, steps: int = 32, iteratio
         ppo_update(agent, optimizer, batch)
         history.append(float(np.mean(returns)) if returns else float("nan"))
         if not quiet:
-            print(f"iteration {it + 1:3d}/{iterations}  episodes {len(returns):4d}  mean return {history[-1]:6.2f}",
+            print(f"iteration {it:3d}/{iterations - 1}  episodes {len(returns):4d}  mean return {history[-1]:6.2f}",
                   flush=True)  # fmt: skip
     env.close()
     return history
