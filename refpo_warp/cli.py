@@ -50,7 +50,13 @@ def _eval(args: list[str]) -> None:
     if checkpoint is not None and not isinstance(checkpoint, str):
         raise ConfigError(f"checkpoint={checkpoint!r} is invalid; expected a path to a model_<iteration>.pt file")
     with tag_run_dir(run_dir) if Path(str(run_dir)).is_dir() else contextlib.nullcontext():
-        evaluate_run(Path(str(run_dir)), checkpoint=checkpoint, overrides=overrides)
+        results = evaluate_run(Path(str(run_dir)), checkpoint=checkpoint, overrides=overrides)
+    from refpo_warp.console import headline_numbers, run_outputs, summary_block
+
+    run_dir = Path(str(run_dir))
+    evaluated = checkpoint or run_dir / f"model_{results['checkpoint_iteration']}.pt"
+    title = f"Evaluated {results['task']} / {results['algo']} at iteration {results['checkpoint_iteration']}"
+    print(summary_block(title, run_outputs(run_dir, evaluated, results), headline_numbers(results)), flush=True)
 
 
 COMMANDS = {"train": _train, "eval": _eval}

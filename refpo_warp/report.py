@@ -3,8 +3,11 @@
 Flow policies are evaluated at every N in ``eval.flow_steps`` (1-step vs multi-step returns) under the protocol
 ``eval.initial_noise`` (random | zero) and ``eval.perturbation`` (the rollout's post-sample noise on | off); a
 Gaussian actor once, with its mean action. Task families may add a ``tasks/<family>/report.py`` with
-``summarize(episodes)`` (extra numbers, e.g. GridWorld's top/bottom goal shares) and ``figures(run_dir, actor, cfg)``
-(PNG files).
+``summarize(episodes)`` (their own numbers, e.g. GridWorld's top/bottom goal shares), ``REPLACES`` (the generic
+``<metric>_mean`` entries their numbers stand for, dropped so every metric has one name in ``eval.json``) and
+``figures(run_dir, actor, cfg)`` (PNG files).
+
+An existing ``eval.json`` is kept as ``eval.prev.json`` before the new one is written (both writes atomic).
 
 ``eval.json`` diagnostics of flow policies: the training-time means over the run of the per-update values logged in
 ``progress.jsonl`` (``straightness_error``, ``explosion_rate`` = the paper's "Explosion" / "Ratio Expl.",
@@ -83,6 +86,8 @@ def evaluate_actor(cfg: dict, actor, env, flow_steps: list[int], record_obs: int
         visited = episodes.pop("observations", visited)
         summary = summarize(episodes)
         if report is not None and hasattr(report, "summarize"):
+            for key in getattr(report, "REPLACES", ()):
+                summary.pop(key, None)
             summary.update(report.summarize(episodes))
         results[name] = summary
     return results, visited
@@ -130,10 +135,29 @@ def training_diagnostics(run_dir: Path) -> dict[str, float]:
     return out
 
 
+EVAL_FILE, PREVIOUS_EVAL_FILE = "eval.json", "eval.prev.json"
+
+
 def write_json(data: dict, path: Path) -> None:
     from refpo_warp.atomic import write_text
 
     write_text(path, json.dumps(data, indent=2))
+
+
+def write_eval_json(data: dict, run_dir: Path) -> Path | None:
+    """Write ``eval.json``; an existing one is first copied to ``eval.prev.json`` (returned; None if there was none).
+
+    A copy, not a rename: at every moment ``eval.json`` is a whole file, the old one or the new one.
+    """
+    from refpo_warp.atomic import write_text
+
+    path, previous = run_dir / EVAL_FILE, run_dir / PREVIOUS_EVAL_FILE
+    kept = None
+    if path.is_file():
+        write_text(previous, path.read_text(encoding="utf-8", errors="replace"))
+        kept = previous
+    write_json(data, path)
+    return kept
 
 
 def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, checkpoint: str | Path | None = None,
@@ -177,9 +201,10 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         "diagnostics": {**training_diagnostics(run_dir), **flow_diagnostics(cfg, actor, visited)} if flow else {},
     }
     out["figures"] = [str(p) for p in run_figures(run_dir, actor, cfg)]
-    write_json(out, run_dir / "eval.json")
+    kept = write_eval_json(out, run_dir)
     runner.alg.train_mode()
-    _print_results(out)
+    if kept is not None:
+        print(f"[eval] {run_dir / EVAL_FILE} replaced; the previous one is kept as {kept}", flush=True)
     return out
 
 
@@ -199,15 +224,6 @@ def run_figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
     if report is not None and hasattr(report, "figures"):
         figures += report.figures(run_dir, actor, cfg)
     return figures
-
-
-def _print_results(results: dict) -> None:
-    for name, summary in results["results"].items():
-        numbers = "  ".join(f"{k} {v:.4g}" for k, v in summary.items() if isinstance(v, float))
-        print(f"[eval] {results['task']} {name}: {numbers}", flush=True)
-    scalars = {k: v for k, v in results.get("diagnostics", {}).items() if isinstance(v, float)}
-    if scalars:
-        print("[eval] diagnostics: " + "  ".join(f"{k} {v:.4g}" for k, v in scalars.items()))
 
 
 def periodic_evaluator(cfg: dict, runner):

@@ -25,7 +25,7 @@ from refpo_warp.run_options import RUN_RULES
 RUN_CONFIG = "config.yaml"
 IDENTITY_KEYS = ("task", "algo")
 # Files a run writes into its directory (glob patterns): only their interrupted temp files are ever removed.
-RUN_FILES = ("model_*.pt", RUN_CONFIG, "progress.jsonl", "eval.json", "error.log", "*.png")
+RUN_FILES = ("model_*.pt", RUN_CONFIG, "progress.jsonl", "eval.json", "eval.prev.json", "error.log", "*.png")
 
 
 def flatten(cfg: dict, prefix: str = "") -> dict[str, Any]:

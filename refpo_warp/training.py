@@ -165,7 +165,7 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
                 raise ConfigError(f"{run_dir} received checkpoints from another process meanwhile; not touching it")
             remove_stale_temp_files(run_dir, RUN_FILES)
             if not resume:
-                for stale in (progress_path(run_dir), run_dir / "eval.json"):
+                for stale in (progress_path(run_dir), run_dir / "eval.json", run_dir / "eval.prev.json"):
                     stale.unlink(missing_ok=True)
             else:
                 truncate_after(run_dir, start - 1)
@@ -228,9 +228,22 @@ def _train_and_evaluate(cfg, env, runner, run_dir, start, evaluate_run, periodic
     if cfg["eval"]["at_end"] and rank.is_main:
         results = evaluate_run(run_dir, cfg=cfg, runner=runner)
         log_final_evaluation(runner, results)
+    if rank.is_main:
+        print(training_summary(cfg, runner, run_dir, results), flush=True)
     if notice:
         print(f"[refpo_warp] NOTE: {notice}", flush=True)
     return results
+
+
+def training_summary(cfg: dict, runner, run_dir: Path, results: dict) -> str:
+    """The closing block: where every output went, the training budget spent and the final evaluation's numbers."""
+    from refpo_warp.console import headline_numbers, run_outputs, summary_block
+
+    logger, checkpoint = runner.logger, latest_checkpoint(run_dir)
+    last = checkpoint.stem.split("_")[-1] if checkpoint is not None else "-"
+    spent = [("trained", f"iterations 0..{last}, {int(logger.tot_timesteps):,} env steps, {logger.tot_time:.0f} s")]
+    title = f"Trained {cfg['task']} / {cfg['algo']} (seed {cfg['seed']})"
+    return summary_block(title, run_outputs(run_dir, checkpoint, results), spent + headline_numbers(results))
 
 
 def log_final_evaluation(runner, results: dict) -> None:
