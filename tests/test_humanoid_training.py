@@ -75,6 +75,9 @@ def test_train_and_evaluate_humanoid_root(tmp_run_dir, capsys):
     for n in ("N=10", "N=1"):
         summary = saved["results"][n]
         assert summary["episodes"] == 12 and summary["unfinished"] == 0
+        # one name per metric, the paper's: no success_mean, mpjpe_mm_mean, alive_steps_mean or length_mean
+        assert set(summary) == {"episodes", "unfinished", "return_mean", "return_std", "success_rate_pct",
+                                "alive_duration", "mpjpe_mm"}  # fmt: skip
         assert 0.0 <= summary["success_rate_pct"] <= 100.0
         assert 1.0 <= summary["alive_duration"] <= 151.0
         assert summary["mpjpe_mm"] > 0.0

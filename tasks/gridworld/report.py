@@ -15,6 +15,9 @@ from refpo_warp.atomic import save_figure  # noqa: E402
 
 FIGURE_STARTS = ((17, 12), (11, 13), (6, 9), (20, 17))  # (x, y) starts of the paper's trajectory panel
 FIGURE_FLOW_STEPS = (10, 1)
+# The generic means these numbers stand for (one name per metric in eval.json): success_rate is success_mean, and
+# top_share / bottom_share carry reached_top_mean (= top_share x success_rate).
+REPLACES = ("success_mean", "reached_top_mean")
 
 
 def summarize(episodes: dict[str, torch.Tensor]) -> dict[str, float]:
