@@ -74,9 +74,9 @@ def main(argv: list[str]) -> None:
     device = resolve_device(args.device)
     if "fpo" not in args.algos:
         args.algos = ["fpo", *args.algos]
-    print(f"Update time on {args.task}, {device}, torch threads {torch.get_num_threads()}: {args.envs} envs x "
-          f"{args.steps} steps = {args.envs * args.steps} transitions, {args.minibatches} minibatches, "
-          f"{args.passes} passes")  # fmt: skip
+    title = (f"Update time on {args.task}, {device}, torch threads {torch.get_num_threads()}: {args.envs} envs x "
+             f"{args.steps} steps = {args.envs * args.steps} transitions, {args.minibatches} minibatches, "
+             f"{args.passes} passes")  # fmt: skip
     seconds, chunks = {}, {}
     for algo in args.algos:
         torch.manual_seed(0)
@@ -88,4 +88,5 @@ def main(argv: list[str]) -> None:
              "ratio to FPO": f"{seconds[a] / seconds['fpo']:.2f}",
              "paper passes, per env step, ratio to FPO": f"{per_env_step[a] / per_env_step['fpo']:.2f}"}
             for a in seconds]  # fmt: skip
-    print_table(rows, ["algorithm", "update (s)", "ratio to FPO", "paper passes, per env step, ratio to FPO"])
+    print_table(rows, ["algorithm", "update (s)", "ratio to FPO", "paper passes, per env step, ratio to FPO"],
+                title=title)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Callable
 
@@ -41,10 +42,23 @@ def env_steps_per_second(env, steps: int = 200, warmup: int = 5, seed: int = 0) 
     return steps * env.num_envs / (time.perf_counter() - start)
 
 
-def print_table(rows: list[dict], columns: list[str]) -> None:
-    """Print rows as an aligned plain-text table (also valid Markdown)."""
+def print_title(title: str) -> None:
+    """Start a titled block: a blank line and a Markdown heading, so each table stands apart (and pastes as Markdown)."""
+    print(f"\n### {title}\n", flush=True)
+
+
+def print_table(rows: list[dict], columns: list[str], title: str | None = None,
+                notes: tuple[str, ...] = ()) -> None:  # fmt: skip
+    """Print rows as an aligned plain-text table (also valid Markdown), under ``title`` and followed by ``notes``."""
+    if title:
+        print_title(title)
     widths = {c: max(len(c), *(len(str(r.get(c, ""))) for r in rows)) for c in columns}
     print("| " + " | ".join(c.ljust(widths[c]) for c in columns) + " |")
     print("|" + "|".join("-" * (widths[c] + 2) for c in columns) + "|")
     for r in rows:
         print("| " + " | ".join(str(r.get(c, "")).ljust(widths[c]) for c in columns) + " |")
+    if notes:
+        print()
+        for note in notes:
+            print(note)
+    sys.stdout.flush()

@@ -80,15 +80,16 @@ def main(argv: list[str]) -> None:
         batches = sorted({profile_envs if b.strip() == "num_envs" else int(b) for b in args.batch.split(",")})
         for algo in [a.strip() for a in args.algos.split(",") if a.strip()]:
             rows += policy_latency(task, algo, device, batches, flow_steps, args.repeats)
-    print(f"Action latency on {device} ({device_name(device)}), torch threads {torch.get_num_threads()}, "
-          f"median of {args.repeats} calls")  # fmt: skip
-    print_table([{**r, "flow_steps": r["flow_steps"] or "mean action", "latency_ms": f"{r['latency_ms']:.3f}"}
-                 for r in rows], ["task", "algo", "flow_steps", "batch", "latency_ms"])  # fmt: skip
+    ratios = []
     for task, algo, batch in sorted({(r["task"], r["algo"], r["batch"]) for r in rows if r["flow_steps"]}):
         by_n = {r["flow_steps"]: r["latency_ms"] for r in rows
                 if (r["task"], r["algo"], r["batch"]) == (task, algo, batch)}  # fmt: skip
         if 1 in by_n and 10 in by_n:
-            print(f"{task} {algo} batch {batch}: N=10 / N=1 latency ratio {by_n[10] / by_n[1]:.1f}x")
+            ratios.append(f"{task} {algo} batch {batch}: N=10 / N=1 latency ratio {by_n[10] / by_n[1]:.1f}x")
+    print_table([{**r, "flow_steps": r["flow_steps"] or "mean action", "latency_ms": f"{r['latency_ms']:.3f}"}
+                 for r in rows], ["task", "algo", "flow_steps", "batch", "latency_ms"],
+                title=f"Action latency on {device} ({device_name(device)}), torch threads {torch.get_num_threads()}, "
+                      f"median of {args.repeats} calls", notes=tuple(ratios))  # fmt: skip
     if args.json:
         path = Path(args.json)
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -82,3 +82,27 @@ def test_eval_keeps_the_previous_eval_json_and_says_so(tmp_run_dir):
     assert not [m for m in RSL_RL_CHATTER if m in proc.stdout]
     evaluate_run(tmp_run_dir, overrides={"eval.flow_steps": [2]})  # again: the previous is now the N=1 file
     assert set(json.loads((tmp_run_dir / "eval.prev.json").read_text())["results"]) == {"N=1"}
+
+
+def test_only_warps_no_driver_warning_is_dropped(capfd):
+    import os
+
+    from refpo_warp.device import NO_DRIVER_WARNING, _stderr_without
+
+    with _stderr_without(NO_DRIVER_WARNING):  # native code writes to file descriptor 2, as Warp's library does
+        os.write(2, f"Warp CUDA warning: {NO_DRIVER_WARNING}. GPU execution will not be available.\n".encode())
+        os.write(2, b"Warp CUDA error: something else\n")
+        print("python-level warning", file=sys.stderr)
+    err = capfd.readouterr().err
+    assert NO_DRIVER_WARNING not in err
+    assert "Warp CUDA error: something else" in err and "python-level warning" in err
+
+
+def test_benchmark_tables_are_titled_blocks(capsys):
+    from refpo_warp.benchmarking import print_table
+
+    print_table([{"a": 1, "b": "x"}], ["a", "b"], title="First", notes=("ratio 2.0x",))
+    print_table([{"a": 22}], ["a"], title="Second")
+    lines = capsys.readouterr().out.split("\n")
+    assert lines[:7] == ["", "### First", "", "| a | b |", "|---|---|", "| 1 | x |", ""]
+    assert lines[7:10] == ["ratio 2.0x", "", "### Second"]  # one blank line before each title

@@ -32,7 +32,7 @@ def main(argv: list[str]) -> int:
         importlib.import_module(OTHERS[family]).main(rest)
         return 0
     for name in FAMILIES if family == "all" else (family,):
-        print(f"\n=== {name} ===", flush=True)
+        print(f"\n## {name}", flush=True)  # each family's tables follow as ### blocks
         importlib.import_module(f"tasks.{name}.bench").main(rest)
     return 0
 

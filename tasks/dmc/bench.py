@@ -114,8 +114,7 @@ def main(argv: list[str]) -> None:
         rows.append(row)
         print(f"  {task}: {row}", flush=True)
         del env
-    print()
     columns = ["task", "substeps", "ours (env steps/s)"]
     if not args.no_mujoco_c:
         columns += ["C rollout", "ours / C rollout", "C loop", "ours / C loop"]
-    print_table(rows, columns)
+    print_table(rows, columns, title=f"DMC env steps per second on {device}, {num_envs} envs")

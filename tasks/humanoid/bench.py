@@ -24,7 +24,7 @@ import time
 import numpy as np
 import torch
 
-from refpo_warp.benchmarking import env_steps_per_second
+from refpo_warp.benchmarking import env_steps_per_second, print_title
 from refpo_warp.device import resolve_device
 from refpo_warp.registry import make_env
 
@@ -125,6 +125,7 @@ def main(argv: list[str]) -> None:
     if args.json:
         print(json.dumps(result))
         return
+    print_title(f"{result['task']} env steps per second on {result['device']}, {num_envs} envs")
     print(f"{result['task']} on {result['device']}: {num_envs} envs, {steps} steps after {args.warmup} warm-up "
           f"(graph captured: {result['graph_captured']}), uniform random actions in [-1, 1]"
           + (f"; env options {env_cfg}" if env_cfg else ""))  # fmt: skip
