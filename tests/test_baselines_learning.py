@@ -9,6 +9,7 @@ its deterministic chain at K = 4. The initial policy (same seed, same constructi
 
 import contextlib
 import io
+import os
 
 import pytest
 import torch
@@ -20,9 +21,10 @@ from refpo_warp.training import build_runner, seed_everything, train
 
 @pytest.fixture
 def two_threads():
-    # The update dominates the run time; CI has 2 cores (conftest pins 1 thread for the small unit tests).
+    # The update dominates the run time; CI has 2 cores (conftest pins 1 thread for the small unit tests). Under
+    # xdist (-n 2) the other core runs the other worker's tests: one thread each.
     previous = torch.get_num_threads()
-    torch.set_num_threads(2)
+    torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else 2)
     yield
     torch.set_num_threads(previous)
 

@@ -4,6 +4,8 @@ Uses the task's CPU profile as shipped (configs/task/dmc_cartpole_balance.yaml: 
 final evaluation of tools/train.py (N = 10 and N = 1 Euler steps for ReFPO, the mean action for PPO).
 """
 
+import os
+
 import pytest
 import torch
 
@@ -12,9 +14,10 @@ from refpo_warp.training import train
 
 @pytest.fixture
 def two_threads():
-    # The update dominates the run time; CI has 2 cores (conftest pins 1 thread for the small unit tests).
+    # The update dominates the run time; CI has 2 cores (conftest pins 1 thread for the small unit tests). Under
+    # xdist (-n 2) the other core runs the other worker's tests: one thread each.
     previous = torch.get_num_threads()
-    torch.set_num_threads(2)
+    torch.set_num_threads(1 if os.environ.get("PYTEST_XDIST_WORKER") else 2)
     yield
     torch.set_num_threads(previous)
 
