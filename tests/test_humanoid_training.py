@@ -2,6 +2,7 @@
 the train -> evaluate path writing eval.json."""
 
 import json
+from pathlib import Path
 
 import pytest
 import torch
@@ -82,5 +83,11 @@ def test_train_and_evaluate_humanoid_root(tmp_run_dir, capsys):
         assert 1.0 <= summary["alive_duration"] <= 151.0
         assert summary["mpjpe_mm"] > 0.0
     assert results["results"]["N=1"]["mpjpe_mm"] == saved["results"]["N=1"]["mpjpe_mm"]
+    # the run dir holds its figures: curves (return, episode length, success: the env logs Episode/success) and the
+    # flow diagnostics
+    assert [Path(f).name for f in saved["figures"]] == ["curves.png", "curves_diagnostics.png"]
+    assert all(Path(f).parent == tmp_run_dir and Path(f).is_file() for f in saved["figures"])
+    rows = [json.loads(line) for line in (tmp_run_dir / "progress.jsonl").read_text().splitlines()]
+    assert any("Episode/success" in r for r in rows)
     out = capsys.readouterr().out
     assert out.count("toy scale") == 2  # the notice at the start and at the end
