@@ -1,3 +1,2 @@
-"""Task families. Importing this package registers every task id (cheaply: env modules load on first use)."""
-
-from tasks import dmc, gridworld, humanoid  # noqa: F401  (each family's __init__ registers its ids)
+"""Task families: every subpackage is one family, found by ``refpo_warp.registry`` (nothing lists them) and imported
+once; its ``__init__`` registers the family's task ids with their env cfg classes (Warp-free) and env entry points."""

@@ -1,5 +1,5 @@
 """The tracking reward's named terms: hand-worked values on a hand-made state, weights and scales from the cfg, the
-terms adding up to the reward, and their episode sums logged as ``Episode_Reward/<term>``."""
+terms adding up to the reward, and their episode sums (kept by the base env) logged as ``Episode_Reward/<term>``."""
 
 import dataclasses
 import math
@@ -10,16 +10,16 @@ import torch
 import warp as wp
 
 from refpo_warp.registry import make_env
-from tasks.humanoid.env import HumanoidTrackingCfg
+from tasks.humanoid.cfg import HumanoidTrackingCfg
 from tasks.humanoid.reward_terms import TERMS, reward_params
 
 NB, NDOF = 24, 69
 
 
-def _launch(params, term_sum, episode_length=5):
-    """One evaluation of a hand-made state (2 identical envs): every simulated body at rest with identity rotation;
-    the reference 0.1 m further along x, turned 0.2 rad about z, moving at 1 m/s along x and spinning at 2 rad/s
-    about z; every hinge at angle 0 with rate 1 rad/s and PD target 0.01 rad (kp 100, kd 10)."""
+def _launch(params, episode_length=5):
+    """One evaluation, at step ``episode_length`` of an episode, of a hand-made state (2 identical envs): every
+    simulated body at rest with identity rotation; the reference 0.1 m further along x, turned 0.2 rad about z, moving
+    at 1 m/s along x and spinning at 2 rad/s about z; every hinge at angle 0 with rate 1 rad/s and PD target 0.01 rad (kp 100, kd 10)."""
     from tasks.humanoid.tracking_kernels import evaluate_step_kernel
 
     n = 2
@@ -40,22 +40,21 @@ def _launch(params, term_sum, episode_length=5):
         wp.array(np.tile([1.0, 0.0, 0.0], (n, NB, 1)).astype(np.float32), dtype=wp.vec3),
         wp.array(np.tile([0.0, 0.0, 2.0], (n, NB, 1)).astype(np.float32), dtype=wp.vec3),
     ]
-    rewards, episode_terms = wp.zeros(n, dtype=float), wp.zeros((n, len(TERMS)), dtype=float)
-    flags = [wp.zeros(n, dtype=wp.bool) for _ in range(3)]  # terminated, truncated, done
+    rewards, step_terms = wp.zeros(n, dtype=float), wp.zeros((n, len(TERMS)), dtype=float)
+    flags = [wp.zeros(n, dtype=wp.bool) for _ in range(2)]  # terminated, clip end
     metrics = [wp.zeros(n, dtype=float) for _ in range(3)]
     wp.launch(evaluate_step_kernel, dim=n,
               inputs=[*arrays.values(), wp.full(NDOF, 100.0, dtype=float), wp.full(NDOF, 10.0, dtype=float), 500.0,
                       *ref, wp.ones(NB, dtype=float), wp.zeros(n, dtype=int), wp.zeros(n, dtype=float),
-                      wp.array([10.0], dtype=float), wp.full(n, episode_length, dtype=wp.int32), 300, 0, 0.25, 0.5,
-                      100.0, params, wp.zeros(n, dtype=float), term_sum],
-              outputs=[rewards, *flags, *metrics, episode_terms], device="cpu")  # fmt: skip
+                      wp.array([10.0], dtype=float), wp.full(n, episode_length - 1, dtype=wp.int32), 0, 0.25, 0.5,
+                      100.0, params, wp.zeros(n, dtype=float)],
+              outputs=[rewards, *flags, *metrics, step_terms], device="cpu")  # fmt: skip
     assert not flags[0].numpy().any()  # 0.1 m off the reference: no termination
-    return rewards.numpy()[0], episode_terms.numpy()[0]
+    return rewards.numpy()[0], step_terms.numpy()[0]
 
 
 def test_terms_on_a_hand_made_state_sum_to_the_reward():
-    term_sum = wp.zeros((2, len(TERMS)), dtype=float)
-    reward, terms = _launch(reward_params(HumanoidTrackingCfg()), term_sum)
+    reward, terms = _launch(reward_params(HumanoidTrackingCfg()))
     # Mean squared errors: position 0.1^2 / 3 (x only, averaged over x/y/z), angle 0.2^2, velocity 1 / 3,
     # angular velocity 4 / 3; power: |(100 * 0.01 - 10 * 1) * 1| = 9 N m rad/s on each of 69 hinges.
     expected = [0.5 * math.exp(-100 * 0.01 / 3), 0.3 * math.exp(-10 * 0.04), 0.1 * math.exp(-0.1 / 3),
@@ -65,18 +64,19 @@ def test_terms_on_a_hand_made_state_sum_to_the_reward():
     assert reward == pytest.approx(terms.sum(), abs=1e-6)
 
 
-def test_weights_and_scales_come_from_the_cfg_and_episode_sums_accumulate():
+def test_weights_and_scales_come_from_the_cfg_and_power_is_off_at_the_start():
     cfg = dataclasses.replace(HumanoidTrackingCfg(), reward_pos_weight=1.0, reward_rot_weight=2.0,
                               reward_vel_weight=3.0, reward_angvel_weight=4.0, reward_pos_scale=1.0,
                               reward_rot_scale=1.0, reward_vel_scale=1.0, reward_angvel_scale=1.0,
                               power_coef=0.001)  # fmt: skip
-    term_sum = wp.zeros((2, len(TERMS)), dtype=float)
-    first_reward, first = _launch(reward_params(cfg), term_sum)
+    first_reward, first = _launch(reward_params(cfg))
     expected = [math.exp(-0.01 / 3), 2 * math.exp(-0.04), 3 * math.exp(-1 / 3), 4 * math.exp(-4 / 3), -0.001 * 621]
     np.testing.assert_allclose(first, expected, rtol=1e-5)
     assert first_reward == pytest.approx(sum(expected), rel=1e-5)
-    _, second = _launch(reward_params(cfg), term_sum, episode_length=2)  # power off in the first 3 steps
-    np.testing.assert_allclose(second, 2 * np.array(expected) - [0, 0, 0, 0, expected[4]], rtol=1e-5)
+    _, third = _launch(reward_params(cfg), episode_length=3)  # power off in the first 3 steps
+    np.testing.assert_allclose(third, expected[:4] + [0.0], rtol=1e-5)
+    _, fourth = _launch(reward_params(cfg), episode_length=4)
+    np.testing.assert_allclose(fourth, expected, rtol=1e-5)
 
 
 def test_episode_reward_terms_are_logged_and_add_up_to_the_return():

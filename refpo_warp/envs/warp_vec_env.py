@@ -1,85 +1,72 @@
 """Base class of every refpo_warp environment: an rsl_rl ``VecEnv`` whose per-step work runs in Warp kernels.
 
-A subclass allocates its state in ``_build`` and launches its kernels in ``_step_impl`` (action, physics,
-reward/termination, auto-reset and observations for all envs at once) and ``_reset_impl`` (reset the envs selected
-by a boolean mask and write their observations). The base class owns the buffers rsl_rl sees, exposed to the
-kernels as zero-copy Warp views, and replays the whole step as one captured graph after a warm-up step (a CUDA
-graph on GPU, a Warp CPU graph on CPU).
+The base owns the episode. One step, for all envs at once:
 
-Finished envs are reset inside the step, so the observation a step returns for them already starts the next
-episode. A subclass that sets ``supports_final_observations`` also writes each env's observation *before* that
-reset into ``buffers.final_obs`` (at least while ``record_final_obs`` is set); the gymnasium adapter needs it for
-``final_obs``. rsl_rl never reads it.
+1. the actions (squashed by tanh first with ``action_transform: tanh``);
+2. the task's ``_step_impl``: dynamics, then this step's ``rewards``, ``terminated`` (and, with
+   ``task_truncation``, ``truncated``), its ``episode_metrics`` and per-step ``reward_terms``;
+3. the base's ``finish_step`` kernel (``episode.py``): episode length, time-out, termination over time-out, the
+   ``done`` reset mask, per-episode statistics, counters of finished envs back to zero;
+4. with ``record_final_obs``, the task's ``_observe_final`` (each env's observation before its reset; the gymnasium
+   adapter needs it, rsl_rl never reads it);
+5. the task's ``_reset_impl(done)``: new episodes for finished envs, then every env's observation.
+
+So the observation a step returns for a finished env already starts its next episode. The base owns the buffers
+rsl_rl sees, exposed to the kernels as zero-copy Warp views, and replays the whole step as one captured graph after
+a warm-up step (a CUDA graph on GPU, a Warp CPU graph on CPU).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import ClassVar
 
 import torch
-import warp as wp
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
-from refpo_warp.device import init_warp, resolve_device
-from refpo_warp.options import Flag, Int, OneOf, check_options, rules_for
+from refpo_warp.device import configure_warp, init_warp, resolve_device
+from refpo_warp.envs.env_cfg import EnvCfg
+from refpo_warp.envs.episode import finish_step, restart_episodes
+from refpo_warp.envs.random_streams import RandomStreams
 
-ACTION_TRANSFORMS = ("clip", "tanh")
-
-
-@dataclass
-class EnvCfg:
-    """Options shared by every environment; task cfgs subclass this."""
-
-    max_episode_length: int = 1000
-    graph_capture: bool = True
-    """Replay the step as a captured graph after one eager warm-up step (CUDA graph or Warp CPU graph)."""
-    action_transform: str = "clip"
-    """What the env does with the policy's actions before its dynamics: ``clip`` to [-1, 1] (the task kernels
-    clip), or ``tanh`` first (MuJoCo Playground sends tanh(action) to the env; the learner keeps the pre-tanh
-    action, so every algorithm trains on what it sampled)."""
-    reset_group_size: int = 1
-    """Envs [g G, (g + 1) G) form group g: the k-th episode of every member starts from the same initial state (one
-    random stream per group and episode index; Flow-GRPO's groups). 1: an independent stream per env."""
-    action_chunk: int = 1
-    """Env steps per policy action: above 1, ``refpo_warp.registry.make_env`` wraps the env in an
-    ``ActionChunkWrapper`` whose actions are ``action_chunk`` env actions run open-loop (ReinFlow's horizon)."""
-
-    # Valid values of the fields (refpo_warp.options); a subclass adds the rules of its own fields the same way.
-    option_rules = {"max_episode_length": Int(1, 10_000_000), "graph_capture": Flag(),
-                    "action_transform": OneOf(ACTION_TRANSFORMS), "reset_group_size": Int(1, 1_000_000),
-                    "action_chunk": Int(1, 1000, fixed=True)}  # the chunk sets the policy's action size  # fmt: skip
-
-    def __post_init__(self) -> None:
-        values = {f.name: getattr(self, f.name) for f in fields(self)}
-        for name, value in check_options(rules_for(type(self)), values, "env.").items():
-            object.__setattr__(self, name, value)
+wp = configure_warp()
 
 
 @dataclass
 class EnvBuffers:
-    """Zero-copy Warp views of the torch buffers that kernels write (built once, never reallocated)."""
+    """Zero-copy Warp views of the torch buffers that kernels read and write (built once, never reallocated)."""
 
     actions: object
     rewards: object
     terminated: object
     truncated: object
+    done: object  # the reset mask, written by the base
     episode_length: object
     rng: object
     obs: dict
     metrics: dict
+    reward_terms: object  # (num_envs, len(reward_terms)) this step's value of each term
     final_obs: dict
 
 
 class WarpVecEnv(VecEnv):
-    """rsl_rl ``VecEnv`` over Warp kernels; see the module docstring for the subclass contract."""
+    """rsl_rl ``VecEnv`` over Warp kernels; see the module docstring for the step and the subclass contract."""
 
     cfg_class: ClassVar[type] = EnvCfg
     episode_metrics: ClassVar[tuple[str, ...]] = ()
-    """Per-episode values a subclass writes at termination (e.g. ``success``); logged and used by evaluation."""
+    """Per-episode values a subclass writes every step (valid where the episode ended, e.g. ``success``); logged as
+    ``Episode/<name>`` and used by evaluation."""
+    reward_terms: ClassVar[tuple[str, ...]] = ()
+    """Named parts of the reward whose per-step values the subclass writes to ``buffers.reward_terms``; their sums
+    over each episode are logged as ``Episode_Reward/<name>``."""
+    task_truncation: ClassVar[bool] = False
+    """Whether ``_step_impl`` writes ``buffers.truncated`` (an episode end that is not a failure besides the
+    time-out, e.g. the end of a motion clip)."""
     supports_final_observations: ClassVar[bool] = False
-    """Whether ``_step_impl`` writes ``buffers.final_obs`` (see the module docstring) when ``record_final_obs``."""
+    """Whether the subclass implements ``_observe_final`` (see the module docstring)."""
+    env_steps_per_step: ClassVar[int] = 1
+    """Env steps per ``step`` call (an ``ActionChunkWrapper`` runs several): what budgets and logs count."""
 
     def __init__(self, cfg: EnvCfg, num_envs: int, device: str = "auto", seed: int = 0) -> None:
         if num_envs < 1:
@@ -91,16 +78,14 @@ class WarpVecEnv(VecEnv):
         self.wp_device = wp.get_device(self.device)
         self.seed = int(seed)
         self.max_episode_length = int(cfg.max_episode_length)
-
         self.reset_group_size = int(cfg.reset_group_size)
-        if self.num_envs % self.reset_group_size:
-            raise ValueError(f"env.reset_group_size ({cfg.reset_group_size}) must divide num_envs ({self.num_envs})")
         self.num_actions, obs_dims = self._spaces()
         n, dev = self.num_envs, self.device
         self._actions = torch.zeros(n, self.num_actions, device=dev)
         self._rewards = torch.zeros(n, device=dev)
         self._terminated = torch.zeros(n, dtype=torch.bool, device=dev)
         self._truncated = torch.zeros(n, dtype=torch.bool, device=dev)
+        self._done = torch.zeros(n, dtype=torch.bool, device=dev)
         self._episode_length = torch.zeros(n, dtype=torch.int32, device=dev)
         self._obs = {name: torch.zeros(n, dim, device=dev) for name, dim in obs_dims.items()}
         self._metrics = {name: torch.zeros(n, device=dev) for name in self.episode_metrics}
@@ -109,6 +94,15 @@ class WarpVecEnv(VecEnv):
         # rsl_rl keeps the observation of step t while step t+1 runs: hand out alternating copies.
         self._obs_out = [TensorDict({k: v.clone() for k, v in self._obs.items()}, batch_size=[n]) for _ in range(2)]
         self._obs_parity = 0
+        # Episode statistics (valid where an episode ended at the last step) and their running sums.
+        width = max(len(self.reward_terms), 1)  # a Warp array needs a non-empty shape
+        self._reward_terms = torch.zeros(n, width, device=dev)
+        self._ended = {"return": torch.zeros(n, device=dev), "length": torch.zeros(n, device=dev)}
+        self._ended_terms = torch.zeros(n, width, device=dev)
+        self._episode_return = wp.zeros(n, dtype=float, device=self.wp_device)
+        self._term_sums = wp.zeros((n, width), dtype=float, device=self.wp_device)
+        self._ended_views = [wp.from_torch(self._ended["length"]), wp.from_torch(self._ended["return"]),
+                             wp.from_torch(self._ended_terms)]  # fmt: skip
 
         rng = torch.zeros(n, dtype=torch.int32, device=dev)
         self.buffers = EnvBuffers(
@@ -116,15 +110,15 @@ class WarpVecEnv(VecEnv):
             rewards=wp.from_torch(self._rewards),
             terminated=wp.from_torch(self._terminated, dtype=wp.bool),
             truncated=wp.from_torch(self._truncated, dtype=wp.bool),
+            done=wp.from_torch(self._done, dtype=wp.bool),
             episode_length=wp.from_torch(self._episode_length),
             rng=wp.from_torch(rng, dtype=wp.uint32),
             obs={k: wp.from_torch(v) for k, v in self._obs.items()},
             metrics={k: wp.from_torch(v) for k, v in self._metrics.items()},
+            reward_terms=wp.from_torch(self._reward_terms),
             final_obs={k: wp.from_torch(v) for k, v in self._final_obs.items()},
         )
-        if self.reset_group_size > 1:  # group streams: a per-env base seed and episode index
-            self._group_base = wp.zeros(n, dtype=wp.int32, device=self.wp_device)
-            self._episode_index = wp.zeros(n, dtype=wp.int32, device=self.wp_device)
+        self._streams = RandomStreams(self.buffers.rng, self.reset_group_size, self.wp_device)
         self.reseed(self.seed)
         self._graph = None
         self._steps_taken = 0
@@ -143,11 +137,18 @@ class WarpVecEnv(VecEnv):
         raise NotImplementedError
 
     def _step_impl(self) -> None:
-        """Launch the kernels of one env step for all envs (must be graph-capturable: no host syncs)."""
+        """Launch the dynamics of one step for all envs and write ``rewards``, ``terminated`` (every env, every step),
+        ``episode_metrics`` and ``reward_terms``; must be graph-capturable (no host syncs). ``episode_length`` still
+        holds the count before this step (the state reached is step ``episode_length + 1``)."""
         raise NotImplementedError
 
     def _reset_impl(self, mask) -> None:
-        """Reset the envs where the Warp bool array ``mask`` is true and write their observations."""
+        """Start new episodes where the Warp bool array ``mask`` is set (draw them from ``buffers.rng``), then make
+        every env's observation current. The base has already restarted their episode counters."""
+        raise NotImplementedError
+
+    def _observe_final(self) -> None:
+        """Write every env's observation of the state the step reached into ``buffers.final_obs`` (before resets)."""
         raise NotImplementedError
 
     # ----------------------------------------------------------------------------------------- rsl_rl VecEnv API
@@ -173,25 +174,41 @@ class WarpVecEnv(VecEnv):
         """Reset the envs selected by a boolean mask, leaving the others untouched."""
         wp_mask = wp.from_torch(mask.to(self.device, torch.bool).contiguous(), dtype=wp.bool)
         with wp.ScopedDevice(self.wp_device):
+            self.restart_counters(wp_mask)
             self._reset_impl(wp_mask)
-            self._next_group_streams(wp_mask, wp_mask)
-        keep = ~mask.to(self.device, torch.bool)
-        self._terminated &= keep
-        self._truncated &= keep
+            self._streams.next_episode(wp_mask)
 
     def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
         self._actions.copy_(actions)
         self._run_step()
-        dones = self._terminated | self._truncated
+        dones = self._done.clone()
         extras = {"time_outs": self._truncated.clone()}
-        if self._metrics and bool(dones.any()):
+        if (self._metrics or self.reward_terms) and bool(dones.any()):
             extras["log"] = {f"Episode/{name}": buf[dones] for name, buf in self._metrics.items()}
+            ended_terms = self._ended_terms[dones]
+            extras["log"].update({f"Episode_Reward/{t}": ended_terms[:, k] for k, t in enumerate(self.reward_terms)})
         return self._publish_obs(), self._rewards.clone(), dones, extras
 
     @property
     def episode_metric_buffers(self) -> dict[str, torch.Tensor]:
         """Per-env values of ``episode_metrics``, valid for the envs whose episode ended at the last step."""
         return self._metrics
+
+    @property
+    def episode_statistics(self) -> dict[str, torch.Tensor]:
+        """Per env, the ``return`` and ``length`` (env steps) of the episode that ended at the last step, then its
+        ``episode_metrics``; valid for the envs whose episode ended there (live buffers)."""
+        return {**self._ended, **self._metrics}
+
+    def restart_counters(self, mask=None) -> None:
+        """Episode length, return and reward-term sums of the envs in ``mask`` (a Warp bool array; None: all) back
+        to a fresh episode's, and their end flags cleared; for tasks that place envs in a state themselves."""
+        if mask is None:
+            mask = wp.from_torch(torch.ones(self.num_envs, dtype=torch.bool, device=self.device), dtype=wp.bool)
+        b = self.buffers
+        wp.launch(restart_episodes, dim=self.num_envs, device=self.wp_device,
+                  inputs=[mask, len(self.reward_terms), b.episode_length, self._episode_return, self._term_sums,
+                          b.terminated, b.truncated, b.done])  # fmt: skip
 
     def enable_final_observations(self) -> None:
         """Make every step also write the observation each env had before its auto-reset (``final_observations``).
@@ -230,25 +247,29 @@ class WarpVecEnv(VecEnv):
             if self._graph is not None:
                 wp.capture_launch(self._graph)
             else:
-                self._transform_and_step()
+                self._launch_step()
                 self._steps_taken += 1
                 # Capture after the eager warm-up step: every module is loaded and lazy buffers exist.
                 if self.cfg.graph_capture and self._steps_taken == 1 and self._can_capture():
                     with wp.ScopedCapture(device=self.wp_device) as capture:
-                        self._transform_and_step()
+                        self._launch_step()
                     self._graph = capture.graph
 
-    def _transform_and_step(self) -> None:
+    def _launch_step(self) -> None:
+        """Every kernel of one step, in the order of the module docstring."""
+        b = self.buffers
         if self.cfg.action_transform == "tanh":
-            self.transform_actions(self.buffers.actions)
+            self.transform_actions(b.actions)
         self._step_impl()
-        self._next_group_streams(self.buffers.terminated, self.buffers.truncated)
-
-    def _next_group_streams(self, ended_a, ended_b) -> None:
-        """After envs (``ended_a`` or ``ended_b``) drew their reset: point them at their group's next episode stream."""
-        if self.reset_group_size > 1:
-            wp.launch(_next_group_streams, dim=self.num_envs, device=self.wp_device,
-                      inputs=[ended_a, ended_b, self._group_base, self._episode_index, self.buffers.rng])  # fmt: skip
+        wp.launch(finish_step, dim=self.num_envs, device=self.wp_device,
+                  inputs=[self.max_episode_length, int(self.task_truncation), len(self.reward_terms), b.rewards,
+                          b.reward_terms, b.terminated, b.truncated, b.episode_length, self._episode_return,
+                          self._term_sums],
+                  outputs=[b.done, *self._ended_views])  # fmt: skip
+        if self.record_final_obs:
+            self._observe_final()
+        self._reset_impl(b.done)
+        self._streams.next_episode(b.done)
 
     def transform_actions(self, actions) -> None:
         """Apply ``action_transform`` in place to a Warp (num_envs, num_actions) array (``clip`` is the tasks')."""
@@ -267,41 +288,10 @@ class WarpVecEnv(VecEnv):
 
     def reseed(self, seed: int) -> None:
         """Restart every env's random stream from ``seed`` (gymnasium's ``reset(seed=...)``)."""
-        if self.reset_group_size > 1:
-            wp.launch(_seed_group_streams, dim=self.num_envs, device=self.wp_device,
-                      inputs=[seed, self.reset_group_size, self._group_base, self._episode_index, self.buffers.rng])
-        else:
-            wp.launch(_seed_streams, dim=self.num_envs, inputs=[seed, self.buffers.rng], device=self.wp_device)
+        self._streams.reseed(seed)
 
 
 @wp.kernel
 def _tanh_in_place(actions: wp.array2d(dtype=float)):
     i, j = wp.tid()
     actions[i, j] = wp.tanh(actions[i, j])
-
-
-@wp.kernel
-def _seed_streams(seed: int, rng: wp.array(dtype=wp.uint32)):
-    # Independent counter-based random stream per env; kernels advance rng[i] in place.
-    i = wp.tid()
-    rng[i] = wp.rand_init(seed, i)
-
-
-@wp.kernel
-def _seed_group_streams(seed: int, group_size: int, base: wp.array(dtype=wp.int32),
-                        episode: wp.array(dtype=wp.int32), rng: wp.array(dtype=wp.uint32)):  # fmt: skip
-    # Stream of env i's k-th episode: rand_init(base of its group, k); kernels draw resets (and only resets) from it.
-    i = wp.tid()
-    base[i] = wp.int32(wp.rand_init(seed, i // group_size))
-    episode[i] = 0
-    rng[i] = wp.rand_init(base[i], 0)
-
-
-@wp.kernel
-def _next_group_streams(ended_a: wp.array(dtype=wp.bool), ended_b: wp.array(dtype=wp.bool),
-                        base: wp.array(dtype=wp.int32), episode: wp.array(dtype=wp.int32),
-                        rng: wp.array(dtype=wp.uint32)):  # fmt: skip
-    i = wp.tid()
-    if ended_a[i] or ended_b[i]:
-        episode[i] = episode[i] + 1
-        rng[i] = wp.rand_init(base[i], episode[i])

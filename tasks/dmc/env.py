@@ -1,41 +1,25 @@
 """DMC-style control tasks (MuJoCo Playground's DM Control Suite) on Newton's MuJoCo solver, one world per env.
 
-One control step: squash actions with tanh (``action_transform``; or clip them) into the MuJoCo actuator controls, run the task's physics substeps, compute
-the reward from the new state, end episodes (a time-out after ``max_episode_length`` steps, reported as truncated so
-the value is bootstrapped; a non-finite physics state, reported as terminated with reward 0 and counted in the
-``nonfinite_resets`` episode metric), re-initialise finished envs, and write observations. Everything runs in Warp
-kernels over the env index and is replayed as one captured graph after the first step.
+One control step: squash actions with tanh (``action_transform``; or clip them) into the MuJoCo actuator controls,
+run the task's physics substeps, compute the reward from the new state and end the episodes whose physics state is
+no longer finite (terminated, reward 0, counted in the ``nonfinite_resets`` episode metric). The base env then applies
+the time-out after ``max_episode_length`` steps (truncated, so the value is bootstrapped) and the task re-initialises
+the finished envs and writes every observation. Everything runs in Warp kernels over the env index and is replayed
+as one captured graph after the first step.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import torch
-import warp as wp
 
-from refpo_warp.envs import EnvCfg, WarpVecEnv
+from refpo_warp.device import configure_warp
+from refpo_warp.envs.warp_vec_env import WarpVecEnv
 from refpo_warp.errors import unknown
-from refpo_warp.options import Int, OneOf
 from refpo_warp.sim import MuJoCoWorlds, world_state_finite
-from tasks.dmc.suite import TASKS
+from tasks.dmc import suite
+from tasks.dmc.cfg import DmcCfg
 
-
-@dataclass
-class DmcCfg(EnvCfg):
-    action_transform: str = "tanh"
-    """MuJoCo Playground sends tanh(action) to the DM Control envs (``clip``: the actions clipped to [-1, 1])."""
-    task: str = "cartpole_balance"
-    """Suite task name (set by the registered task id, e.g. dmc_cheetah_run -> cheetah_run)."""
-    solver_iterations: int = 0
-    """MuJoCo solver iterations; 0 keeps the model file's (Playground's deliberately low) value."""
-    solver_ls_iterations: int = 0
-    """MuJoCo line-search iterations; 0 keeps the model file's value."""
-    reset_bank_size: int = 0
-    """Settled initial states pre-computed by tasks whose reset lets the model settle first (cheetah);
-    0 means max(num_envs, 256)."""
-    option_rules = {"task": OneOf(sorted(TASKS), fixed=True), "solver_iterations": Int(0, 10_000),
-                    "solver_ls_iterations": Int(0, 10_000), "reset_bank_size": Int(0, 10_000_000)}  # fmt: skip
+wp = configure_warp()
 
 
 @wp.kernel
@@ -45,36 +29,19 @@ def apply_actions(actions: wp.array2d(dtype=float), ctrl: wp.array2d(dtype=float
 
 
 @wp.kernel
-def finish_step(
+def end_diverged_worlds(
     joint_q: wp.array2d(dtype=float),
     joint_qd: wp.array2d(dtype=float),
-    max_episode_length: int,
     rewards: wp.array(dtype=float),
-    episode_length: wp.array(dtype=wp.int32),
     terminated: wp.array(dtype=wp.bool),
-    truncated: wp.array(dtype=wp.bool),
-    reset_mask: wp.array(dtype=wp.bool),
     nonfinite_resets: wp.array(dtype=float),
 ):
     i = wp.tid()
     finite = world_state_finite(joint_q, joint_qd, i)
-    length = episode_length[i] + 1
-    timeout = finite and length >= max_episode_length
     if not finite:
         rewards[i] = 0.0  # the reward of a diverged state is meaningless (and may be NaN)
     terminated[i] = not finite
-    truncated[i] = timeout
-    done = timeout or not finite
-    reset_mask[i] = done
     nonfinite_resets[i] = wp.where(finite, 0.0, 1.0)
-    episode_length[i] = wp.where(done, 0, length)
-
-
-@wp.kernel
-def restart_episodes(mask: wp.array(dtype=wp.bool), episode_length: wp.array(dtype=wp.int32)):
-    i = wp.tid()
-    if mask[i]:
-        episode_length[i] = 0
 
 
 class DmcEnv(WarpVecEnv):
@@ -85,9 +52,9 @@ class DmcEnv(WarpVecEnv):
     supports_final_observations = True
 
     def _spaces(self):
-        if self.cfg.task not in TASKS:
-            raise unknown("DMC task (env.task)", self.cfg.task, TASKS)
-        self.task_class = TASKS[self.cfg.task]
+        if self.cfg.task not in suite.task_names():
+            raise unknown("DMC task (env.task)", self.cfg.task, suite.task_names())
+        self.task_class = suite.task_class(self.cfg.task)
         return self.task_class.num_actions, {"policy": self.task_class.num_obs}
 
     def _build(self) -> None:
@@ -117,19 +84,14 @@ class DmcEnv(WarpVecEnv):
         sim.simulate()
         task.after_physics()
         task.reward(b.rewards)
-        wp.launch(finish_step, dim=self.num_envs,
-                  inputs=[sim.views.joint_q, sim.views.joint_qd, self.max_episode_length, b.rewards,
-                          b.episode_length, b.terminated, b.truncated, sim.reset_mask,
+        wp.launch(end_diverged_worlds, dim=self.num_envs,
+                  inputs=[sim.views.joint_q, sim.views.joint_qd, b.rewards, b.terminated,
                           b.metrics["nonfinite_resets"]])  # fmt: skip
-        if self.record_final_obs:  # the observation that ends each episode, before the resets below
-            task.observe(b.final_obs["policy"], self._no_resets)
-        self._start_episodes(sim.reset_mask)
+
+    def _observe_final(self) -> None:
+        self.task.observe(self.buffers.final_obs["policy"], self._no_resets)
 
     def _reset_impl(self, mask) -> None:
-        wp.launch(restart_episodes, dim=self.num_envs, inputs=[mask, self.buffers.episode_length])
-        self._start_episodes(mask)
-
-    def _start_episodes(self, mask) -> None:
         """Initial states of the envs in ``mask``, then the observations of all envs."""
         self.task.reset(mask)
         self.sim.after_reset(mask)

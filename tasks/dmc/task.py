@@ -1,6 +1,7 @@
 """What one DMC task adds to the shared Newton env: its model file, sizes, and reset/reward/observation kernels.
 
-A task subclass sets the class attributes and launches its kernels over the env (= world) index. Kernels read the
+A task is a module of ``tasks/dmc/suite/`` that defines one subclass (the module's name is the task's name). The
+subclass sets the class attributes and launches its kernels over the env (= world) index. Kernels read the
 simulation through ``self.views`` (per-world views of joint coordinates, body poses, controls; see
 ``refpo_warp.sim.WorldViews``) and write only the arrays they are given. All launches must be graph-capturable.
 """
@@ -38,9 +39,8 @@ def reset_uniform(
 
 
 class DmcTask:
-    """Base class of the ten DMC tasks (one instance per env, built after the simulation)."""
+    """Base class of the DMC tasks (one instance per env, built after the simulation)."""
 
-    name: ClassVar[str]
     model_file: ClassVar[str]  # file in tasks/dmc/models/
     substeps: ClassVar[int]  # physics steps per control step (Playground ctrl_dt / sim_dt)
     num_obs: ClassVar[int]

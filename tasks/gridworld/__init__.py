@@ -1,9 +1,7 @@
 """Multimodal GridWorld (ReFPO paper §4.1): two goal bands, one at the top and one at the bottom of the grid."""
 
 from refpo_warp.registry import register_task
+from tasks.gridworld.cfg import GridWorldCfg
 
-register_task(
-    "gridworld",
-    "tasks.gridworld.env:GridWorldEnv",
-    description="25x25 grid, goal rows {0,1,23,24} (+20, episode ends), 200-step time-out",
-)
+register_task("gridworld", "tasks.gridworld.env:GridWorldEnv", GridWorldCfg,
+              description="25x25 grid, goal rows {0,1,23,24} (+20, episode ends), 200-step time-out")  # fmt: skip

@@ -1,30 +1,22 @@
-"""GridWorld as one Warp kernel over the env index.
+"""GridWorld as Warp kernels over the env index.
 
 Dynamics (paper Appendix B.1, reference ``two_walls`` mode): integer position (x, y) on a size x size grid; the
 continuous 2-D action is clipped to [-1, 1] and rounded per axis to {-1, 0, 1} (|a| > 0.5 moves; diagonals allowed);
 the position is clipped to the grid. Rows y in {0, 1} (bottom) and {size-2, size-1} (top) are goals: reward
-``goal_reward`` and the episode ends. Otherwise the reward is 0 and the episode times out after
-``max_episode_length`` steps. Resets are uniform over the non-goal cells. Observation: (pos - c) / c, c = (size-1)/2.
+``goal_reward`` and the episode ends (terminated). Otherwise the reward is 0 and the base env's time-out ends the
+episode after ``max_episode_length`` steps. Resets are uniform over the non-goal cells. Observation: (pos - c) / c,
+c = (size-1)/2.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import torch
-import warp as wp
 
-from refpo_warp.envs import EnvCfg, WarpVecEnv
-from refpo_warp.options import Int, Real
+from refpo_warp.device import configure_warp
+from refpo_warp.envs.warp_vec_env import WarpVecEnv
+from tasks.gridworld.cfg import GridWorldCfg
 
-
-@dataclass
-class GridWorldCfg(EnvCfg):
-    size: int = 25
-    goal_reward: float = 20.0
-    max_episode_length: int = 200
-    # starts lie in rows 2 .. size - 3, between the goal rows: at least 5 rows
-    option_rules = {"size": Int(5, 100_000), "goal_reward": Real(-1e6, 1e6)}
+wp = configure_warp()
 
 
 @wp.func
@@ -62,15 +54,11 @@ def sample_start(rng: wp.array(dtype=wp.uint32), i: int, size: int) -> wp.vec2i:
 def step_kernel(
     actions: wp.array2d(dtype=float),
     pos: wp.array(dtype=wp.vec2i),
-    episode_length: wp.array(dtype=wp.int32),
-    rng: wp.array(dtype=wp.uint32),
     size: int,
-    max_episode_length: int,
     goal_reward: float,
     obs: wp.array2d(dtype=float),
     rewards: wp.array(dtype=float),
     terminated: wp.array(dtype=wp.bool),
-    truncated: wp.array(dtype=wp.bool),
     success: wp.array(dtype=float),
     reached_top: wp.array(dtype=float),
     final_obs: wp.array2d(dtype=float),
@@ -80,30 +68,20 @@ def step_kernel(
     dx = move(wp.clamp(actions[i, 0], -1.0, 1.0))
     dy = move(wp.clamp(actions[i, 1], -1.0, 1.0))
     p = wp.vec2i(wp.clamp(p[0] + dx, 0, size - 1), wp.clamp(p[1] + dy, 0, size - 1))
-
     goal = is_goal_row(p[1], size)
-    length = episode_length[i] + 1
-    timeout = (not goal) and length >= max_episode_length
     rewards[i] = wp.where(goal, goal_reward, 0.0)
     terminated[i] = goal
-    truncated[i] = timeout
     success[i] = wp.where(goal, 1.0, 0.0)
     reached_top[i] = wp.where(goal and p[1] >= size - 2, 1.0, 0.0)
-    write_obs(final_obs, i, p, size)  # before the auto-reset (two floats: cheaper to always write than to branch)
-
-    if goal or timeout:  # auto-reset: the returned observation starts the next episode
-        p = sample_start(rng, i, size)
-        length = 0
     pos[i] = p
-    episode_length[i] = length
     write_obs(obs, i, p, size)
+    write_obs(final_obs, i, p, size)  # before any reset (two floats: cheaper to always write than to branch)
 
 
 @wp.kernel
 def reset_kernel(
     mask: wp.array(dtype=wp.bool),
     pos: wp.array(dtype=wp.vec2i),
-    episode_length: wp.array(dtype=wp.int32),
     rng: wp.array(dtype=wp.uint32),
     size: int,
     obs: wp.array2d(dtype=float),
@@ -111,7 +89,6 @@ def reset_kernel(
     i = wp.tid()
     if mask[i]:
         pos[i] = sample_start(rng, i, size)
-        episode_length[i] = 0
         write_obs(obs, i, pos[i], size)
 
 
@@ -133,18 +110,16 @@ class GridWorldEnv(WarpVecEnv):
 
     def _step_impl(self) -> None:
         b, c = self.buffers, self.cfg
-        wp.launch(
-            step_kernel,
-            dim=self.num_envs,
-            inputs=[b.actions, self.pos, b.episode_length, b.rng, c.size, c.max_episode_length, c.goal_reward],
-            outputs=[b.obs["policy"], b.rewards, b.terminated, b.truncated, b.metrics["success"],
-                     b.metrics["reached_top"], b.final_obs["policy"]],
-        )  # fmt: skip
+        wp.launch(step_kernel, dim=self.num_envs, inputs=[b.actions, self.pos, c.size, c.goal_reward],
+                  outputs=[b.obs["policy"], b.rewards, b.terminated, b.metrics["success"], b.metrics["reached_top"],
+                           b.final_obs["policy"]])  # fmt: skip
+
+    def _observe_final(self) -> None:
+        pass  # the step kernel always writes it
 
     def _reset_impl(self, mask) -> None:
-        b = self.buffers
-        wp.launch(reset_kernel, dim=self.num_envs, inputs=[mask, self.pos, b.episode_length, b.rng, self.cfg.size],
-                  outputs=[b.obs["policy"]])  # fmt: skip
+        wp.launch(reset_kernel, dim=self.num_envs, inputs=[mask, self.pos, self.buffers.rng, self.cfg.size],
+                  outputs=[self.buffers.obs["policy"]])  # fmt: skip
 
     @property
     def positions(self) -> torch.Tensor:
@@ -157,6 +132,6 @@ class GridWorldEnv(WarpVecEnv):
         if (positions < 0).any() or (positions >= self.cfg.size).any():
             raise ValueError(f"positions must lie on the {self.cfg.size}x{self.cfg.size} grid")
         self._pos.copy_(positions)
-        self._episode_length.zero_()
+        self.restart_counters()
         c = (self.cfg.size - 1) / 2
         self._obs["policy"].copy_((positions.float() - c) / c)

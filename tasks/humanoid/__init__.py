@@ -1,14 +1,17 @@
-"""SMPL humanoid motion tracking (ReFPO paper §4.3): three goal-conditioning regimes over the same env."""
+"""SMPL humanoid motion tracking (ReFPO paper §4.3): one env, task ids that fix its goal conditioning (and options)."""
 
 from refpo_warp.registry import register_task
+from tasks.humanoid.cfg import HumanoidTrackingCfg
 
-_ENV = "tasks.humanoid.env:HumanoidTrackingEnv"
+# task id: (description, the env options the id fixes); humanoid_all_residual's residual PD targets are in its YAML
+TASKS = {
+    "humanoid_all": ("every body's targets observed", {"conditioning": "all"}),
+    "humanoid_root_hands": ("only pelvis and wrist positions observed", {"conditioning": "root_hands"}),
+    "humanoid_all_residual": ("every body's targets observed, PD targets relative to the reference",
+                              {"conditioning": "all"}),
+    "humanoid_root": ("only the pelvis position observed", {"conditioning": "root"}),
+}
 
-register_task("humanoid_all", _ENV, description="SMPL humanoid tracking, every body's targets observed",
-              conditioning="all")
-register_task("humanoid_root_hands", _ENV,
-              description="SMPL humanoid tracking, only pelvis and wrist positions observed", conditioning="root_hands")
-register_task("humanoid_all_residual", _ENV, conditioning="all",
-              description="SMPL humanoid tracking, every body's targets observed, PD targets relative to the reference")
-register_task("humanoid_root", _ENV, description="SMPL humanoid tracking, only the pelvis position observed",
-              conditioning="root")
+for _task_id, (_description, _fixed) in TASKS.items():
+    register_task(_task_id, "tasks.humanoid.env:HumanoidTrackingEnv", HumanoidTrackingCfg,
+                  description=f"SMPL humanoid tracking, {_description}", **_fixed)  # fmt: skip

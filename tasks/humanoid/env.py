@@ -1,25 +1,24 @@
 """SMPL humanoid motion tracking (ReFPO paper §4.3): a Newton-simulated humanoid follows reference clips.
 
 Per control step (30 Hz), all in Warp kernels and captured as one graph: PD targets from the actions, 4 physics
-substeps, the reference at the new time, reward / termination / episode metrics, new episodes for finished envs
-(reference-state initialisation: the simulator is set to the reference at the episode's start time), and the
-observation against the reference one control step ahead. Details: ``docs/humanoid.md``.
+substeps, the reference at the new time, reward terms / termination / clip-end truncation / episode metrics; then the
+base env's episode rules (``refpo_warp/envs/episode.py``), new episodes for finished envs (reference-state
+initialisation: the simulator is set to the reference at the episode's start time), and the observation against the
+reference one control step ahead. Details: ``docs/humanoid.md``.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 import torch
 
 from refpo_warp.device import configure_warp
-from refpo_warp.envs import EnvCfg, WarpVecEnv
+from refpo_warp.envs.warp_vec_env import WarpVecEnv
 from refpo_warp.motion import skeleton as sk
-from refpo_warp.options import Flag, Int, OneOf, Real, Text
 from tasks.humanoid import motions
+from tasks.humanoid.cfg import HumanoidTrackingCfg
 from tasks.humanoid.model import CONTROL_HZ, EFFORT_LIMIT, HumanoidSim, SimOptions
-from tasks.humanoid.obs_layout import CONDITIONING_REGIMES, OBS_DIM, conditioning_mask
+from tasks.humanoid.obs_layout import OBS_DIM, conditioning_mask
 from tasks.humanoid.observations import observation_kernel
 from tasks.humanoid.reward_terms import TERMS, reward_params
 from tasks.humanoid.tracking_kernels import (
@@ -33,81 +32,13 @@ from tasks.humanoid.tracking_kernels import (
 wp = configure_warp()
 
 
-@dataclass
-class HumanoidTrackingCfg(EnvCfg):
-    conditioning: str = "all"
-    """Goal conditioning of the policy observation: all | root_hands | root (set by the task id)."""
-    motion_file: str = ""
-    """AMASS npz file, folder of them, or *.motionlib.npz; "" = the shipped synthetic clips."""
-    eval_mode: bool = False
-    """Env i plays clip i from its start (no random init); termination on the mean body distance."""
-    max_episode_length: int = 300
-    """Training episode cap in control steps (the reference crops clips to 300 frames); unused in eval mode."""
-    termination_distance: float = 0.25
-    """Training: the episode ends when any body is farther than this (m) from the reference."""
-    eval_termination_distance: float = 0.5
-    """Eval mode: the episode ends when the mean distance of the 20 non-hand/toe bodies exceeds this (m)."""
-    reward_pos_weight: float = 0.5
-    reward_pos_scale: float = 100.0
-    """Term ``pos``: weight * exp(-scale * mean squared body-position error, m^2)."""
-    reward_rot_weight: float = 0.3
-    reward_rot_scale: float = 10.0
-    """Term ``rot``: weight * exp(-scale * mean squared body-rotation angle, rad^2)."""
-    reward_vel_weight: float = 0.1
-    reward_vel_scale: float = 0.1
-    """Term ``vel``: weight * exp(-scale * mean squared body linear-velocity error, (m/s)^2)."""
-    reward_angvel_weight: float = 0.1
-    reward_angvel_scale: float = 0.1
-    """Term ``angvel``: weight * exp(-scale * mean squared body angular-velocity error, (rad/s)^2)."""
-    power_coef: float = 0.0005
-    """Term ``power``: -power_coef * sum over hinges of |PD torque * joint rate| (off for the first 3 steps)."""
-    freeze_hands_toes: bool = True
-    """L/R_Hand and L/R_Toe PD targets stay 0 (the reference's freeze_hand / freeze_toe)."""
-    residual_actions: bool = False
-    """PD target = the reference joint angles of the observed frame (one control step ahead) + scale * clip(a, -1, 1),
-    kept within pi/2 of the current joint angles: Puffer-PHC's ``res_action`` (off in the paper's runs, as here by
-    default). Off: PD target = scale * clip(a, -1, 1)."""
-    max_joint_speed: float = 100.0
-    """A hinge rate above this (rad/s) is a numerical blow-up: the episode ends as a failure."""
-    substeps: int = 4
-    """Physics steps per 30 Hz control step (120 Hz; 3 substeps fail the 3 s PD hold, see docs/humanoid.md)."""
-    nconmax: int = 32
-    """Contact points per world; MuJoCo Warp pools nconmax x num_envs for all worlds (measured: at most 14 per world
-    on average over 32 tracking worlds). Kernels sized by the pool run over every slot, used or not."""
-    njmax: int = 160
-    """Constraint rows per world (4 per pyramidal contact + joint limits); measured peaks 72 (training) and 108 (eval
-    mode) under N(0, 1) actions. Kernels sized by njmax run over every row, used or not (320 -> 160: +5% steps/s,
-    identical results)."""
-    solver_iterations: int = 100
-    """Newton solver iteration cap (MuJoCo's default); worlds stop at convergence (1.8 iterations on average).
-    Capping at 3 moves bodies by up to 0.15 m in one control step from a cold start: not a safe speed-up."""
-    solver_ls_iterations: int = 50
-
-    option_rules = {  # valid values (refpo_warp.options)
-        "conditioning": OneOf(CONDITIONING_REGIMES, fixed=True),
-        "motion_file": Text(),
-        "eval_mode": Flag(),
-        "termination_distance": Real(0, 100, lo_open=True),
-        "eval_termination_distance": Real(0, 100, lo_open=True),
-        **{f"reward_{t}_weight": Real(-1e6, 1e6) for t in TERMS[:4]},
-        **{f"reward_{t}_scale": Real(0, 1e6) for t in TERMS[:4]},
-        "power_coef": Real(0, 1e3),
-        "freeze_hands_toes": Flag(),
-        "residual_actions": Flag(),
-        "max_joint_speed": Real(0, 1e6, lo_open=True),
-        "substeps": Int(1, 100),
-        "nconmax": Int(1, 100_000),
-        "njmax": Int(1, 1_000_000),
-        "solver_iterations": Int(1, 10_000),
-        "solver_ls_iterations": Int(0, 10_000),
-    }
-
-
 class HumanoidTrackingEnv(WarpVecEnv):
     """Motion tracking with 69 PD-controlled hinges; observation groups ``policy`` (masked) and ``critic`` (full)."""
 
     cfg_class = HumanoidTrackingCfg
     episode_metrics = ("success", "mpjpe_mm", "alive_steps")
+    reward_terms = TERMS
+    task_truncation = True  # the end of the reference clip
 
     @classmethod
     def eval_num_envs(cls, cfg: HumanoidTrackingCfg) -> int:
@@ -155,9 +86,6 @@ class HumanoidTrackingEnv(WarpVecEnv):
         self.obs_time = wp.zeros(n, dtype=float, device=dev)
         self.mpjpe_sum = wp.zeros(n, dtype=float, device=dev)
         self.reward_params = reward_params(c)
-        self.term_sum = wp.zeros((n, len(TERMS)), dtype=float, device=dev)  # this episode's sums so far
-        self._episode_terms = torch.zeros(n, len(TERMS), device=self.device)  # read where an episode ended
-        self.episode_terms = wp.from_torch(self._episode_terms)
 
     # ------------------------------------------------------------------------------------------------ stepping
     def _step_impl(self) -> None:
@@ -177,26 +105,14 @@ class HumanoidTrackingEnv(WarpVecEnv):
             dim=n,
             inputs=[s.body_q, s.body_qd, s.body_com, s.joint_q, s.joint_qd, s.joint_target, self.kp, self.kd,
                     EFFORT_LIMIT, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, self.eval_body, self.clip_id,
-                    self.ref_time, self.motion.clip_duration_device, b.episode_length, self.max_episode_length,
-                    int(c.eval_mode), c.termination_distance, c.eval_termination_distance, c.max_joint_speed,
-                    self.reward_params, self.mpjpe_sum, self.term_sum],
-            outputs=[b.rewards, b.terminated, b.truncated, s.reset_mask, b.metrics["success"],
-                     b.metrics["mpjpe_mm"], b.metrics["alive_steps"], self.episode_terms],
+                    self.ref_time, self.motion.clip_duration_device, b.episode_length, int(c.eval_mode),
+                    c.termination_distance, c.eval_termination_distance, c.max_joint_speed, self.reward_params,
+                    self.mpjpe_sum],
+            outputs=[b.rewards, b.terminated, b.truncated, b.metrics["success"], b.metrics["mpjpe_mm"],
+                     b.metrics["alive_steps"], b.reward_terms],
         )  # fmt: skip
-        self._start_episodes(s.reset_mask)
-
-    def step(self, actions: torch.Tensor):
-        """The base step, plus each reward term's sum over the episodes that ended (``Episode_Reward/<term>``)."""
-        obs, rewards, dones, extras = super().step(actions)
-        if "log" in extras:  # written by the base env when an episode ended
-            ended = self._episode_terms[dones]
-            extras["log"].update({f"Episode_Reward/{t}": ended[:, k] for k, t in enumerate(TERMS)})
-        return obs, rewards, dones, extras
 
     def _reset_impl(self, mask) -> None:
-        self._start_episodes(mask)
-
-    def _start_episodes(self, mask) -> None:
         """New episodes where ``mask`` is set (simulator set to the reference), then every env's observation."""
         b, s, n, r = self.buffers, self.sim, self.num_envs, self.ref
         wp.launch(
@@ -204,8 +120,7 @@ class HumanoidTrackingEnv(WarpVecEnv):
             dim=n,
             inputs=[mask, b.rng, self.motion.num_clips, self.motion.clip_duration_device, self.step_dt,
                     int(self.cfg.eval_mode)],
-            outputs=[self.clip_id, self.start_time, self.ref_time, b.episode_length, self.mpjpe_sum, self.term_sum,
-                     s.reset_mask],
+            outputs=[self.clip_id, self.start_time, self.ref_time, self.mpjpe_sum, s.reset_mask],
         )  # fmt: skip
         # Only the starting envs need the reference at their (new) start; every row is resampled below.
         self.motion.sample(self.clip_id, self.ref_time, r, mask=s.reset_mask)

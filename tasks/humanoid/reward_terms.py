@@ -4,7 +4,8 @@
 + w_angvel exp(-k_angvel mean dw^2) - power_coef sum_dof |tau * qdot|``; means over the 24 bodies and, for vectors,
 over x/y/z. Defaults (the reference's): weights 0.5 / 0.3 / 0.1 / 0.1, scales 100 / 10 / 0.1 / 0.1, power 0.0005.
 The terms are computed in one kernel with the termination checks (``tracking_kernels.evaluate_step_kernel``); each
-step's weighted terms add up to the reward, and their sums over an episode are logged as ``Episode_Reward/<term>``.
+step's weighted terms add up to the reward; the base env sums them over each episode, logged as
+``Episode_Reward/<term>``.
 """
 
 from __future__ import annotations
@@ -41,14 +42,7 @@ def imitation_term(weight: float, scale: float, sq_error_sum: float, count: floa
 
 
 @wp.func
-def write_terms(
-    i: int,
-    terms: term_vector,
-    term_sum: wp.array2d(dtype=float),
-    episode_terms: wp.array2d(dtype=float),
-):
-    """Add this step's terms to the episode's running sums; ``episode_terms`` holds the sums so far."""
+def write_terms(i: int, terms: term_vector, reward_terms: wp.array2d(dtype=float)):
+    """This step's terms of env ``i`` (the base env sums them over the episode)."""
     for k in range(NUM_TERMS):
-        total = term_sum[i, k] + terms[k]
-        term_sum[i, k] = total
-        episode_terms[i, k] = total
+        reward_terms[i, k] = terms[k]

@@ -1,5 +1,7 @@
-"""Per-step kernels of the tracking env: PD targets from actions, imitation reward, termination, episode metrics,
-episode starts (reference-state initialisation) and writing a reference state into the simulator.
+"""Per-step kernels of the tracking env: PD targets from actions, imitation reward, termination, the clip-end
+truncation, episode metrics, episode starts (reference-state initialisation) and writing a reference state into the
+simulator. The episode rules themselves (length, time-out, done, episode sums) are the base env's
+(``refpo_warp/envs/episode.py``); here ``episode_length`` is read only, and it still holds the count before the step.
 
 Reward: the named terms of ``reward_terms.py`` (weights and scales from the cfg), the power term off for an
 episode's first 3 steps.
@@ -57,9 +59,7 @@ def advance_time_kernel(
     ref_time: wp.array(dtype=float),
 ):
     i = wp.tid()
-    length = episode_length[i] + 1
-    episode_length[i] = length
-    ref_time[i] = start_time[i] + float(length) * dt
+    ref_time[i] = start_time[i] + float(episode_length[i] + 1) * dt  # the time of the state this step reaches
 
 
 @wp.func
@@ -90,9 +90,7 @@ def start_episodes_kernel(
     clip_id: wp.array(dtype=int),
     start_time: wp.array(dtype=float),
     ref_time: wp.array(dtype=float),
-    episode_length: wp.array(dtype=wp.int32),
     mpjpe_sum: wp.array(dtype=float),
-    term_sum: wp.array2d(dtype=float),
     reset_mask: wp.array(dtype=wp.bool),
 ):
     i = wp.tid()
@@ -100,10 +98,7 @@ def start_episodes_kernel(
     if mask[i]:
         choose_start(rng, i, num_clips, clip_duration, dt, eval_mode, clip_id, start_time)
         ref_time[i] = start_time[i]
-        episode_length[i] = 0
         mpjpe_sum[i] = 0.0
-        for k in range(term_sum.shape[1]):
-            term_sum[i, k] = 0.0
 
 
 @wp.kernel
@@ -126,22 +121,19 @@ def evaluate_step_kernel(
     ref_time: wp.array(dtype=float),
     clip_duration: wp.array(dtype=float),
     episode_length: wp.array(dtype=wp.int32),
-    max_episode_length: int,
     eval_mode: int,
     termination_distance: float,
     eval_termination_distance: float,
     max_joint_speed: float,
     reward: RewardParams,
     mpjpe_sum: wp.array(dtype=float),
-    term_sum: wp.array2d(dtype=float),
     rewards: wp.array(dtype=float),
     terminated: wp.array(dtype=wp.bool),
-    truncated: wp.array(dtype=wp.bool),
-    done_mask: wp.array(dtype=wp.bool),
+    clip_end: wp.array(dtype=wp.bool),
     success: wp.array(dtype=float),
     mpjpe_mm: wp.array(dtype=float),
     alive_steps: wp.array(dtype=float),
-    episode_terms: wp.array2d(dtype=float),
+    reward_terms: wp.array2d(dtype=float),
 ):
     i = wp.tid()
     pos_err = float(0.0)
@@ -185,7 +177,7 @@ def evaluate_step_kernel(
         tau = wp.clamp(kp[d] * (joint_target[i, QS + d] - q) - kd[d] * qd, -effort_limit, effort_limit)
         power += wp.abs(tau * qd)
         fastest = wp.max(fastest, wp.abs(qd))
-    length = episode_length[i]
+    length = episode_length[i] + 1  # the state just reached is step `length` of the episode
     if length <= POWER_FREE_STEPS:
         power = 0.0
     terms[4] = -reward.power_coef * power
@@ -196,22 +188,21 @@ def evaluate_step_kernel(
         reward_sum = 0.0
         sum_dist = 0.0
         terms = term_vector()
-    write_terms(i, terms, term_sum, episode_terms)
+    write_terms(i, terms, reward_terms)
 
     if eval_mode != 0:
         lost = eval_dist / wp.max(eval_count, 1.0) > eval_termination_distance
     else:
         lost = max_dist > termination_distance
     term = broken or (lost and length > 1)
-    clip_end = ref_time[i] >= clip_duration[clip_id[i]] - 1.0e-4
-    trunc = (not term) and (clip_end or (eval_mode == 0 and length >= max_episode_length))
+    # The end of the clip truncates the episode (the base env's finish_step lets a termination take precedence and
+    # adds the time-out; in eval mode max_episode_length is past every clip's end, so only clip ends truncate).
+    clip_end[i] = ref_time[i] >= clip_duration[clip_id[i]] - 1.0e-4
 
     total = mpjpe_sum[i] + sum_dist / n
     mpjpe_sum[i] = total
     rewards[i] = reward_sum
     terminated[i] = term
-    truncated[i] = trunc
-    done_mask[i] = term or trunc
     success[i] = wp.where(term, 0.0, 1.0)
     mpjpe_mm[i] = 1000.0 * total / float(wp.max(length, 1))
     alive_steps[i] = float(length)

@@ -1,4 +1,4 @@
-"""Cheetah run (Playground ``CheetahRun``): run forward as fast as possible.
+"""Cheetah run (Playground ``CheetahRun``): run a planar half-cheetah forward as fast as possible.
 
 Observation (17): joint positions without the root x (8), joint velocities (9).
 Reward: tolerance(v, bounds=(10, inf), margin=10, value 0 at margin, linear) = clip(v / 10, 0, 1), where v is the
@@ -62,7 +62,6 @@ def cheetah_obs(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=flo
 
 
 class CheetahRun(DmcTask):
-    name = "cheetah_run"
     model_file = "cheetah.xml"
     substeps = 1  # ctrl_dt = sim_dt = 0.01
     num_obs = 17

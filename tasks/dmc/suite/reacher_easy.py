@@ -1,4 +1,4 @@
-"""Reacher easy (Playground ``ReacherEasy``): touch a randomly placed target with the tip of a two-link arm.
+"""Reacher easy (Playground ``ReacherEasy``): touch a random target with the tip of a two-link arm.
 
 Observation (6): shoulder and wrist angles, target minus fingertip (x, y), joint velocities.
 Reward: 1 when the fingertip-target distance is at most 0.05 + 0.01 (target radius + fingertip radius), else 0.
@@ -80,7 +80,6 @@ def reacher_obs(
 
 
 class ReacherEasy(DmcTask):
-    name = "reacher_easy"
     model_file = "reacher_easy.xml"
     substeps = 4  # ctrl_dt 0.02, sim_dt 0.005
     num_obs = 6

@@ -37,7 +37,6 @@ def point_mass_obs(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=
 
 
 class PointMass(DmcTask):
-    name = "point_mass"
     model_file = "point_mass.xml"
     substeps = 1  # ctrl_dt = sim_dt = 0.02
     num_obs = 4

@@ -35,7 +35,6 @@ def ball_in_cup_obs(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype
 
 
 class BallInCup(DmcTask):
-    name = "ball_in_cup"
     model_file = "ball_in_cup.xml"
     substeps = 10  # ctrl_dt 0.02, sim_dt 0.002
     num_obs = 8

@@ -63,7 +63,6 @@ def walker_obs(
 
 
 class WalkerWalk(DmcTask):
-    name = "walker_walk"
     model_file = "walker.xml"
     substeps = 10  # ctrl_dt 0.025, sim_dt 0.0025
     num_obs = 24

@@ -1,4 +1,4 @@
-"""Finger spin (Playground ``FingerSpin``): flick the free spinner so that it turns fast.
+"""Finger spin (Playground ``FingerSpin``): flick a hinged spinner into fast rotation.
 
 Observation (9): proximal and distal joint angles (MuJoCo qpos, i.e. including the proximal ``ref`` of -90 deg),
 spinner tip position relative to the spinner frame (x, z), joint velocities (3), log(1 + touch) of the two fingertip
@@ -121,7 +121,6 @@ def finger_obs(
 
 
 class FingerSpin(DmcTask):
-    name = "finger_spin"
     model_file = "finger_spin.xml"
     substeps = 4  # ctrl_dt 0.02, sim_dt 0.005
     num_obs = 9

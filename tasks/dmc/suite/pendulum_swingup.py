@@ -1,4 +1,4 @@
-"""Pendulum swing-up (Playground ``PendulumSwingup``).
+"""Pendulum swing-up (Playground ``PendulumSwingup``): swing a torque-limited pendulum upright.
 
 Observation (3): pole frame zz and xz (cos and sin of the angle from upright; dm_control's order), hinge angular
 velocity.
@@ -38,7 +38,6 @@ def pendulum_obs(
 
 
 class PendulumSwingup(DmcTask):
-    name = "pendulum_swingup"
     model_file = "pendulum.xml"
     substeps = 2  # ctrl_dt 0.02, sim_dt 0.01
     num_obs = 3

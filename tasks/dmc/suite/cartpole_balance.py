@@ -1,4 +1,6 @@
-"""Cartpole balance and swing-up (Playground ``CartpoleBalance`` / ``CartpoleSwingup``, dense reward).
+"""Cartpole balance (Playground ``CartpoleBalance``): keep a pole upright on a cart (dense reward).
+
+The swing-up task (``cartpole_swingup.py``) shares this model, reward and observation; only its reset differs.
 
 Observation (5): cart position, cos and sin of the pole angle (pole frame zz and xz), cart and pole velocities.
 Reward: upright * centered * small_control * small_velocity with upright = (cos + 1) / 2,
@@ -79,12 +81,11 @@ def cartpole_obs(
 
 
 class CartpoleBalance(DmcTask):
-    name = "cartpole_balance"
     model_file = "cartpole.xml"
     substeps = 1  # ctrl_dt 0.01 = sim_dt 0.01
     num_obs = 5
     num_actions = 1
-    swing_up = 0
+    swing_up = 0  # the reset's distribution (cartpole_swingup.py sets 1)
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)
@@ -101,8 +102,3 @@ class CartpoleBalance(DmcTask):
     def observe(self, obs, reset_mask) -> None:
         v = self.views
         self.launch(cartpole_obs, [v.joint_q, v.joint_qd, v.body_q, self.pole, obs])
-
-
-class CartpoleSwingup(CartpoleBalance):
-    name = "cartpole_swingup"
-    swing_up = 1

@@ -1,5 +1,6 @@
-"""Acrobot swing-up (Playground ``AcrobotSwingup``): swing the tip of a two-link pendulum (elbow actuated) up to
-a target 4 m above the ground.
+"""Acrobot swing-up (Playground ``AcrobotSwingup``): swing a two-link underactuated pendulum up to a target.
+
+The tip of the two-link pendulum (elbow actuated) reaches for a target 4 m above the ground.
 
 Observation (6): z-axis x components of the upper and lower arm frames (horizontal), their z components
 (vertical), joint velocities. Reward: tolerance(|tip - target|, bounds=(0, 0.2), margin=1) (Gaussian, 0.1 at margin).
@@ -47,7 +48,6 @@ def acrobot_obs(
 
 
 class AcrobotSwingup(DmcTask):
-    name = "acrobot_swingup"
     model_file = "acrobot.xml"
     substeps = 1  # ctrl_dt = sim_dt = 0.01
     num_obs = 6
