@@ -113,10 +113,20 @@ def _choices(kind: str) -> list[str]:
     return sorted(p.stem for p in (CONFIG_DIR / kind).glob("*.yaml") if not p.stem.startswith("_"))
 
 
+def task_config_path(task: str) -> Path:
+    """The training config file of a registered task: its spec's ``config_file``, else ``configs/task/<task>.yaml``."""
+    from refpo_warp.registry import get_task
+
+    config_file = get_task(task).config_file
+    return Path(config_file) if config_file is not None else CONFIG_DIR / "task" / f"{task}.yaml"
+
+
 def _task_layers(task: str, seen: tuple[str, ...] = ()) -> dict:
-    path = CONFIG_DIR / "task" / f"{task}.yaml"
+    """The task's config file merged over its ``base`` chain (bases are ``configs/task/<base>.yaml``)."""
+    path = task_config_path(task) if not seen else CONFIG_DIR / "task" / f"{task}.yaml"
     if not path.exists():
-        return {}
+        what = f"task '{task}' is registered, but its config file" if not seen else f"base '{task}' of {seen[-1]}:"
+        raise ConfigError(f"{what} {path} does not exist (every task needs one; it may hold just a 'base' line)")
     data = load_yaml(path)
     merged: dict = {}
     for base in [data.get("base")] if isinstance(data.get("base"), str) else data.get("base") or []:
@@ -251,7 +261,7 @@ def _validate_class_section(section: str, values: dict) -> dict:
 def _validate_env_section(task: str, values: dict, prefix: str = "env.") -> dict:
     from refpo_warp.registry import get_task
 
-    cfg_class = get_task(task).env_class().cfg_class
+    cfg_class = get_task(task).cfg_class
     fields = {f.name: f for f in dataclasses.fields(cfg_class)}
     out = {}
     for key, value in values.items():
@@ -310,7 +320,7 @@ def resolve_config(overrides: list[str] | dict[str, Any] | None = None, device_t
     # Env options may be given without the "env." prefix (e.g. motion_file=clips/ or conditioning=root).
     from refpo_warp.registry import get_task
 
-    env_fields = {f.name for f in dataclasses.fields(get_task(task).env_class().cfg_class)}
+    env_fields = {f.name for f in dataclasses.fields(get_task(task).cfg_class)}
     for key in [k for k in flat if "." not in k and k not in defaults and k in env_fields]:
         if f"env.{key}" in flat:
             raise ConfigError(f"'{key}' and 'env.{key}' are the same option, given twice; give it once")

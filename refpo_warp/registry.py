@@ -1,10 +1,10 @@
-"""Task registry: task ids map to an env cfg dataclass and a lazily imported environment class.
+"""Task registry: task ids map to a ``TaskSpec`` (env cfg dataclass, lazily imported env class, config file).
 
-Task families are the subpackages of the task root package (``tasks``); the registry imports each one the first time
-a task is looked up, and the family's ``__init__`` registers its ids with ``register_task``. Nothing lists the
-families by hand. A registration names the env cfg class (from a Warp-free module) and the env class as an
-entry-point string, so listing tasks and resolving configs never import a simulator; the env module is imported
-only when ``make_env`` builds that task.
+Task families are the subpackages of the task root package (``tasks``); each declares its tasks as a ``TASKS`` list
+of ``refpo_warp.task_spec.TaskSpec`` next to its code. The registry finds the families (nothing lists them by hand),
+imports each once and reads its list; the families never import the registry. Listing tasks and resolving configs
+never import a simulator: the env module is imported only when ``make_env`` builds that task. Code outside the task
+root adds tasks with ``register_task``.
 """
 
 from __future__ import annotations
@@ -12,62 +12,39 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import pkgutil
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
-from refpo_warp.errors import unknown
+from refpo_warp.errors import ConfigError, unknown
+from refpo_warp.task_spec import TaskSpec
+
+__all__ = ["TaskSpec", "get_task", "list_tasks", "make_env", "make_env_cfg", "register_task", "task_families"]
 
 TASK_ROOT = "tasks"  # the package whose subpackages are the task families
-
-
-@dataclass(frozen=True)
-class TaskSpec:
-    """A registered task: what builds its env and which config file holds its training defaults."""
-
-    task_id: str
-    entry_point: str  # "module.path:ClassName" of a WarpVecEnv subclass
-    cfg_class: type  # its env cfg dataclass (an EnvCfg subclass, importable without Warp)
-    cfg_overrides: dict[str, Any] = field(default_factory=dict)
-    description: str = ""
-    config_file: Path | None = None  # None: configs/task/<task_id>.yaml
-
-    def env_class(self) -> type:
-        module_path, name = self.entry_point.split(":")
-        return getattr(importlib.import_module(module_path), name)
-
-    @property
-    def package(self) -> str:
-        """The package of the env module: the family (``tasks.<family>``), home of its optional ``report.py``."""
-        return self.entry_point.split(":")[0].rsplit(".", 1)[0]
-
 
 _TASKS: dict[str, TaskSpec] = {}
 _FAMILIES: list[str] = []
 
 
-def register_task(task_id: str, entry_point: str, cfg_class: type, description: str = "",
-                  config_file: str | Path | None = None, **cfg_overrides: Any) -> None:  # fmt: skip
-    """Register ``task_id``: its env (``"module:Class"``), env cfg class, and the cfg fields this id fixes (e.g. the
-    DMC suite task). ``config_file`` is its training config (default ``configs/task/<task_id>.yaml``)."""
-    valid = {f.name for f in dataclasses.fields(cfg_class)}
-    for key in cfg_overrides:
-        if key not in valid:
-            raise unknown(f"env option of {cfg_class.__name__} (registering '{task_id}')", key, valid)
-    spec = TaskSpec(task_id, entry_point, cfg_class, dict(cfg_overrides), description,
-                    Path(config_file) if config_file is not None else None)  # fmt: skip
-    if task_id in _TASKS and _TASKS[task_id] != spec:
-        raise ValueError(f"Task id '{task_id}' is already registered by {_TASKS[task_id].entry_point}")
-    _TASKS[task_id] = spec
+def register_task(spec: TaskSpec) -> None:
+    """Add a task (a family's ``TASKS`` entries are added this way when the family is discovered)."""
+    if not isinstance(spec, TaskSpec):
+        raise TypeError(f"register_task takes a TaskSpec, got {type(spec).__name__}")
+    if spec.task_id in _TASKS and _TASKS[spec.task_id] != spec:
+        raise ValueError(f"Task id '{spec.task_id}' is already registered by {_TASKS[spec.task_id].entry_point}")
+    _TASKS[spec.task_id] = spec
 
 
 def task_families() -> list[str]:
-    """The task families (subpackages of the task root), each imported once so that it registered its ids."""
+    """The task families (subpackages of the task root), each imported once and its ``TASKS`` registered."""
     if not _FAMILIES:
         root = importlib.import_module(TASK_ROOT)
-        names = sorted(m.name for m in pkgutil.iter_modules(root.__path__) if m.ispkg)
+        names = sorted(m.name for m in pkgutil.iter_modules(root.__path__) if m.ispkg and not m.name.startswith("_"))
         for name in names:
-            importlib.import_module(f"{TASK_ROOT}.{name}")
+            family = importlib.import_module(f"{TASK_ROOT}.{name}")
+            if not isinstance(getattr(family, "TASKS", None), (list, tuple)):
+                raise ConfigError(f"{family.__file__}: a task family must declare its tasks as TASKS = [TaskSpec(...)]")
+            for spec in family.TASKS:
+                register_task(spec)
         _FAMILIES.extend(names)
     return list(_FAMILIES)
 

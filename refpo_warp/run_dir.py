@@ -99,7 +99,7 @@ def _default(cfg: dict, key: str) -> Any:
     if section == "env" and "." not in name:
         from refpo_warp.registry import get_task
 
-        fields = {f.name: f for f in dataclasses.fields(get_task(cfg["task"]).env_class().cfg_class)}
+        fields = {f.name: f for f in dataclasses.fields(get_task(cfg["task"]).cfg_class)}
         return fields[name].default if name in fields else _UNKNOWN
     return _UNKNOWN
 
@@ -117,7 +117,7 @@ def _is_fixed(cfg: dict, key: str) -> bool:
     if section == "env":
         from refpo_warp.registry import get_task
 
-        rule = rules_for(get_task(cfg["task"]).env_class().cfg_class).get(name)
+        rule = rules_for(get_task(cfg["task"]).cfg_class).get(name)
         return bool(rule is not None and rule.fixed)
     rule = RUN_RULES.get(key)
     return bool(rule is not None and rule.fixed)

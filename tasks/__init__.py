@@ -1,2 +1,3 @@
 """Task families: every subpackage is one family, found by ``refpo_warp.registry`` (nothing lists them) and imported
-once; its ``__init__`` registers the family's task ids with their env cfg classes (Warp-free) and env entry points."""
+once; its ``__init__`` declares the family's tasks as ``TASKS = [refpo_warp.task_spec.TaskSpec(...)]``: id, env cfg
+class (Warp-free), env entry point, training config file."""

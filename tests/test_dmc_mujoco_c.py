@@ -21,10 +21,10 @@ import torch
 from dmc_mujoco_reference import REFERENCES
 
 from refpo_warp.registry import make_env
+from tasks.dmc import suite
 
 N = 4
-TASKS = ("cartpole_balance", "cartpole_swingup", "pendulum_swingup", "point_mass", "ball_in_cup", "finger_spin",
-         "reacher_easy", "acrobot_swingup", "cheetah_run", "walker_walk")  # fmt: skip
+TASKS = tuple(suite.task_names())  # every module of tasks/dmc/suite/: a new task must be added below too
 UNCONSTRAINED = ("cartpole_balance", "cartpole_swingup", "pendulum_swingup", "point_mass", "reacher_easy",
                  "acrobot_swingup")  # fmt: skip
 CONVERGED = {"iterations": 100, "ls_iterations": 50}

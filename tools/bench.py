@@ -1,18 +1,25 @@
 #!/usr/bin/env python
 """Benchmarks: python tools/bench.py <gridworld|dmc|humanoid|all|latency|algorithms> [options of that benchmark]
 
-Each family's benchmark lives in tasks/<family>/bench.py; `python tools/bench.py dmc --help` shows its options.
-`all` runs the three families. `latency` (refpo_warp/latency.py) times action generation at N = 10 vs N = 1 for
+Each task family with a benchmark has it in tasks/<family>/bench.py (found there, not listed here);
+`python tools/bench.py dmc --help` shows its options. `all` runs every family's benchmark. `latency` (refpo_warp/latency.py) times action generation at N = 10 vs N = 1 for
 chosen tasks and algorithms; `--json PATH` writes the rows for `tools/report.py` (the latency figure).
 `algorithms` (refpo_warp/algorithm_bench.py) times the update of every algorithm on one batch size, as ratios to
 FPO.
 """
 
 import importlib
+import importlib.util
 import sys
 
-FAMILIES = ("gridworld", "dmc", "humanoid")
 OTHERS = {"latency": "refpo_warp.latency", "algorithms": "refpo_warp.algorithm_bench"}  # not a task family
+
+
+def benchmarked_families() -> list[str]:
+    """The task families (found by the registry) that have a ``bench.py``."""
+    from refpo_warp.registry import TASK_ROOT, task_families
+
+    return [f for f in task_families() if importlib.util.find_spec(f"{TASK_ROOT}.{f}.bench") is not None]
 
 
 def main(argv: list[str]) -> int:
@@ -20,10 +27,11 @@ def main(argv: list[str]) -> int:
         print(__doc__)
         return 0
     family, rest = argv[0], argv[1:]
-    if family not in FAMILIES + ("all", *OTHERS):
+    families = benchmarked_families()
+    if family not in (*families, "all", *OTHERS):
         from refpo_warp.errors import unknown
 
-        print(f"error: {unknown('benchmark', family, FAMILIES + ('all', *OTHERS))}", file=sys.stderr)
+        print(f"error: {unknown('benchmark', family, (*families, 'all', *OTHERS))}", file=sys.stderr)
         return 2
     from refpo_warp.device import set_torch_threads
 
@@ -31,7 +39,7 @@ def main(argv: list[str]) -> int:
     if family in OTHERS:
         importlib.import_module(OTHERS[family]).main(rest)
         return 0
-    for name in FAMILIES if family == "all" else (family,):
+    for name in families if family == "all" else (family,):
         print(f"\n## {name}", flush=True)  # each family's tables follow as ### blocks
         importlib.import_module(f"tasks.{name}.bench").main(rest)
     return 0

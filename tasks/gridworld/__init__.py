@@ -1,7 +1,9 @@
 """Multimodal GridWorld (ReFPO paper §4.1): two goal bands, one at the top and one at the bottom of the grid."""
 
-from refpo_warp.registry import register_task
+from refpo_warp.task_spec import TaskSpec
 from tasks.gridworld.cfg import GridWorldCfg
 
-register_task("gridworld", "tasks.gridworld.env:GridWorldEnv", GridWorldCfg,
-              description="25x25 grid, goal rows {0,1,23,24} (+20, episode ends), 200-step time-out")  # fmt: skip
+TASKS = [
+    TaskSpec("gridworld", "tasks.gridworld.env:GridWorldEnv", GridWorldCfg,
+             description="25x25 grid, goal rows {0,1,23,24} (+20, episode ends), 200-step time-out"),
+]  # fmt: skip

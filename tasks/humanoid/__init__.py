@@ -1,10 +1,10 @@
 """SMPL humanoid motion tracking (ReFPO paper §4.3): one env, task ids that fix its goal conditioning (and options)."""
 
-from refpo_warp.registry import register_task
+from refpo_warp.task_spec import TaskSpec
 from tasks.humanoid.cfg import HumanoidTrackingCfg
 
 # task id: (description, the env options the id fixes); humanoid_all_residual's residual PD targets are in its YAML
-TASKS = {
+_VARIANTS = {
     "humanoid_all": ("every body's targets observed", {"conditioning": "all"}),
     "humanoid_root_hands": ("only pelvis and wrist positions observed", {"conditioning": "root_hands"}),
     "humanoid_all_residual": ("every body's targets observed, PD targets relative to the reference",
@@ -12,6 +12,8 @@ TASKS = {
     "humanoid_root": ("only the pelvis position observed", {"conditioning": "root"}),
 }
 
-for _task_id, (_description, _fixed) in TASKS.items():
-    register_task(_task_id, "tasks.humanoid.env:HumanoidTrackingEnv", HumanoidTrackingCfg,
-                  description=f"SMPL humanoid tracking, {_description}", **_fixed)  # fmt: skip
+TASKS = [
+    TaskSpec(task_id, "tasks.humanoid.env:HumanoidTrackingEnv", HumanoidTrackingCfg, fixed,
+             description=f"SMPL humanoid tracking, {description}")
+    for task_id, (description, fixed) in _VARIANTS.items()
+]  # fmt: skip
