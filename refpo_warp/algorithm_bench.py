@@ -28,7 +28,7 @@ PAPER_PASSES = {"fpo": 16, "refpo": 16, "refpo_aw": 16, "flow_grpo": 8, "reinflo
 
 def build(algo: str, task: str, device: str, envs: int, steps: int, minibatches: int, passes: int):
     from refpo_warp.config import resolve_config
-    from refpo_warp.training import build_runner
+    from refpo_warp.runner_setup import build_runner
 
     cfg = resolve_config([f"task={task}", f"algo={algo}", f"device={device}", f"num_envs={envs}",
                           f"runner.num_steps_per_env={steps}", f"algorithm.num_mini_batches={minibatches}",

@@ -40,7 +40,7 @@ def policy_latency(task: str, algo: str, device: str, batches: list[int], flow_s
     """Latency rows (``latency_ms`` per call) of ``algo``'s actor on ``task`` for every batch size and N."""
     from refpo_warp.config import resolve_config
     from refpo_warp.report import is_flow, make_policy
-    from refpo_warp.training import build_runner
+    from refpo_warp.runner_setup import build_runner
 
     cfg = resolve_config([f"task={task}", f"algo={algo}", f"device={device}", f"num_envs={max(batches)}"])
     with contextlib.redirect_stdout(io.StringIO()):  # rsl_rl prints the model structure

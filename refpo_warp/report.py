@@ -169,7 +169,8 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
     """
     from refpo_warp.checkpoints import latest_checkpoint, load_latest
     from refpo_warp.errors import ConfigError
-    from refpo_warp.training import build_runner, load_run_config
+    from refpo_warp.run_dir import load_run_config
+    from refpo_warp.runner_setup import build_runner
 
     run_dir = Path(run_dir)
     if cfg is None:
@@ -227,7 +228,7 @@ def run_figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
 
 
 def periodic_evaluator(cfg: dict, runner):
-    """Hook for ``ProgressLogger.on_iteration``: every ``eval.interval`` iterations, the returns at
+    """Evaluation between training chunks (``refpo_warp.training``): every ``eval.interval`` iterations, the returns at
     ``eval.interval_flow_steps`` (``eval/return_N<n>``, or ``eval/return`` for a Gaussian actor) and, for flows,
     the Jacobian statistics (``Flow/jacobian_*``) on the visited observations."""
     env = make_eval_env(cfg, interval=True)

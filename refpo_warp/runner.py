@@ -10,7 +10,10 @@
 - rsl_rl's construction and logging-writer messages (model structure, observation sets, git state) only with
   ``verbose``;
 - a NaN/inf loss stops training before the next checkpoint, so the last checkpoint on disk stays good;
-- an ``on_iteration`` hook (periodic evaluation) whose numbers go to TensorBoard and ``progress.jsonl``;
+- ``learn_chunk``: a run learns in chunks (rsl_rl's ``learn`` each), so that the caller can evaluate between them
+  (``refpo_warp.training``); one TensorBoard writer and checkpoints only at ``save_interval`` and at the run's end,
+  as for a single ``learn``; ``end_chunk`` adds the caller's numbers to the chunk's last progress row;
+- env steps count every env step: a policy step of an action-chunk env (``env_steps_per_step``) is several;
 - multi-process training under torchrun on CUDA (NCCL) and on a CPU (gloo); rsl_rl itself only starts NCCL.
 """
 
@@ -20,8 +23,6 @@ import contextlib
 import io
 import math
 import statistics
-from collections.abc import Callable
-
 import torch
 from rsl_rl.runners import OnPolicyRunner
 from rsl_rl.utils.logger import Logger
@@ -46,19 +47,38 @@ def _episode_means(ep_extras: list[dict]) -> dict[str, float]:
 
 
 class ProgressLogger(Logger):
-    """rsl_rl's Logger (TensorBoard) plus a one-line console report, ``progress.jsonl`` and a non-finite check."""
+    """rsl_rl's Logger (TensorBoard) plus a one-line console report, ``progress.jsonl`` and a non-finite check.
 
-    def __init__(self, *args, log_full: bool = False, verbose: bool = False, **kwargs) -> None:
+    ``env_steps_per_step``: env steps per policy step (an action-chunk env's chunk), so that ``env_steps`` and
+    ``steps_per_s`` count env steps. While ``hold_last_row`` is set, the row of the last iteration of a ``learn`` call
+    waits for ``end_chunk`` (which adds the evaluation run between chunks) before it is written and printed.
+    """
+
+    def __init__(self, *args, log_full: bool = False, verbose: bool = False, env_steps_per_step: int = 1,
+                 **kwargs) -> None:  # fmt: skip
         super().__init__(*args, **kwargs)
         self.log_full = log_full
         self.verbose = verbose
-        self.on_iteration: Callable[[int, bool], dict[str, float]] | None = None
+        self.env_steps_per_step = int(env_steps_per_step)
+        self.run_iterations: int | None = None  # the whole run's iteration count, for the progress line
+        self.hold_last_row = False
+        self.final_chunk = True
+        self._held: dict | None = None
+        self._writer_started = False
+        self._learn_total: int | None = None
 
     def init_logging_writer(self) -> None:
+        if self._writer_started:  # once per run, not once per learn() chunk
+            return
         # rsl_rl reports the git state of each repository here; W&B / Neptune print links the user wants to see.
         service = str(self.cfg.get("logger", "tensorboard")).lower() in ("wandb", "neptune")
         with quiet_stdout(not (self.verbose or service)):
             super().init_logging_writer()
+        self._writer_started = True
+
+    def stop_logging_writer(self) -> None:
+        if self.final_chunk:
+            super().stop_logging_writer()
 
     def log(self, it: int, start_it: int, total_it: int, collect_time: float, learn_time: float,
             loss_dict: dict, **kwargs) -> None:  # fmt: skip
@@ -76,12 +96,14 @@ class ProgressLogger(Logger):
             super().log(it, start_it, total_it, collect_time, learn_time, losses, **kwargs)
         for key, value in tagged.items():
             self.writer.add_scalar(key, value, it)
+        # rsl_rl counted policy steps; the other steps of each action chunk (all ranks):
+        policy_steps = self.cfg["num_steps_per_env"] * self.num_envs * self.gpu_world_size
+        self.tot_timesteps += policy_steps * (self.env_steps_per_step - 1)
         row = {
             "iteration": it,
             "env_steps": self.tot_timesteps,
             "time_s": round(self.tot_time, 3),
-            "steps_per_s": int(self.cfg["num_steps_per_env"] * self.num_envs * self.gpu_world_size  # all ranks
-                               / max(collect_time + learn_time, 1e-9)),
+            "steps_per_s": int(policy_steps * self.env_steps_per_step / max(collect_time + learn_time, 1e-9)),
         }
         if self.rewbuffer:
             row["reward_mean"] = statistics.mean(self.rewbuffer)
@@ -89,14 +111,28 @@ class ProgressLogger(Logger):
         row.update(episode)
         row.update({f"Loss/{k}": float(v) for k, v in losses.items()})
         row.update(tagged)
-        if self.on_iteration is not None:
-            evaluated = self.on_iteration(it, it == total_it - 1)
-            for key, value in evaluated.items():
-                self.writer.add_scalar(key, value, it)
-            row.update(evaluated)
+        self._learn_total = total_it
+        if self.hold_last_row and it == total_it - 1:
+            self._held = row
+        else:
+            self._write_row(row)
+
+    def end_chunk(self, extra: dict[str, float]) -> None:
+        """Add ``extra`` (e.g. ``eval/return_N10``) to the held row of the chunk's last iteration (and to TensorBoard
+        at that iteration), then write and print the row."""
+        row, self._held = self._held, None
+        if row is None:  # not the main rank (or nothing held)
+            return
+        for key, value in extra.items():
+            self.writer.add_scalar(key, value, row["iteration"])
+        row.update(extra)
+        self._write_row(row)
+
+    def _write_row(self, row: dict) -> None:
         append_row(self.log_dir, row)
         if not self.log_full:
-            print(self._progress_line(it, total_it, row), flush=True)
+            total = self.run_iterations or self._learn_total
+            print(self._progress_line(row["iteration"], total, row), flush=True)
 
     @staticmethod
     def _progress_line(it: int, total_it: int, row: dict) -> str:
@@ -116,7 +152,7 @@ class ProgressLogger(Logger):
 
 
 class Runner(OnPolicyRunner):
-    """OnPolicyRunner with atomic, safely loaded checkpoints, a progress line per iteration, an evaluation hook and
+    """OnPolicyRunner with atomic, safely loaded checkpoints, a progress line per iteration, learning in chunks and
     a torch.distributed backend that matches the device; rsl_rl's own messages only with ``verbose``.
 
     ``run_info`` (``{"task", "algo"}``) is written into every checkpoint and checked when one is loaded.
@@ -132,9 +168,32 @@ class Runner(OnPolicyRunner):
             log_dir=log_dir, cfg=self.cfg, env_cfg=env.cfg, num_envs=env.num_envs,
             is_distributed=self.is_distributed, gpu_world_size=self.gpu_world_size,
             gpu_global_rank=self.gpu_global_rank, device=device, log_full=log_full, verbose=verbose,
+            env_steps_per_step=getattr(env, "env_steps_per_step", 1),
         )  # fmt: skip
         self.logger.git_status_repos = old.git_status_repos + [__file__]
         self.run_info = dict(run_info or {})
+        self._learned = False
+        self._final_chunk = True
+
+    def learn_chunk(self, num_iterations: int, run_iterations: int, init_at_random_ep_len: bool = False) -> None:
+        """The next ``num_iterations`` of a run of ``run_iterations`` (rsl_rl's ``learn``, resumed where the last
+        chunk ended); then the caller may evaluate and must call ``end_chunk``. Checkpoints are written at
+        ``save_interval`` and after the run's last iteration, not at the end of every chunk."""
+        if self._learned:  # rsl_rl leaves current_learning_iteration at the last iteration it ran
+            self.current_learning_iteration += 1
+        self._final_chunk = self.current_learning_iteration + num_iterations >= run_iterations
+        self.logger.run_iterations = run_iterations
+        self.logger.final_chunk = self._final_chunk
+        self.logger.hold_last_row = True
+        try:
+            self.learn(num_iterations, init_at_random_ep_len=init_at_random_ep_len)
+        finally:
+            self._learned = True
+            self._final_chunk = self.logger.final_chunk = True
+
+    def end_chunk(self, extra: dict[str, float]) -> None:
+        """Finish the chunk's last progress row with ``extra`` (the numbers the caller measured after it)."""
+        self.logger.end_chunk(extra)
 
     def _configure_multi_gpu(self) -> None:
         """rsl_rl's multi-GPU set-up, with the backend picked by the device: NCCL on CUDA, gloo on a CPU.
@@ -157,6 +216,8 @@ class Runner(OnPolicyRunner):
 
     def save(self, path: str, infos: dict | None = None) -> None:
         """Write the checkpoint atomically: a reader never sees a partial file, a crash keeps the previous one."""
+        if not self._final_chunk and self.current_learning_iteration % self.cfg["save_interval"]:
+            return  # the end of a chunk that is not the run's end (save_interval saves fall on multiples)
         saved = self.alg.save()
         saved["iter"] = self.current_learning_iteration
         saved["infos"] = infos

@@ -14,22 +14,17 @@ rank 0 alone writes the run dir (config, checkpoints, logs) and evaluates (``ref
 from __future__ import annotations
 
 import contextlib
-import copy
 import math
-import random
 from pathlib import Path
 from typing import Any
-
-import numpy as np
-import torch
 
 from refpo_warp.atomic import remove_stale_temp_files
 from refpo_warp.checkpoints import checkpoint_progress, latest_checkpoint, load_latest
 from refpo_warp.config import dump_config, parse_overrides, resolve_config
-from refpo_warp.distributed import process_rank, rank_device
+from refpo_warp.distributed import process_rank
 from refpo_warp.errors import ConfigError, NonFiniteLossError, tag_run_dir
 from refpo_warp.progress import progress_path, truncate_after
-from refpo_warp.registry import make_env
+from refpo_warp.report import evaluate_run, periodic_evaluator
 from refpo_warp.run_dir import (
     RUN_CONFIG,
     RUN_FILES,
@@ -40,74 +35,20 @@ from refpo_warp.run_dir import (
     run_lock,
 )
 from refpo_warp.runner import Runner
+from refpo_warp.runner_setup import (
+    build_runner,
+    env_steps_per_iteration,
+    num_iterations,
+    rsl_rl_config,
+    seed_everything,
+)
 
-__all__ = ["RUN_CONFIG", "build_runner", "flatten", "load_run_config", "num_iterations", "rsl_rl_config", "train"]
-
-
-def seed_everything(seed: int) -> None:
-    random.seed(seed)
-    np.random.seed(seed)
-    torch.manual_seed(seed)
-
-
-def rsl_rl_config(cfg: dict) -> dict:
-    """The train_cfg dict rsl_rl's OnPolicyRunner expects, built from a resolved refpo_warp config."""
-    runner = cfg["runner"]
-    return {
-        "num_steps_per_env": runner["num_steps_per_env"],
-        "save_interval": runner["save_interval"],
-        "logger": runner["logger"],
-        "check_for_nan": runner["check_for_nan"],
-        "torch_compile_mode": runner["torch_compile_mode"],
-        "obs_groups": {k: list(v) for k, v in runner["obs_groups"].items()},
-        "run_name": f"{cfg['task']}/{cfg['algo']}",
-        # Deep copies: rsl_rl < 5.5 pops class_name out of these dicts and the nested distribution_cfg.
-        "actor": copy.deepcopy(cfg["actor"]),
-        "critic": copy.deepcopy(cfg["critic"]),
-        "algorithm": copy.deepcopy(cfg["algorithm"]),
-    }
-
-
-def num_iterations(cfg: dict, world_size: int = 1) -> int:
-    """Training iterations: ``max_iterations`` if set, else the env-step budget over the batch size of all ranks
-    (``total_env_steps`` counts every rank's env steps, as the logged ``env_steps`` do)."""
-    if cfg["max_iterations"]:
-        return int(cfg["max_iterations"])
-    batch = cfg["num_envs"] * cfg["runner"]["num_steps_per_env"] * world_size
-    return max(1, math.ceil(cfg["total_env_steps"] / batch))
+__all__ = ["RUN_CONFIG", "build_runner", "flatten", "load_run_config", "num_iterations", "rsl_rl_config",
+           "seed_everything", "train"]  # fmt: skip
 
 
 def default_run_dir(cfg: dict) -> Path:
     return Path("runs") / cfg["task"] / f"{cfg['algo']}_seed{cfg['seed']}"
-
-
-def check_obs_groups(cfg: dict, env) -> None:
-    """Every observation group named in ``runner.obs_groups`` must be one the env provides."""
-    available = sorted(env.get_observations().keys())
-    for name, groups in cfg["runner"]["obs_groups"].items():
-        missing = [g for g in groups if g not in available]
-        if missing:
-            raise ConfigError(f"runner.obs_groups.{name}={groups}: the {cfg['task']} env has no observation group "
-                              f"{', '.join(map(repr, missing))}; its groups are {', '.join(available)}")  # fmt: skip
-
-
-def build_runner(cfg: dict, log_dir: Path | None, env=None):
-    """Env + rsl_rl runner (with our extensions) for a resolved config; ``env`` hosts the runner instead of a new one.
-
-    Nothing is written to ``log_dir`` until training starts. Under torchrun: this rank's device and env seed
-    (``seed + RANK``), and a run dir for rank 0 only.
-    """
-    rank = process_rank()
-    device = rank_device(cfg["device"], rank)
-    if env is None:
-        env = make_env(cfg["task"], num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank,
-                       **cfg["env"])  # fmt: skip
-    check_obs_groups(cfg, env)
-    log_dir = log_dir if rank.is_main else None
-    run_info = {"task": cfg["task"], "algo": cfg["algo"]}  # written into and checked against every checkpoint
-    runner = Runner(env, rsl_rl_config(cfg), log_dir=str(log_dir) if log_dir else None, device=device,
-                    log_full=cfg["runner"]["log_full"], run_info=run_info, verbose=cfg["verbose"])  # fmt: skip
-    return env, runner
 
 
 def resolve_run(flat: dict[str, Any]) -> dict:
@@ -131,8 +72,6 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
     checkpoint (nothing is started from scratch behind the user's back). Without it, a run dir that already holds
     checkpoints is refused.
     """
-    from refpo_warp.report import evaluate_run, periodic_evaluator
-
     flat = parse_overrides(overrides) if isinstance(overrides, list) else dict(overrides or {})
     cfg = resolve_run(flat)
     run_dir, resume = Path(cfg["run_dir"]), cfg["resume"]
@@ -171,7 +110,7 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
                 truncate_after(run_dir, start - 1)
             dump_config(cfg, run_dir / RUN_CONFIG)
         with tag_run_dir(run_dir):
-            return _train_and_evaluate(cfg, env, runner, run_dir, start, evaluate_run, periodic_evaluator)
+            return _train_and_evaluate(cfg, env, runner, run_dir, start)
 
 
 def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: int = 1) -> int:
@@ -184,8 +123,7 @@ def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: in
         from refpo_warp.progress import read_rows
 
         rows = [r for r in read_rows(run_dir) if r["iteration"] == iteration] if progress_path(run_dir).exists() else []
-        batch = cfg["num_envs"] * cfg["runner"]["num_steps_per_env"] * world_size
-        env_steps = rows[-1]["env_steps"] if rows else (iteration + 1) * batch
+        env_steps = rows[-1]["env_steps"] if rows else (iteration + 1) * env_steps_per_iteration(cfg, world_size)
         time_s = rows[-1].get("time_s", 0.0) if rows else 0.0
     alg = runner.alg
     if "algorithm.learning_rate" in flat:  # rsl_rl restored the checkpoint's rate with the optimizer state
@@ -200,23 +138,23 @@ def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: in
     return runner.continue_after(iteration, env_steps, time_s or 0.0)
 
 
-def _train_and_evaluate(cfg, env, runner, run_dir, start, evaluate_run, periodic_evaluator) -> dict:
+def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
     rank = process_rank()
     total = num_iterations(cfg, rank.world_size)
     notice = cfg["notice"].format(task=cfg["task"], algo=cfg["algo"]) if cfg["notice"] else None
     if notice:
         print(f"[refpo_warp] NOTE: {notice}", flush=True)
     ranks = f" x {rank.world_size} ranks" if rank.is_distributed else ""
-    steps = total * env.num_envs * cfg["runner"]["num_steps_per_env"] * rank.world_size
+    steps = total * env_steps_per_iteration(cfg, rank.world_size)
     print(f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs{ranks}, "
           f"iterations {start}..{total - 1} ({steps:,} env steps), run dir {run_dir}", flush=True)  # fmt: skip
     if cfg["eval"]["interval"] is None:  # periodic evaluation on by default: 10 evaluations per run
         cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
-    if cfg["eval"]["interval"] > 0 and rank.is_main:
-        runner.logger.on_iteration = periodic_evaluator(cfg, runner)
+    interval = int(cfg["eval"]["interval"])
+    evaluate = periodic_evaluator(cfg, runner) if interval > 0 and rank.is_main else None  # rank 0 evaluates
     if total > start:
         try:
-            runner.learn(total - start, init_at_random_ep_len=cfg["runner"]["init_at_random_ep_len"])
+            _learn_in_chunks(runner, start, total, interval, evaluate, cfg["runner"]["init_at_random_ep_len"])
         except NonFiniteLossError as err:  # the CLI's message says what survives and how to go on
             err.checkpoint, err.run_dir = latest_checkpoint(run_dir), run_dir
             err.learning_rate = float(runner.alg.learning_rate)
@@ -244,6 +182,18 @@ def training_summary(cfg: dict, runner, run_dir: Path, results: dict) -> str:
     spent = [("trained", f"iterations 0..{last}, {int(logger.tot_timesteps):,} env steps, {logger.tot_time:.0f} s")]
     title = f"Trained {cfg['task']} / {cfg['algo']} (seed {cfg['seed']})"
     return summary_block(title, run_outputs(run_dir, checkpoint, results), spent + headline_numbers(results))
+
+
+def _learn_in_chunks(runner, start: int, total: int, interval: int, evaluate, init_at_random_ep_len: bool) -> None:
+    """Iterations ``start .. total - 1`` in chunks that end where periodic evaluation is due (every ``interval``
+    iterations and at the last); the evaluation runs here, between chunks, and its numbers join the progress row
+    of the chunk's last iteration (``eval/return_N<n>`` ...). Every rank learns in the same chunks."""
+    it = start
+    while it < total:
+        end = min(total, (it // interval + 1) * interval) if interval > 0 else total
+        runner.learn_chunk(end - it, total, init_at_random_ep_len=init_at_random_ep_len and it == start)
+        runner.end_chunk(evaluate(end - 1, end == total) if evaluate is not None else {})
+        it = end
 
 
 def log_final_evaluation(runner, results: dict) -> None:

@@ -57,3 +57,19 @@ def test_time_outs_fall_on_chunk_boundaries_and_lengths_count_env_steps():
     assert env.unwrapped.episode_length_buf.tolist() == [6, 0]
     episodes = run_episodes(lambda obs: still, goal_world(3, max_episode_length=7))
     assert episodes["length"].tolist() == [9.0, 9.0]  # 3 chunks of 3 env steps (the 7-step episode, rounded up)
+
+
+def test_training_counts_env_steps_of_a_chunked_env(tmp_path):
+    """Each policy step of an action-chunk env is ``action_chunk`` env steps: in the iteration budget, in
+    ``progress.jsonl`` and in the checkpoint's count (8 envs x 4 policy steps x chunk 3 = 96 env steps/iteration)."""
+    from refpo_warp.checkpoints import checkpoint_progress, read_checkpoint
+    from refpo_warp.config import resolve_config
+    from refpo_warp.progress import read_rows
+    from refpo_warp.training import num_iterations, train
+
+    args = ["task=gridworld", "algo=reinflow", "num_envs=8", "runner.num_steps_per_env=4", "env.action_chunk=3",
+            "device=cpu", "eval.at_end=false", "eval.interval=0", "runner.save_interval=100"]  # fmt: skip
+    assert num_iterations(resolve_config(args + ["total_env_steps=200"])) == 3  # ceil(200 / 96)
+    train(args + ["max_iterations=2", f"run_dir={tmp_path}"])
+    assert [r["env_steps"] for r in read_rows(tmp_path)] == [96, 192]
+    assert checkpoint_progress(read_checkpoint(tmp_path / "model_1.pt"))[0] == 192

@@ -19,7 +19,8 @@ NB, NDOF = 24, 69
 def _launch(params, episode_length=5):
     """One evaluation, at step ``episode_length`` of an episode, of a hand-made state (2 identical envs): every
     simulated body at rest with identity rotation; the reference 0.1 m further along x, turned 0.2 rad about z, moving
-    at 1 m/s along x and spinning at 2 rad/s about z; every hinge at angle 0 with rate 1 rad/s and PD target 0.01 rad (kp 100, kd 10)."""
+    at 1 m/s along x and spinning at 2 rad/s about z; every hinge at angle 0 with rate 1 rad/s and PD target 0.01 rad
+    (kp 100, kd 10)."""
     from tasks.humanoid.tracking_kernels import evaluate_step_kernel
 
     n = 2

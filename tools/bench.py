@@ -2,7 +2,8 @@
 """Benchmarks: python tools/bench.py <gridworld|dmc|humanoid|all|latency|algorithms> [options of that benchmark]
 
 Each task family with a benchmark has it in tasks/<family>/bench.py (found there, not listed here);
-`python tools/bench.py dmc --help` shows its options. `all` runs every family's benchmark. `latency` (refpo_warp/latency.py) times action generation at N = 10 vs N = 1 for
+`python tools/bench.py dmc --help` shows its options. `all` runs every family's benchmark. `latency`
+(refpo_warp/latency.py) times action generation at N = 10 vs N = 1 for
 chosen tasks and algorithms; `--json PATH` writes the rows for `tools/report.py` (the latency figure).
 `algorithms` (refpo_warp/algorithm_bench.py) times the update of every algorithm on one batch size, as ratios to
 FPO.

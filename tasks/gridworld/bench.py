@@ -40,7 +40,7 @@ def gym_steps_per_second(num_envs: int, steps: int) -> float:
 def build_algorithm(reflow_coef: float, device: str, num_envs: int):
     """ReFPO with the paper's GridWorld settings (task config) on a filled rollout, ready for update()."""
     from refpo_warp.config import resolve_config
-    from refpo_warp.training import build_runner
+    from refpo_warp.runner_setup import build_runner
 
     cfg = resolve_config(["task=gridworld", f"algorithm.reflow_coef={reflow_coef}", f"device={device}",
                           f"num_envs={num_envs}"])  # fmt: skip
