@@ -1,0 +1,134 @@
+"""docs/create_new_task.md, followed step by step: a tiny task (its options, env, declaration and config file) and a
+ReFPO variant, registered here and trained for one iteration. The code below is the page's code."""
+
+from dataclasses import dataclass
+
+import pytest
+
+from refpo_warp.algorithms.refpo import ReFPO
+from refpo_warp.device import configure_warp
+from refpo_warp.envs.env_cfg import EnvCfg
+from refpo_warp.envs.warp_vec_env import WarpVecEnv
+from refpo_warp.options import Real
+from refpo_warp.task_spec import TaskSpec
+
+wp = configure_warp()
+
+
+# --- 1. the task: options (tasks/line/cfg.py)
+@dataclass
+class LineCfg(EnvCfg):
+    speed: float = 0.1
+    """Distance moved per step at action 1."""
+    max_episode_length: int = 20
+    option_rules = {"speed": Real(0, 10, lo_open=True)}
+
+
+# --- env (tasks/line/env.py)
+@wp.kernel
+def line_step(actions: wp.array2d(dtype=float), pos: wp.array(dtype=float), speed: float,
+              rewards: wp.array(dtype=float), terminated: wp.array(dtype=wp.bool)):  # fmt: skip
+    i = wp.tid()
+    x = pos[i] + speed * wp.clamp(actions[i, 0], -1.0, 1.0)
+    pos[i] = x
+    rewards[i] = 1.0 - wp.abs(x)
+    terminated[i] = wp.abs(x) > 1.0  # left the line: a failure, not a time-out
+
+
+@wp.kernel
+def line_reset(mask: wp.array(dtype=wp.bool), rng: wp.array(dtype=wp.uint32), pos: wp.array(dtype=float),
+               obs: wp.array2d(dtype=float)):  # fmt: skip
+    i = wp.tid()
+    if mask[i]:
+        state = rng[i]
+        pos[i] = wp.randf(state, -0.5, 0.5)
+        rng[i] = state
+    obs[i, 0] = pos[i]
+
+
+class LineEnv(WarpVecEnv):
+    cfg_class = LineCfg
+
+    def _spaces(self):
+        return 1, {"policy": 1}  # action size, {observation group: size}
+
+    def _build(self):
+        self.pos = wp.zeros(self.num_envs, dtype=float, device=self.wp_device)
+
+    def _step_impl(self):
+        b = self.buffers
+        wp.launch(line_step, dim=self.num_envs, inputs=[b.actions, self.pos, self.cfg.speed],
+                  outputs=[b.rewards, b.terminated])  # fmt: skip
+
+    def _reset_impl(self, mask):
+        b = self.buffers
+        wp.launch(line_reset, dim=self.num_envs, inputs=[mask, b.rng, self.pos], outputs=[b.obs["policy"]])
+
+
+# --- 2. the algorithm (refpo_warp/algorithms/<name>.py)
+class CappedReflowReFPO(ReFPO):
+    """ReFPO whose Reflow term averages min(l_i, reflow_cap) over the actions' CFM losses l_i."""
+
+    option_rules = {"reflow_cap": Real(0, 1e6, lo_open=True)}  # checked by the resolver and the constructor
+
+    def __init__(self, actor, critic, storage, reflow_cap: float = 1.0, **kwargs):
+        super().__init__(actor, critic, storage, **kwargs)
+        self.reflow_cap = reflow_cap
+
+    def reflow_loss(self, new_loss, batch):
+        return new_loss.mean(dim=-1).clamp(max=self.reflow_cap).mean()
+
+
+CONFIG = """num_envs: 8
+runner: {num_steps_per_env: 16}
+eval: {num_envs: 8, flow_steps: [1, 2]}
+"""
+
+
+@pytest.fixture
+def line_task(tmp_path):
+    """The declaration (here by register_task, as code outside tasks/ does) and its config file."""
+    from refpo_warp.registry import _TASKS, register_task
+
+    (tmp_path / "line.yaml").write_text(CONFIG)
+    register_task(TaskSpec("line", f"{__name__}:LineEnv", LineCfg, description="stay near 0 on a line",
+                           config_file=tmp_path / "line.yaml"))  # fmt: skip
+    yield tmp_path
+    del _TASKS["line"]
+
+
+def test_the_env_follows_the_base_episode_rules(line_task):
+    import torch
+
+    from refpo_warp.registry import make_env
+
+    env = make_env("line", num_envs=4, device="cpu", seed=0, speed=0.5)
+    ended = torch.zeros(4)
+    for _ in range(3):  # x0 in [-0.5, 0.5], +0.5 a step: each env leaves the line once (step 2 or 3), and a
+        _, _, dones, extras = env.step(torch.ones(4, 1))  # restarted env cannot leave again within one step
+        assert not extras["time_outs"].any()  # a failure, not a time-out
+        ended += dones
+    assert (ended == 1).all()
+    assert (env.episode_length_buf <= 1).all()  # restarted by the base env
+    env.reset()
+    for _ in range(19):  # standing still: the 20-step time-out ends every episode, reported as a time-out
+        _, _, dones, _ = env.step(torch.zeros(4, 1))
+        assert not dones.any()
+    _, _, dones, extras = env.step(torch.zeros(4, 1))
+    assert dones.all() and extras["time_outs"].all() and (env.episode_length_buf == 0).all()
+
+
+def test_the_new_task_and_algorithm_train_one_iteration(line_task):
+    from refpo_warp.progress import read_rows
+    from refpo_warp.training import train
+
+    run_dir = line_task / "run"
+    results = train(["task=line", "algo=refpo", "device=cpu", "max_iterations=1", f"run_dir={run_dir}",
+                     f"algorithm.class_name={__name__}:CappedReflowReFPO", "algorithm.reflow_cap=0.5",
+                     "algorithm.num_mc_samples=4"])  # fmt: skip
+    (row,) = read_rows(run_dir)
+    assert row["env_steps"] == 8 * 16 and 0.0 <= row["Loss/reflow"] <= 0.5
+    assert (run_dir / "model_0.pt").is_file() and set(results["results"]) == {"N=1", "N=2"}
+    with pytest.raises(Exception, match="reflow_cap"):  # the option's rule is checked at config time
+        train(["task=line", "device=cpu", f"run_dir={line_task / 'bad'}",
+               f"algorithm.class_name={__name__}:CappedReflowReFPO", "algorithm.reflow_cap=-1"])  # fmt: skip
