@@ -84,7 +84,9 @@ def mujoco_c(env, seconds: float) -> tuple[float, float]:
 
 
 def main(argv: list[str]) -> None:
-    from tasks.dmc.suite import TASKS
+    from tasks.dmc.suite import task_names
+
+    TASKS = task_names()
 
     parser = argparse.ArgumentParser(prog="tools/bench.py dmc", description=__doc__.split("\n\n")[0])
     parser.add_argument("--device", default="auto")
