@@ -20,10 +20,19 @@ import torch
 from refpo_warp.benchmarking import print_table, synchronize
 from refpo_warp.device import resolve_device
 
-ALGORITHMS = ("fpo", "refpo", "refpo_aw", "flow_grpo", "reinflow", "ppo")
+ORDER = ("fpo", "refpo", "refpo_aw", "flow_grpo", "reinflow", "ppo")  # table order; other algos follow, sorted
 NAMES = {"fpo": "FPO", "refpo": "ReFPO", "refpo_aw": "ReFPO (adv.-weighted)", "flow_grpo": "Flow-GRPO",
          "reinflow": "ReinFlow", "ppo": "PPO"}  # fmt: skip
 PAPER_PASSES = {"fpo": 16, "refpo": 16, "refpo_aw": 16, "flow_grpo": 8, "reinflow": 8, "ppo": 16}
+"""Passes per batch in the paper's DMC tables; an algorithm not in them is scaled with ``--passes``."""
+
+
+def algorithms() -> list[str]:
+    """Every configs/algo/<algo>.yaml (nothing to list here when an algorithm is added)."""
+    from refpo_warp.config import algo_names
+
+    found = algo_names()
+    return [a for a in ORDER if a in found] + sorted(set(found) - set(ORDER))
 
 
 def build(algo: str, task: str, device: str, envs: int, steps: int, minibatches: int, passes: int):
@@ -68,7 +77,7 @@ def main(argv: list[str]) -> None:
     parser.add_argument("--minibatches", type=int, default=8)
     parser.add_argument("--passes", type=int, default=2)
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--algos", nargs="+", default=list(ALGORITHMS), choices=ALGORITHMS)
+    parser.add_argument("--algos", nargs="+", default=algorithms(), choices=algorithms())
     parser.add_argument("--device", default="auto")
     args = parser.parse_args(argv)
     device = resolve_device(args.device)
@@ -83,8 +92,8 @@ def main(argv: list[str]) -> None:
         env, alg, cfg = build(algo, args.task, device, args.envs, args.steps, args.minibatches, args.passes)
         seconds[algo] = update_time(alg, env, device, args.repeats)
         chunks[algo] = cfg["env"].get("action_chunk", 1)
-    per_env_step = {a: seconds[a] / args.passes * PAPER_PASSES[a] / chunks[a] for a in seconds}
-    rows = [{"algorithm": NAMES[a], "update (s)": f"{seconds[a]:.3f}",
+    per_env_step = {a: seconds[a] / args.passes * PAPER_PASSES.get(a, args.passes) / chunks[a] for a in seconds}
+    rows = [{"algorithm": NAMES.get(a, a), "update (s)": f"{seconds[a]:.3f}",
              "ratio to FPO": f"{seconds[a] / seconds['fpo']:.2f}",
              "paper passes, per env step, ratio to FPO": f"{per_env_step[a] / per_env_step['fpo']:.2f}"}
             for a in seconds]  # fmt: skip

@@ -113,6 +113,11 @@ def _choices(kind: str) -> list[str]:
     return sorted(p.stem for p in (CONFIG_DIR / kind).glob("*.yaml") if not p.stem.startswith("_"))
 
 
+def algo_names() -> list[str]:
+    """Every ``algo=`` choice: the files ``configs/algo/<algo>.yaml``."""
+    return _choices("algo")
+
+
 def task_config_path(task: str) -> Path:
     """The training config file of a registered task: its spec's ``config_file``, else ``configs/task/<task>.yaml``."""
     from refpo_warp.registry import get_task
