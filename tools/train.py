@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Train a policy: python tools/train.py task=<task id> [algo=refpo|fpo|ppo|refpo_aw|flow_grpo|reinflow] [key=value ...]
+"""Train a policy: python tools/train.py task=<task id> [algo=<configs/algo/*.yaml: refpo, fpo, ...>] [key=value ...]
 
 Examples:
     python tools/train.py task=gridworld algo=refpo seed=1 run_dir=runs/grid
