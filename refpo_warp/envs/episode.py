@@ -1,14 +1,16 @@
 """The episode rules every environment shares, as Warp kernels over the env index (``WarpVecEnv`` launches them).
 
 After a task's step kernels wrote this step's rewards, terminations (and any truncation of its own, e.g. the end of
-a motion clip), ``finish_step`` decides, for every env:
+a motion clip), ``finish_step`` (and, for a task with named reward terms, ``finish_reward_terms``) decides, for
+every env:
 
 - the episode length grows by one (the state just reached is step ``length`` of the episode);
 - a time-out is ``length >= max_episode_length``; it and the task's truncation are reported as ``truncated`` (rsl_rl
   bootstraps the value of a truncated episode from ``extras["time_outs"]``), but only when the task did not
   terminate the episode at the same step: a termination takes precedence;
 - ``done`` = terminated or truncated: the reset mask the task's reset then runs on;
-- per-episode statistics at that step: return (sum of rewards), length, and the sums of the task's reward terms;
+- the per-episode sums of the task's named reward terms (``finish_reward_terms``), kept for the episode that ended
+  (logged as ``Episode_Reward/<term>``); the return itself is summed by rsl_rl's logger and by the evaluation;
 - the counters of finished envs restart from zero.
 """
 
@@ -23,37 +25,38 @@ wp = configure_warp()
 def finish_step(
     max_episode_length: int,
     task_truncation: int,
-    num_terms: int,
-    rewards: wp.array(dtype=float),
-    reward_terms: wp.array2d(dtype=float),
     terminated: wp.array(dtype=wp.bool),
     truncated: wp.array(dtype=wp.bool),
     episode_length: wp.array(dtype=wp.int32),
-    episode_return: wp.array(dtype=float),
-    term_sums: wp.array2d(dtype=float),
     done: wp.array(dtype=wp.bool),
-    ended_length: wp.array(dtype=float),
-    ended_return: wp.array(dtype=float),
-    ended_term_sums: wp.array2d(dtype=float),
 ):
     i = wp.tid()
     length = episode_length[i] + 1
-    total = episode_return[i] + rewards[i]
     term = terminated[i]
     # task_truncation: whether the task writes truncated[i] itself (otherwise it holds the last step's verdict)
     trunc = (not term) and (length >= max_episode_length or (task_truncation != 0 and truncated[i]))
     ended = term or trunc
     truncated[i] = trunc
     done[i] = ended
-    # The statistics are written every step (cheaper than a branch); they are read only where an episode ended.
-    ended_length[i] = float(length)
-    ended_return[i] = total
-    for k in range(num_terms):
-        term_total = term_sums[i, k] + reward_terms[i, k]
-        ended_term_sums[i, k] = term_total
-        term_sums[i, k] = wp.where(ended, 0.0, term_total)
     episode_length[i] = wp.where(ended, 0, length)
-    episode_return[i] = wp.where(ended, 0.0, total)
+
+
+@wp.kernel
+def finish_reward_terms(
+    reward_terms: wp.array2d(dtype=float),
+    done: wp.array(dtype=wp.bool),
+    term_sums: wp.array2d(dtype=float),
+    ended_term_sums: wp.array2d(dtype=float),
+):
+    """Per (env, reward term), after ``finish_step``: the term's sum over the episode, kept for the episode that
+    ended (``ended_term_sums``) and restarted from zero; launched only for envs that declare reward terms."""
+    i, k = wp.tid()
+    total = term_sums[i, k] + reward_terms[i, k]
+    if done[i]:
+        ended_term_sums[i, k] = total
+        term_sums[i, k] = 0.0
+    else:
+        term_sums[i, k] = total
 
 
 @wp.kernel
@@ -61,7 +64,6 @@ def restart_episodes(
     mask: wp.array(dtype=wp.bool),
     num_terms: int,
     episode_length: wp.array(dtype=wp.int32),
-    episode_return: wp.array(dtype=float),
     term_sums: wp.array2d(dtype=float),
     terminated: wp.array(dtype=wp.bool),
     truncated: wp.array(dtype=wp.bool),
@@ -71,7 +73,6 @@ def restart_episodes(
     i = wp.tid()
     if mask[i]:
         episode_length[i] = 0
-        episode_return[i] = 0.0
         for k in range(num_terms):
             term_sums[i, k] = 0.0
         terminated[i] = False

@@ -6,7 +6,7 @@ The base owns the episode. One step, for all envs at once:
 2. the task's ``_step_impl``: dynamics, then this step's ``rewards``, ``terminated`` (and, with
    ``task_truncation``, ``truncated``), its ``episode_metrics`` and per-step ``reward_terms``;
 3. the base's ``finish_step`` kernel (``episode.py``): episode length, time-out, termination over time-out, the
-   ``done`` reset mask, per-episode statistics, counters of finished envs back to zero;
+   ``done`` reset mask, the episode sums of the reward terms, counters of finished envs back to zero;
 4. with ``record_final_obs``, the task's ``_observe_final`` (each env's observation before its reset; the gymnasium
    adapter needs it, rsl_rl never reads it);
 5. the task's ``_reset_impl(done)``: new episodes for finished envs, then every env's observation.
@@ -27,7 +27,7 @@ from tensordict import TensorDict
 
 from refpo_warp.device import configure_warp, init_warp, resolve_device
 from refpo_warp.envs.env_cfg import EnvCfg
-from refpo_warp.envs.episode import finish_step, restart_episodes
+from refpo_warp.envs.episode import finish_reward_terms, finish_step, restart_episodes
 from refpo_warp.envs.random_streams import RandomStreams
 
 wp = configure_warp()
@@ -94,15 +94,12 @@ class WarpVecEnv(VecEnv):
         # rsl_rl keeps the observation of step t while step t+1 runs: hand out alternating copies.
         self._obs_out = [TensorDict({k: v.clone() for k, v in self._obs.items()}, batch_size=[n]) for _ in range(2)]
         self._obs_parity = 0
-        # Episode statistics (valid where an episode ended at the last step) and their running sums.
+        # Per-episode sums of the reward terms: running, and of the episode that ended at the last step.
         width = max(len(self.reward_terms), 1)  # a Warp array needs a non-empty shape
         self._reward_terms = torch.zeros(n, width, device=dev)
-        self._ended = {"return": torch.zeros(n, device=dev), "length": torch.zeros(n, device=dev)}
         self._ended_terms = torch.zeros(n, width, device=dev)
-        self._episode_return = wp.zeros(n, dtype=float, device=self.wp_device)
         self._term_sums = wp.zeros((n, width), dtype=float, device=self.wp_device)
-        self._ended_views = [wp.from_torch(self._ended["length"]), wp.from_torch(self._ended["return"]),
-                             wp.from_torch(self._ended_terms)]  # fmt: skip
+        self._ended_terms_view = wp.from_torch(self._ended_terms)
 
         rng = torch.zeros(n, dtype=torch.int32, device=dev)
         self.buffers = EnvBuffers(
@@ -194,12 +191,6 @@ class WarpVecEnv(VecEnv):
         """Per-env values of ``episode_metrics``, valid for the envs whose episode ended at the last step."""
         return self._metrics
 
-    @property
-    def episode_statistics(self) -> dict[str, torch.Tensor]:
-        """Per env, the ``return`` and ``length`` (env steps) of the episode that ended at the last step, then its
-        ``episode_metrics``; valid for the envs whose episode ended there (live buffers)."""
-        return {**self._ended, **self._metrics}
-
     def restart_counters(self, mask=None) -> None:
         """Episode length, return and reward-term sums of the envs in ``mask`` (a Warp bool array; None: all) back
         to a fresh episode's, and their end flags cleared; for tasks that place envs in a state themselves."""
@@ -207,7 +198,7 @@ class WarpVecEnv(VecEnv):
             mask = wp.from_torch(torch.ones(self.num_envs, dtype=torch.bool, device=self.device), dtype=wp.bool)
         b = self.buffers
         wp.launch(restart_episodes, dim=self.num_envs, device=self.wp_device,
-                  inputs=[mask, len(self.reward_terms), b.episode_length, self._episode_return, self._term_sums,
+                  inputs=[mask, len(self.reward_terms), b.episode_length, self._term_sums,
                           b.terminated, b.truncated, b.done])  # fmt: skip
 
     def enable_final_observations(self) -> None:
@@ -262,10 +253,12 @@ class WarpVecEnv(VecEnv):
             self.transform_actions(b.actions)
         self._step_impl()
         wp.launch(finish_step, dim=self.num_envs, device=self.wp_device,
-                  inputs=[self.max_episode_length, int(self.task_truncation), len(self.reward_terms), b.rewards,
-                          b.reward_terms, b.terminated, b.truncated, b.episode_length, self._episode_return,
-                          self._term_sums],
-                  outputs=[b.done, *self._ended_views])  # fmt: skip
+                  inputs=[self.max_episode_length, int(self.task_truncation), b.terminated, b.truncated,
+                          b.episode_length],
+                  outputs=[b.done])  # fmt: skip
+        if self.reward_terms:
+            wp.launch(finish_reward_terms, dim=(self.num_envs, len(self.reward_terms)), device=self.wp_device,
+                      inputs=[b.reward_terms, b.done, self._term_sums], outputs=[self._ended_terms_view])  # fmt: skip
         if self.record_final_obs:
             self._observe_final()
         self._reset_impl(b.done)
