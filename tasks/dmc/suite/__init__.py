@@ -21,9 +21,9 @@ def task_names() -> list[str]:
 
 
 def describe(name: str) -> str:
-    """The first line of the task module's docstring (parsed, not imported)."""
+    """The first line of the task module's docstring (parsed, not imported), as plain text."""
     doc = ast.get_docstring(ast.parse((SUITE_DIR / f"{name}.py").read_text(encoding="utf-8"))) or ""
-    return doc.split("\n", 1)[0]
+    return doc.split("\n", 1)[0].replace("``", "").rstrip(".")
 
 
 def task_class(name: str) -> type:
