@@ -182,8 +182,10 @@ class WarpVecEnv(VecEnv):
         extras = {"time_outs": self._truncated.clone()}
         if (self._metrics or self.reward_terms) and bool(dones.any()):
             extras["log"] = {f"Episode/{name}": buf[dones] for name, buf in self._metrics.items()}
-            ended_terms = self._ended_terms[dones]
-            extras["log"].update({f"Episode_Reward/{t}": ended_terms[:, k] for k, t in enumerate(self.reward_terms)})
+            if self.reward_terms:
+                ended_terms = self._ended_terms[dones]
+                extras["log"].update({f"Episode_Reward/{t}": ended_terms[:, k]
+                                      for k, t in enumerate(self.reward_terms)})  # fmt: skip
         return self._publish_obs(), self._rewards.clone(), dones, extras
 
     @property
