@@ -19,7 +19,8 @@ LAYERS = {
     "run": ["runner", "runner_setup", "config", "run_dir", "run_options", "registry", "checkpoints", "progress",
             "evaluation", "distributed", "flow_diagnostics", "sweep_spec"],
     "core": ["algorithms", "models", "envs", "sim", "motion"],
-    "base": ["errors", "options", "device", "atomic", "benchmarking", "task_spec", "rsl_rl_rules", "rsl_rl_compat"],
+    "base": ["errors", "options", "device", "atomic", "console", "benchmarking", "task_spec", "rsl_rl_rules",
+             "rsl_rl_compat"],
 }  # fmt: skip
 LAYER_RANK = {layer: rank for rank, layer in enumerate(reversed(LAYERS))}
 _RANK = {name: LAYER_RANK[layer] for layer, names in LAYERS.items() for name in names}
