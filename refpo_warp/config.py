@@ -183,7 +183,9 @@ def _coerce(value: Any, default: Any, key: str) -> Any:
             return str(value)
     else:
         return value
-    raise ConfigError(f"'{key}' expects a {type(default).__name__} (like {default!r}), got {value!r}")
+    kind = {"int": "an integer", "float": "a number", "bool": "true or false", "str": "a string"}.get(
+        type(default).__name__, f"a {type(default).__name__}")
+    raise ConfigError(f"'{key}' expects {kind} (like {default!r}), got {value!r}")
 
 
 def resolve_class(class_name: str) -> type:

@@ -52,7 +52,7 @@ def test_unknown_names_suggest_the_closest_valid_one(override, suggestion):
 
 
 def test_bad_values_are_reported():
-    with pytest.raises(ConfigError, match="expects a int"):
+    with pytest.raises(ConfigError, match="expects an integer"):
         resolve_config(["task=gridworld", "num_envs=many"])
     with pytest.raises(ConfigError, match="key=value"):
         parse_overrides(["gridworld"])
