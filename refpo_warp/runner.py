@@ -185,9 +185,17 @@ class Runner(OnPolicyRunner):
         self.logger.run_iterations = run_iterations
         self.logger.final_chunk = self._final_chunk
         self.logger.hold_last_row = True
+        # rsl_rl's learn() broadcasts rank 0's parameters first. The ranks are identical after the first chunk (the
+        # gradients are all-reduced), and a later broadcast would load into the normaliser buffers that rsl-rl-lib
+        # < 5.5 re-creates during the inference-mode rollout, which torch refuses: broadcast once per run.
+        synchronised = self._learned and self.is_distributed
+        if synchronised:
+            self.alg.broadcast_parameters = _already_synchronised
         try:
             self.learn(num_iterations, init_at_random_ep_len=init_at_random_ep_len)
         finally:
+            if synchronised:
+                del self.alg.broadcast_parameters  # the class's method again
             self._learned = True
             self._final_chunk = self.logger.final_chunk = True
 
@@ -240,3 +248,7 @@ class Runner(OnPolicyRunner):
         self.logger.tot_timesteps = int(env_steps)
         self.logger.tot_time = float(time_s)
         return self.current_learning_iteration
+
+
+def _already_synchronised() -> None:
+    """Stands in for ``broadcast_parameters`` after a run's first chunk (see ``Runner.learn_chunk``)."""
