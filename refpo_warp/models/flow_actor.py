@@ -25,6 +25,7 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
+from refpo_warp.models.sampled_policy import SampledPolicyProtocol
 from refpo_warp.models.velocity_field import DATA_GUARD, PARAMETERIZATIONS, TIME_CONDITIONINGS, VelocityField
 from refpo_warp.options import Check, Flag, Int, OneOf, Real, checks_options
 from refpo_warp.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS, mapping_or_none
@@ -56,7 +57,7 @@ def cfm_loss(terms: CfmTerms, tau: torch.Tensor, output_mode: str, loss_scale: f
 
 
 @checks_options
-class FlowActor(nn.Module):
+class FlowActor(SampledPolicyProtocol, nn.Module):
     """Flow-matching actor with the constructor and model protocol of rsl_rl's ``MLPModel``.
 
     Args:
@@ -194,31 +195,7 @@ class FlowActor(nn.Module):
         """|v - (a - eps)|^2 averaged over action dims, shape (B, K): the Straightness Error's summand."""
         return self.cfm_terms(obs, actions, tau, eps).velocity_error
 
-    # ------------------------------------------------------------------------------------------------ rsl_rl model protocol
-    def reset(self, dones: torch.Tensor | None = None, hidden_state=None) -> None:
-        pass
-
-    def get_hidden_state(self):
-        return None
-
-    def detach_hidden_state(self, dones: torch.Tensor | None = None) -> None:
-        pass
-
-    def update_normalization(self, obs: TensorDict) -> None:
-        if self.obs_normalization:
-            self.obs_normalizer.update(torch.cat([obs[g] for g in self.obs_groups], dim=-1))
-
-    @property
-    def output_mean(self) -> torch.Tensor:
-        return self._last_actions.mean(dim=0)
-
-    @property
-    def output_std(self) -> torch.Tensor:
-        """Per-dimension spread of the last sampled batch (rsl_rl logs it as the policy's action std)."""
-        if self._last_actions.shape[0] < 2:
-            return torch.zeros(self.action_dim)
-        return self._last_actions.std(dim=0)
-
+    # --------------------------------------------- rsl_rl model protocol (the rest: SampledPolicyProtocol)
     def get_output_log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
         raise NotImplementedError(
             "A flow policy has no tractable action likelihood; train it with refpo_warp.algorithms:ReFPO "

@@ -34,6 +34,7 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
+from refpo_warp.models.sampled_policy import SampledPolicyProtocol
 from refpo_warp.models.velocity_field import VelocityField
 from refpo_warp.options import Check, Flag, Int, OneOf, Real, checks_options
 from refpo_warp.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS, mapping_or_none
@@ -58,7 +59,7 @@ def fixed_sigma(t: float, schedule: str, sigma_min: float, sigma_max: float) -> 
 
 
 @checks_options
-class ReinFlowActor(nn.Module):
+class ReinFlowActor(SampledPolicyProtocol, nn.Module):
     """ReinFlow's noisy flow policy with the constructor and model protocol of rsl_rl's ``MLPModel``.
 
     Args (besides rsl_rl's obs, obs_groups, obs_set, output_dim):
@@ -249,31 +250,7 @@ class ReinFlowActor(nn.Module):
             return self.sample(obs, num_steps, "random", perturbation=True)
         return self.sample(obs, num_steps, "zero", perturbation=False)
 
-    # ---------------------------------------------------------------------------------------- rsl_rl model protocol
-    def reset(self, dones: torch.Tensor | None = None, hidden_state=None) -> None:
-        pass
-
-    def get_hidden_state(self):
-        return None
-
-    def detach_hidden_state(self, dones: torch.Tensor | None = None) -> None:
-        pass
-
-    def update_normalization(self, obs: TensorDict) -> None:
-        if self.obs_normalization:
-            self.obs_normalizer.update(torch.cat([obs[g] for g in self.obs_groups], dim=-1))
-
-    @property
-    def output_mean(self) -> torch.Tensor:
-        return self._last_actions.mean(dim=0)
-
-    @property
-    def output_std(self) -> torch.Tensor:
-        """Per-dimension spread of the last sampled batch (rsl_rl logs it as the policy's action std)."""
-        if self._last_actions.shape[0] < 2:
-            return torch.zeros(self.action_dim)
-        return self._last_actions.std(dim=0)
-
+    # --------------------------------------------- rsl_rl model protocol (the rest: SampledPolicyProtocol)
     def get_output_log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
         raise NotImplementedError("ReinFlowActor's likelihood is that of its whole chain; train it with "
                                   "refpo_warp.algorithms:ReinFlow, not with rsl_rl's PPO.")  # fmt: skip
