@@ -20,11 +20,9 @@ import warnings
 from dataclasses import dataclass
 
 import torch
-from rsl_rl.modules import EmpiricalNormalization
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.models.normalization import with_clip
 from refpo_warp.models.sampled_policy import SampledPolicyProtocol
 from refpo_warp.models.velocity_field import DATA_GUARD, PARAMETERIZATIONS, TIME_CONDITIONINGS, VelocityField
 from refpo_warp.options import Check, Flag, Int, OneOf, Real, checks_options
@@ -119,28 +117,15 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
         super().__init__()
         if distribution_cfg is not None:
             warnings.warn("FlowActor ignores distribution_cfg: actions are sampled by integrating the flow.")
-        self.obs_groups = list(obs_groups[obs_set])
-        for group in self.obs_groups:
-            if obs[group].dim() != 2:
-                raise ValueError(f"FlowActor needs 1-D observation groups; '{group}' has shape {obs[group].shape}")
-        self.obs_dim = sum(obs[g].shape[-1] for g in self.obs_groups)
-        self.action_dim = output_dim
-        self.obs_normalization = obs_normalization
-        self.obs_normalizer = with_clip(EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity(),
-                                        obs_clip)  # fmt: skip
+        self._set_up_observations(obs, obs_groups, obs_set, output_dim, obs_normalization, obs_clip)
         self.velocity = VelocityField(self.obs_dim, output_dim, hidden_dims, activation, time_embed_dim, output_scale,
                                       parameterization, time_conditioning, head_init_gain)  # fmt: skip
         self.num_flow_steps = int(num_flow_steps)
         self.output_mode = output_mode
         self.loss_scale = float(loss_scale)
         self.action_noise_std = float(action_noise_std)
-        self._last_actions = torch.zeros(1, output_dim)
 
     # ------------------------------------------------------------------------------------------------ sampling
-    def encode(self, obs: TensorDict) -> torch.Tensor:
-        """Concatenate this actor's observation groups and normalise them (clamped to ``obs_clip`` if set)."""
-        return self.obs_normalizer(torch.cat([obs[g] for g in self.obs_groups], dim=-1))
-
     def sample(self, obs: TensorDict, num_steps: int | None = None, initial_noise: str = "random",
                perturbation: bool = False, noise: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
         """Actions from the flow: integrate from random (or zero, or the given) noise with ``num_steps`` Euler steps

@@ -28,12 +28,10 @@ import math
 import warnings
 
 import torch
-from rsl_rl.modules import EmpiricalNormalization
 from rsl_rl.utils import resolve_nn_activation
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.models.normalization import with_clip
 from refpo_warp.models.sampled_policy import SampledPolicyProtocol
 from refpo_warp.models.velocity_field import VelocityField
 from refpo_warp.options import Check, Flag, Int, OneOf, Real, checks_options
@@ -133,15 +131,7 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
                              f"({num_flow_steps})")  # fmt: skip
         if sigma_min > sigma_max:
             raise ValueError(f"sigma_min ({sigma_min}) must not exceed sigma_max ({sigma_max})")
-        self.obs_groups = list(obs_groups[obs_set])
-        for group in self.obs_groups:
-            if obs[group].dim() != 2:
-                raise ValueError(f"ReinFlowActor needs 1-D observation groups; '{group}' has shape {obs[group].shape}")
-        self.obs_dim = sum(obs[g].shape[-1] for g in self.obs_groups)
-        self.action_dim = int(output_dim)
-        self.obs_normalization = obs_normalization
-        self.obs_normalizer = with_clip(EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity(),
-                                        obs_clip)  # fmt: skip
+        self._set_up_observations(obs, obs_groups, obs_set, output_dim, obs_normalization, obs_clip)
         self.velocity = VelocityField(self.obs_dim, self.action_dim, hidden_dims, activation, time_embed_dim,
                                       output_scale)  # fmt: skip
         layers, width = [], time_embed_dim + self.obs_dim
@@ -158,13 +148,8 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         self.denoised_clip = float(denoised_clip)
         self.randn_clip = float(randn_clip)
         self.action_clip = float(action_clip)
-        self._last_actions = torch.zeros(1, self.action_dim)
 
     # ------------------------------------------------------------------------------------------------ the chain
-    def encode(self, obs: TensorDict) -> torch.Tensor:
-        """Concatenate this actor's observation groups and normalise them (clamped to ``obs_clip`` if set)."""
-        return self.obs_normalizer(torch.cat([obs[g] for g in self.obs_groups], dim=-1))
-
     def step_std(self, obs_norm: torch.Tensor, k: int, num_steps: int) -> torch.Tensor:
         """The std step k samples with, max(sigma_k, min_sampling_std), shape (B, D)."""
         t = k / num_steps

@@ -1,19 +1,47 @@
 """The parts of rsl_rl's model protocol that every sampled (flow) policy answers the same way.
 
-rsl_rl's runner and PPO-style algorithms call these on the actor: recurrent-state hooks (a flow policy has no hidden
-state), the observation-normaliser update, and ``output_mean`` / ``output_std``, which rsl_rl logs as the policy's
-action statistics; a sampled policy reports those of the last batch it sampled (``_last_actions``).
+The observation set-up (the actor's groups, concatenated, normalised and optionally clamped) and what rsl_rl's runner
+and PPO-style algorithms call on the actor: recurrent-state hooks (a flow policy has no hidden state), the
+observation-normaliser update, and ``output_mean`` / ``output_std``, which rsl_rl logs as the policy's action
+statistics; a sampled policy reports those of the last batch it sampled (``_last_actions``).
 """
 
 from __future__ import annotations
 
 import torch
+from rsl_rl.modules import EmpiricalNormalization
 from tensordict import TensorDict
+from torch import nn
+
+from refpo_warp.models.normalization import with_clip
 
 
 class SampledPolicyProtocol:
-    """Mixin for an ``nn.Module`` actor with ``obs_groups``, ``obs_normalization``, ``obs_normalizer``,
-    ``action_dim`` and ``_last_actions`` (the last sampled batch, set by its sampler)."""
+    """Mixin for an ``nn.Module`` actor: ``_set_up_observations`` in its ``__init__``; its sampler sets
+    ``_last_actions`` (the last sampled batch)."""
+
+    def _set_up_observations(self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int,
+                             obs_normalization: bool, obs_clip: float | None) -> None:  # fmt: skip
+        """``obs_groups`` (this actor's, 1-D each), ``obs_dim``, ``action_dim`` and the normaliser (rsl_rl's, clamped
+        to ``obs_clip`` if set); call after ``nn.Module.__init__``."""
+        self.obs_groups = list(obs_groups[obs_set])
+        for group in self.obs_groups:
+            if obs[group].dim() != 2:
+                raise ValueError(f"{type(self).__name__} needs 1-D observation groups; '{group}' has shape "
+                                 f"{obs[group].shape}")  # fmt: skip
+        self.obs_dim = sum(obs[g].shape[-1] for g in self.obs_groups)
+        self.action_dim = int(output_dim)
+        self.obs_normalization = obs_normalization
+        self.obs_normalizer = with_clip(EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity(),
+                                        obs_clip)  # fmt: skip
+        self._last_actions = torch.zeros(1, self.action_dim)
+
+    def _flat_obs(self, obs: TensorDict) -> torch.Tensor:
+        return torch.cat([obs[g] for g in self.obs_groups], dim=-1)
+
+    def encode(self, obs: TensorDict) -> torch.Tensor:
+        """Concatenate this actor's observation groups and normalise them (clamped to ``obs_clip`` if set)."""
+        return self.obs_normalizer(self._flat_obs(obs))
 
     def reset(self, dones: torch.Tensor | None = None, hidden_state=None) -> None:
         pass
@@ -26,7 +54,7 @@ class SampledPolicyProtocol:
 
     def update_normalization(self, obs: TensorDict) -> None:
         if self.obs_normalization:
-            self.obs_normalizer.update(torch.cat([obs[g] for g in self.obs_groups], dim=-1))
+            self.obs_normalizer.update(self._flat_obs(obs))
 
     @property
     def output_mean(self) -> torch.Tensor:
