@@ -41,7 +41,7 @@ REPORT_KEYS = ("curve_methods", "ratio_tasks", "ratio_methods")
 # Run options the sweep sets itself; on the command line use the sweep-level key instead.
 MANAGED = {"task": "tasks=", "algo": "methods=", "seed": "seeds=", "run_dir": "out=", "resume": None}
 # Config keys that do not change what a run computes: a finished run whose config differs only here is kept.
-FINGERPRINT_IGNORED = ("device", "resume", "run_dir")
+FINGERPRINT_IGNORED = ("device", "resume", "run_dir", "verbose")
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ import yaml
 from refpo_warp.config import parse_overrides, resolve_config
 from refpo_warp.errors import ConfigError
 from refpo_warp.sweep import run_sweep
-from refpo_warp.sweep_spec import cli_value, load_sweep, validate
+from refpo_warp.sweep_spec import cli_value, fingerprint, load_sweep, validate
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = {"max_iterations": 2, "num_envs": 4, "runner.num_steps_per_env": 8, "eval.num_envs": 4,
@@ -92,6 +92,13 @@ def test_named_sweeps_resolve():
     assert [(m.label, m.algo) for m in cpu.methods] == [("ppo", "ppo"), ("fpo", "fpo"), ("refpo", "refpo")]
     assert cpu.methods[2].overrides == {"algorithm.reflow_coef": 0.04} and cpu.device == "cpu"
     assert len(validate(cpu)) == len(cpu.tasks) * 9
+
+
+def test_fingerprint_ignores_options_that_do_not_change_the_run():
+    cfg = resolve_config(parse_overrides(["task=gridworld", "algo=refpo"]), device_type="cpu")
+    same = {**cfg, "verbose": not cfg["verbose"], "run_dir": "/elsewhere", "device": "cuda:1", "resume": "x"}
+    assert fingerprint(same) == fingerprint(cfg)
+    assert fingerprint({**cfg, "seed": cfg["seed"] + 1}) != fingerprint(cfg)
 
 
 def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
