@@ -5,6 +5,8 @@ import pytest
 import torch
 
 from refpo_warp import make_env
+from tasks.gridworld.cfg import GridWorldCfg
+from tasks.gridworld.env import GridWorldEnv
 from tasks.gridworld.gym_env import GridWorldGymEnv
 
 NUM_ENVS = 32
@@ -92,3 +94,11 @@ def test_graph_replay_matches_eager_stepping():
         runs.append(torch.stack([env.step(a)[0]["policy"] for a in actions]))
         assert (env._graph is not None) == capture
     assert torch.equal(runs[0], runs[1])
+
+
+def test_a_fused_step_cannot_skip_the_base_s_reward_term_or_truncation_kernels():
+    class WithTerms(GridWorldEnv):  # GridWorld's one kernel applies the episode rule itself (step_finishes_episode)
+        reward_terms = ("goal",)
+
+    with pytest.raises(TypeError, match="step_finishes_episode cannot be combined with reward_terms"):
+        WithTerms(GridWorldCfg(), num_envs=2, device="cpu")

@@ -21,6 +21,29 @@ from refpo_warp.device import configure_warp
 wp = configure_warp()
 
 
+@wp.func
+def finish_env_step(
+    i: int,
+    max_episode_length: int,
+    task_truncation: int,
+    terminated: wp.array(dtype=wp.bool),
+    truncated: wp.array(dtype=wp.bool),
+    episode_length: wp.array(dtype=wp.int32),
+    done: wp.array(dtype=wp.bool),
+) -> bool:
+    """The rules above for env ``i``; returns ``done[i]``. Callable from a task's own step kernel (a task that sets
+    ``WarpVecEnv.step_finishes_episode`` fuses its whole step into one launch)."""
+    length = episode_length[i] + 1
+    term = terminated[i]
+    # task_truncation: whether the task writes truncated[i] itself (otherwise it holds the last step's verdict)
+    trunc = (not term) and (length >= max_episode_length or (task_truncation != 0 and truncated[i]))
+    ended = term or trunc
+    truncated[i] = trunc
+    done[i] = ended
+    episode_length[i] = wp.where(ended, 0, length)
+    return ended
+
+
 @wp.kernel
 def finish_step(
     max_episode_length: int,
@@ -30,15 +53,7 @@ def finish_step(
     episode_length: wp.array(dtype=wp.int32),
     done: wp.array(dtype=wp.bool),
 ):
-    i = wp.tid()
-    length = episode_length[i] + 1
-    term = terminated[i]
-    # task_truncation: whether the task writes truncated[i] itself (otherwise it holds the last step's verdict)
-    trunc = (not term) and (length >= max_episode_length or (task_truncation != 0 and truncated[i]))
-    ended = term or trunc
-    truncated[i] = trunc
-    done[i] = ended
-    episode_length[i] = wp.where(ended, 0, length)
+    finish_env_step(wp.tid(), max_episode_length, task_truncation, terminated, truncated, episode_length, done)
 
 
 @wp.kernel

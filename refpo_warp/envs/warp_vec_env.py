@@ -11,7 +11,9 @@ The base owns the episode. One step, for all envs at once:
    adapter needs it, rsl_rl never reads it);
 5. the task's ``_reset_impl(done)``: new episodes for finished envs, then every env's observation.
 
-So the observation a step returns for a finished env already starts its next episode. The base owns the buffers
+So the observation a step returns for a finished env already starts its next episode. A task whose whole step is a
+few flops per env (GridWorld) may set ``step_finishes_episode`` and do 2, 3 (through ``episode.finish_env_step``, the
+same rule), 4 and 5 in its own single kernel, where three launches would cost more than the work. The base owns the buffers
 rsl_rl sees, exposed to the kernels as zero-copy Warp views, and replays the whole step as one captured graph after
 a warm-up step (a CUDA graph on GPU, a Warp CPU graph on CPU).
 """
@@ -65,12 +67,19 @@ class WarpVecEnv(VecEnv):
     time-out, e.g. the end of a motion clip)."""
     supports_final_observations: ClassVar[bool] = False
     """Whether the subclass implements ``_observe_final`` (see the module docstring)."""
+    step_finishes_episode: ClassVar[bool] = False
+    """Whether ``_step_impl`` itself applies ``episode.finish_env_step``, writes ``final_obs`` and resets the envs
+    that finished (one fused kernel); the base then launches neither ``finish_step`` nor ``_reset_impl`` after it.
+    Only for tasks without ``reward_terms`` or ``task_truncation``."""
     env_steps_per_step: ClassVar[int] = 1
     """Env steps per ``step`` call (an ``ActionChunkWrapper`` runs several): what budgets and logs count."""
 
     def __init__(self, cfg: EnvCfg, num_envs: int, device: str = "auto", seed: int = 0) -> None:
         if num_envs < 1:
             raise ValueError(f"num_envs must be >= 1, got {num_envs}")
+        if self.step_finishes_episode and (self.reward_terms or self.task_truncation):
+            raise TypeError(f"{type(self).__name__}: step_finishes_episode cannot be combined with reward_terms or "
+                            "task_truncation (the base's finish kernels handle those)")
         init_warp()
         self.cfg = cfg
         self.num_envs = int(num_envs)
@@ -254,16 +263,17 @@ class WarpVecEnv(VecEnv):
         if self.cfg.action_transform == "tanh":
             self.transform_actions(b.actions)
         self._step_impl()
-        wp.launch(finish_step, dim=self.num_envs, device=self.wp_device,
-                  inputs=[self.max_episode_length, int(self.task_truncation), b.terminated, b.truncated,
-                          b.episode_length],
-                  outputs=[b.done])  # fmt: skip
-        if self.reward_terms:
-            wp.launch(finish_reward_terms, dim=(self.num_envs, len(self.reward_terms)), device=self.wp_device,
-                      inputs=[b.reward_terms, b.done, self._term_sums], outputs=[self._ended_terms_view])  # fmt: skip
-        if self.record_final_obs:
-            self._observe_final()
-        self._reset_impl(b.done)
+        if not self.step_finishes_episode:
+            wp.launch(finish_step, dim=self.num_envs, device=self.wp_device,
+                      inputs=[self.max_episode_length, int(self.task_truncation), b.terminated, b.truncated,
+                              b.episode_length],
+                      outputs=[b.done])  # fmt: skip
+            if self.reward_terms:
+                wp.launch(finish_reward_terms, dim=(self.num_envs, len(self.reward_terms)), device=self.wp_device,
+                          inputs=[b.reward_terms, b.done, self._term_sums], outputs=[self._ended_terms_view])  # fmt: skip
+            if self.record_final_obs:
+                self._observe_final()
+            self._reset_impl(b.done)
         self._streams.next_episode(b.done)
 
     def transform_actions(self, actions) -> None:
