@@ -75,7 +75,6 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
         obs_clip: Clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); None: no clamp.
     """
 
-    is_recurrent: bool = False
     option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.options)
         "hidden_dims": HIDDEN_DIMS,
         "activation": OneOf(ACTIVATIONS),

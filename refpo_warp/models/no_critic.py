@@ -10,11 +10,11 @@ import torch
 from tensordict import TensorDict
 from torch import nn
 
+from refpo_warp.models.stateless import Stateless
 
-class NoCritic(nn.Module):
+
+class NoCritic(Stateless, nn.Module):
     """A parameter-free critic with rsl_rl's model constructor and protocol; always 0."""
-
-    is_recurrent: bool = False
 
     def __init__(self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int) -> None:
         super().__init__()
@@ -23,15 +23,6 @@ class NoCritic(nn.Module):
     def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False) -> torch.Tensor:
         first = next(iter(obs.values()))
         return torch.zeros(first.shape[0], self.output_dim, device=first.device)
-
-    def reset(self, dones: torch.Tensor | None = None, hidden_state=None) -> None:
-        pass
-
-    def get_hidden_state(self):
-        return None
-
-    def detach_hidden_state(self, dones: torch.Tensor | None = None) -> None:
-        pass
 
     def update_normalization(self, obs: TensorDict) -> None:
         pass

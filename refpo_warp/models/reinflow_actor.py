@@ -76,7 +76,6 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         action_clip: Clamp of the final action (table (d) action range [-1, 1]).
     """
 
-    is_recurrent: bool = False
     option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.options)
         "hidden_dims": HIDDEN_DIMS,
         "activation": OneOf(ACTIVATIONS),

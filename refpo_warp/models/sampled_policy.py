@@ -14,9 +14,10 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
+from refpo_warp.models.stateless import Stateless
 
 
-class SampledPolicyProtocol:
+class SampledPolicyProtocol(Stateless):
     """Mixin for an ``nn.Module`` actor: ``_set_up_observations`` in its ``__init__``; its sampler sets
     ``_last_actions`` (the last sampled batch)."""
 
@@ -42,15 +43,6 @@ class SampledPolicyProtocol:
     def encode(self, obs: TensorDict) -> torch.Tensor:
         """Concatenate this actor's observation groups and normalise them (clamped to ``obs_clip`` if set)."""
         return self.obs_normalizer(self._flat_obs(obs))
-
-    def reset(self, dones: torch.Tensor | None = None, hidden_state=None) -> None:
-        pass
-
-    def get_hidden_state(self):
-        return None
-
-    def detach_hidden_state(self, dones: torch.Tensor | None = None) -> None:
-        pass
 
     def update_normalization(self, obs: TensorDict) -> None:
         if self.obs_normalization:
