@@ -126,9 +126,6 @@ class GridWorldEnv(WarpVecEnv):
                   outputs=[b.obs["policy"], b.rewards, b.terminated, b.truncated, b.done, b.metrics["success"],
                            b.metrics["reached_top"], b.final_obs["policy"]])  # fmt: skip
 
-    def _observe_final(self) -> None:
-        pass  # the step kernel always writes it
-
     def _reset_impl(self, mask) -> None:
         wp.launch(reset_kernel, dim=self.num_envs, inputs=[mask, self.pos, self.buffers.rng, self.cfg.size],
                   outputs=[self.buffers.obs["policy"]])  # fmt: skip
