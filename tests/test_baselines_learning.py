@@ -5,27 +5,18 @@ reaches that bound only at its edge; see NOT_MET).
 Each uses the task's CPU profile as shipped (configs/task/dmc_cartpole_balance.yaml, ``by_device.cpu.by_algo``) and the
 final evaluation of tools/train.py: Flow-GRPO and the weighted ReFPO by the deterministic ODE at N = 10, ReinFlow by
 its deterministic chain at K = 4. The initial policy (same seed, same construction) is evaluated the same way first.
+The checks run on conftest's one torch thread whether or not xdist runs them (CI: -n 2): these runs depend on the
+order of floating-point sums, so they run exactly as measured.
 """
 
 import contextlib
 import io
 
 import pytest
-import torch
 
 from refpo_warp.config import resolve_config
 from refpo_warp.report import evaluate_actor, make_eval_env
 from refpo_warp.training import build_runner, seed_everything, train
-
-
-@pytest.fixture
-def one_thread():
-    # One torch thread whether or not xdist runs the check (CI: -n 2, one worker per core): these runs are sensitive to
-    # the order of floating-point sums, so the check runs exactly as it was measured.
-    previous = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(previous)
 
 
 def initial_return(overrides: list[str], flow_steps: int) -> float:
@@ -52,7 +43,7 @@ CHECKS = [("flow_grpo", 10), ("reinflow", 4), ("refpo_aw", 10)]
 @pytest.mark.parametrize("algo, flow_steps", [
     pytest.param(algo, n, marks=[pytest.mark.xfail(run=False, reason=NOT_MET[algo])] if algo in NOT_MET else [])
     for algo, n in CHECKS])  # fmt: skip
-def test_method_raises_its_cartpole_return(algo, flow_steps, tmp_run_dir, one_thread):
+def test_method_raises_its_cartpole_return(algo, flow_steps, tmp_run_dir):
     overrides = ["task=dmc_cartpole_balance", f"algo={algo}", "seed=1", "device=cpu", f"run_dir={tmp_run_dir}"]
     before = initial_return(overrides, flow_steps)
     results = train(overrides)

@@ -13,9 +13,9 @@ The base owns the episode. One step, for all envs at once:
 
 So the observation a step returns for a finished env already starts its next episode. A task whose whole step is a
 few flops per env (GridWorld) may set ``step_finishes_episode`` and do 2, 3 (through ``episode.finish_env_step``, the
-same rule), 4 and 5 in its own single kernel, where three launches would cost more than the work. The base owns the buffers
-rsl_rl sees, exposed to the kernels as zero-copy Warp views, and replays the whole step as one captured graph after
-a warm-up step (a CUDA graph on GPU, a Warp CPU graph on CPU).
+same rule), 4 and 5 in its own single kernel, where three launches would cost more than the work. The base owns the
+buffers rsl_rl sees, exposed to the kernels as zero-copy Warp views, and replays the whole step as one captured graph
+after a warm-up step (a CUDA graph on GPU, a Warp CPU graph on CPU).
 """
 
 from __future__ import annotations
