@@ -15,11 +15,12 @@ def cuda_available() -> bool:
     return init_warp().get_cuda_device_count() > 0
 
 
-# The longest tests, longest first (minutes each on a 2-core CPU, as CI's `--durations` measured them): under xdist they start
-# first, one per worker, and everything else fills in around them.
-LONGEST = ("test_humanoid_episodes_get_longer[refpo]", "test_humanoid_episodes_get_longer[ppo]",
-           "test_method_raises_its_cartpole_return[reinflow-4]",
-           "test_refpo_solves_gridworld_with_one_and_ten_flow_steps",
+# The longest tests (minutes each on a 2-core CPU, as CI's `--durations` measured them): under xdist they start first,
+# one per worker, and everything else fills in around them. The first two compile different Warp kernels (the
+# humanoid's and Newton's, GridWorld's): started together, two humanoid checks would both compile Newton's kernels
+# (about a minute each on a cold cache); the second one starts once the first has filled the cache.
+LONGEST = ("test_humanoid_episodes_get_longer[refpo]", "test_refpo_solves_gridworld_with_one_and_ten_flow_steps",
+           "test_humanoid_episodes_get_longer[ppo]", "test_method_raises_its_cartpole_return[reinflow-4]",
            "test_refpo_balances_the_cartpole_with_ten_and_one_flow_steps",
            "test_method_raises_its_cartpole_return[refpo_aw-10]", "test_ppo_balances_the_cartpole",
            "test_train_and_evaluate_humanoid_root")
