@@ -20,7 +20,8 @@ def cuda_available() -> bool:
 # humanoid's and Newton's, GridWorld's): started together, two humanoid checks would both compile Newton's kernels
 # (about a minute each on a cold cache); the second one starts once the first has filled the cache.
 LONGEST = ("test_humanoid_episodes_get_longer[refpo]", "test_refpo_solves_gridworld_with_one_and_ten_flow_steps",
-           "test_humanoid_episodes_get_longer[ppo]", "test_method_raises_its_cartpole_return[reinflow-4]",
+           "test_method_raises_its_cartpole_return[flow_grpo-10]", "test_method_raises_its_cartpole_return[reinflow-4]",
+           "test_humanoid_episodes_get_longer[ppo]",
            "test_refpo_balances_the_cartpole_with_ten_and_one_flow_steps",
            "test_method_raises_its_cartpole_return[refpo_aw-10]", "test_ppo_balances_the_cartpole",
            "test_train_and_evaluate_humanoid_root")

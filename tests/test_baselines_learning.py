@@ -1,6 +1,5 @@
 """Learning checks of the issue-10 methods: Flow-GRPO, ReinFlow and the advantage-weighted ReFPO each raise their
-evaluation return on dmc_cartpole_balance to at least twice the initial policy's and to at least 500 (Flow-GRPO
-reaches that bound only at its edge; see NOT_MET).
+evaluation return on dmc_cartpole_balance to at least twice the initial policy's and to at least 500.
 
 Each uses the task's CPU profile as shipped (configs/task/dmc_cartpole_balance.yaml, ``by_device.cpu.by_algo``) and the
 final evaluation of tools/train.py: Flow-GRPO and the weighted ReFPO by the deterministic ODE at N = 10, ReinFlow by
@@ -30,20 +29,11 @@ def initial_return(overrides: list[str], flow_steps: int) -> float:
     return results[f"N={flow_steps}"]["return_mean"]
 
 
-# Flow-GRPO's profile ends near the bound (measured, docs/algorithms.md "Learning checks"): its check is kept but not
-# run by default; `pytest -m slow --runxfail tests/test_baselines_learning.py` runs it.
-NOT_MET = {
-    "flow_grpo": "measured on 1 thread: N=10 return 312 -> 623 at 2.5M env steps (bound 625) and 639 at 3M through "
-                 "tools/train.py; nearby profiles 560-682, and 553-628 for single changes of noise level, lr, gamma, "
-                 "group size, group std, passes or episode length: about 2x, not reliably at least 2x",
-}
 CHECKS = [("flow_grpo", 10), ("reinflow", 4), ("refpo_aw", 10)]
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("algo, flow_steps", [
-    pytest.param(algo, n, marks=[pytest.mark.xfail(run=False, reason=NOT_MET[algo])] if algo in NOT_MET else [])
-    for algo, n in CHECKS])  # fmt: skip
+@pytest.mark.parametrize("algo, flow_steps", CHECKS)
 def test_method_raises_its_cartpole_return(algo, flow_steps, tmp_run_dir):
     overrides = ["task=dmc_cartpole_balance", f"algo={algo}", "seed=1", "device=cpu", f"run_dir={tmp_run_dir}"]
     before = initial_return(overrides, flow_steps)
