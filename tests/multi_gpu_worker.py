@@ -1,5 +1,5 @@
 """Run by tests/test_multi_gpu.py under torchrun (not a test itself): one short ReFPO run per rank through
-``refpo_warp.training.build_runner``, twice: with rsl_rl's gradient all-reduce and with it switched off. Each rank
+``refpo_warp.runner.build.build_runner``, twice: with rsl_rl's gradient all-reduce and with it switched off. Each rank
 saves its final actor/critic state, learning rate, device and env seed to ``OUT_DIR/<mode>_rank<r>.pt``.
 
     torchrun --standalone --nproc_per_node=2 tests/multi_gpu_worker.py OUT_DIR key=value ...
@@ -10,9 +10,9 @@ from pathlib import Path
 
 import torch
 
-from refpo_warp.config import parse_overrides, resolve_config
-from refpo_warp.distributed import close_process_group, process_rank
-from refpo_warp.training import build_runner, seed_everything
+from refpo_warp.config.resolve import parse_overrides, resolve_config
+from refpo_warp.runner.build import build_runner, seed_everything
+from refpo_warp.runner.distributed import close_process_group, process_rank
 
 
 def run(cfg: dict, reduce_gradients: bool) -> dict:

@@ -5,8 +5,8 @@ import pytest
 import torch
 
 from refpo_warp.envs.action_chunk import ActionChunkWrapper
-from refpo_warp.evaluation import run_episodes
-from refpo_warp.registry import make_env
+from refpo_warp.envs.registry import make_env
+from refpo_warp.evaluation.episodes import run_episodes
 
 
 def test_a_chunk_is_h_env_steps_of_the_wrapped_env():
@@ -62,10 +62,11 @@ def test_time_outs_fall_on_chunk_boundaries_and_lengths_count_env_steps():
 def test_training_counts_env_steps_of_a_chunked_env(tmp_path):
     """Each policy step of an action-chunk env is ``action_chunk`` env steps: in the iteration budget, in
     ``progress.jsonl`` and in the checkpoint's count (8 envs x 4 policy steps x chunk 3 = 96 env steps/iteration)."""
-    from refpo_warp.checkpoints import checkpoint_progress, read_checkpoint
-    from refpo_warp.config import resolve_config
-    from refpo_warp.progress import read_rows
-    from refpo_warp.training import num_iterations, train
+    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.runner.build import num_iterations
+    from refpo_warp.runner.checkpoints import checkpoint_progress, read_checkpoint
+    from refpo_warp.runner.progress import read_rows
+    from refpo_warp.training import train
 
     args = ["task=gridworld", "algo=reinflow", "num_envs=8", "runner.num_steps_per_env=4", "env.action_chunk=3",
             "device=cpu", "eval.at_end=false", "eval.interval=0", "runner.save_interval=100"]  # fmt: skip

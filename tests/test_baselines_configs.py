@@ -3,8 +3,8 @@ profiles hold the paper's tables (c) and (d) with Brax batch semantics."""
 
 import pytest
 
-from refpo_warp.config import resolve_config
-from refpo_warp.registry import list_tasks
+from refpo_warp.config.resolve import resolve_config
+from refpo_warp.envs.registry import list_tasks
 
 ALGOS = ("flow_grpo", "reinflow", "refpo_aw")
 

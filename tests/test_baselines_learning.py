@@ -13,9 +13,10 @@ import io
 
 import pytest
 
-from refpo_warp.config import resolve_config
-from refpo_warp.report import evaluate_actor, make_eval_env
-from refpo_warp.training import build_runner, seed_everything, train
+from refpo_warp.config.resolve import resolve_config
+from refpo_warp.evaluation.evaluate_run import evaluate_actor, make_eval_env
+from refpo_warp.runner.build import build_runner, seed_everything
+from refpo_warp.training import train
 
 
 def initial_return(overrides: list[str], flow_steps: int) -> float:

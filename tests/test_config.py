@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from refpo_warp.config import merge, parse_overrides, resolve_config
-from refpo_warp.errors import ConfigError
+from refpo_warp.config.resolve import merge, parse_overrides, resolve_config
+from refpo_warp.utils.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 

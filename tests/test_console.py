@@ -7,9 +7,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-from refpo_warp.console import quiet_stdout
-from refpo_warp.report import evaluate_run
+from refpo_warp.evaluation.evaluate_run import evaluate_run
 from refpo_warp.training import train
+from refpo_warp.utils.console import quiet_stdout
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ["task=gridworld", "algo=refpo", "num_envs=8", "runner.num_steps_per_env=16", "max_iterations=3",
@@ -87,7 +87,7 @@ def test_eval_keeps_the_previous_eval_json_and_says_so(tmp_run_dir):
 def test_only_warps_no_driver_warning_is_dropped(capfd):
     import os
 
-    from refpo_warp.device import NO_DRIVER_WARNING, _stderr_without
+    from refpo_warp.utils.device import NO_DRIVER_WARNING, _stderr_without
 
     with _stderr_without(NO_DRIVER_WARNING):  # native code writes to file descriptor 2, as Warp's library does
         os.write(2, f"Warp CUDA warning: {NO_DRIVER_WARNING}. GPU execution will not be available.\n".encode())
@@ -99,7 +99,7 @@ def test_only_warps_no_driver_warning_is_dropped(capfd):
 
 
 def test_benchmark_tables_are_titled_blocks(capsys):
-    from refpo_warp.benchmarking import print_table
+    from refpo_warp.utils.timing import print_table
 
     print_table([{"a": 1, "b": "x"}], ["a", "b"], title="First", notes=("ratio 2.0x",))
     print_table([{"a": 22}], ["a"], title="Second")

@@ -6,11 +6,11 @@ from dataclasses import dataclass
 import pytest
 
 from refpo_warp.algorithms.refpo import ReFPO
-from refpo_warp.device import configure_warp
 from refpo_warp.envs.env_cfg import EnvCfg
+from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.envs.warp_vec_env import WarpVecEnv
-from refpo_warp.options import Real
-from refpo_warp.task_spec import TaskSpec
+from refpo_warp.utils.device import configure_warp
+from refpo_warp.utils.option_rules import Real
 
 wp = configure_warp()
 
@@ -88,7 +88,7 @@ eval: {num_envs: 8, flow_steps: [1, 2]}
 @pytest.fixture
 def line_task(tmp_path):
     """The declaration (here by register_task, as code outside tasks/ does) and its config file."""
-    from refpo_warp.registry import _TASKS, register_task
+    from refpo_warp.envs.registry import _TASKS, register_task
 
     (tmp_path / "line.yaml").write_text(CONFIG)
     register_task(TaskSpec("line", f"{__name__}:LineEnv", LineCfg, description="stay near 0 on a line",
@@ -100,7 +100,7 @@ def line_task(tmp_path):
 def test_the_env_follows_the_base_episode_rules(line_task):
     import torch
 
-    from refpo_warp.registry import make_env
+    from refpo_warp.envs.registry import make_env
 
     env = make_env("line", num_envs=4, device="cpu", seed=0, speed=0.5)
     ended = torch.zeros(4)
@@ -119,7 +119,7 @@ def test_the_env_follows_the_base_episode_rules(line_task):
 
 
 def test_the_new_task_and_algorithm_train_one_iteration(line_task):
-    from refpo_warp.progress import read_rows
+    from refpo_warp.runner.progress import read_rows
     from refpo_warp.training import train
 
     run_dir = line_task / "run"

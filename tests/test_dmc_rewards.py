@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 import warp as wp
 
-from refpo_warp.device import init_warp
+from refpo_warp.utils.device import init_warp
 
 init_warp()
 
-from tasks.dmc import rewards  # noqa: E402
-from tasks.dmc.rewards import SIGMOIDS, small_control, tolerance  # noqa: E402
+from refpo_warp.tasks.dmc import rewards  # noqa: E402
+from refpo_warp.tasks.dmc.rewards import SIGMOIDS, small_control, tolerance  # noqa: E402
 
 
 @wp.kernel

@@ -6,8 +6,8 @@ import pytest
 import torch
 from tensordict import TensorDict
 
-from refpo_warp.flow_diagnostics import jacobian_statistics, spectral_norms, straightness_error
 from refpo_warp.models import FlowActor
+from refpo_warp.models.flow_diagnostics import jacobian_statistics, spectral_norms, straightness_error
 
 
 def linear_field(matrix):

@@ -6,9 +6,9 @@ import pytest
 import torch
 import warp as wp
 
+from refpo_warp.envs.registry import make_env
 from refpo_warp.motion import skeleton as sk
 from refpo_warp.motion.rotations import quat_conjugate, quat_mul, quat_rotate, quat_to_axis_angle
-from refpo_warp.registry import make_env
 
 DT = 1.0 / 30.0
 
@@ -67,8 +67,7 @@ def numpy_imitation_reward(pos, rot, vel, omega, rpos, rrot, rvel, romega):
 def set_sim_to_reference(env, ref):
     """Write the reference state into every world's joint coordinates and run forward kinematics (replay)."""
     import newton
-
-    from tasks.humanoid.tracking_kernels import write_reference_state_kernel
+    from refpo_warp.tasks.humanoid.tracking_kernels import write_reference_state_kernel
 
     s = env.sim
     all_envs = wp.array(np.ones(env.num_envs, bool), dtype=wp.bool, device="cpu")
@@ -91,8 +90,8 @@ def test_kinematic_replay_gives_zero_error_and_maximal_reward(env):
     """Sim joint coordinates set to the reference's dof_pos/root pose each step: FK reproduces every body pose."""
     import dataclasses
 
-    from tasks.humanoid.reward_terms import reward_params
-    from tasks.humanoid.tracking_kernels import evaluate_step_kernel
+    from refpo_warp.tasks.humanoid.reward_terms import reward_params
+    from refpo_warp.tasks.humanoid.tracking_kernels import evaluate_step_kernel
 
     no_power = reward_params(dataclasses.replace(env.cfg, power_coef=0.0))
     env.reset()
@@ -183,7 +182,7 @@ def test_actions_map_to_pd_targets(env):
 
 def test_observation_is_heading_invariant(env):
     """Turning the whole scene (simulator and reference) about the vertical and shifting it gives the same obs."""
-    from tasks.humanoid.observations import observation_kernel
+    from refpo_warp.tasks.humanoid.observations import observation_kernel
 
     env.step(0.3 * torch.ones(3, 69))
     s = env.sim

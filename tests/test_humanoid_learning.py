@@ -11,7 +11,7 @@ seed 1: the training episode length of the last 5 iterations at least 1.08x that
 import numpy as np
 import pytest
 
-from refpo_warp.plots import read_progress
+from refpo_warp.runner.progress import read_rows
 from refpo_warp.training import train
 
 ITERATIONS, WINDOW, MIN_GAIN = 40, 5, 1.08
@@ -22,7 +22,7 @@ ITERATIONS, WINDOW, MIN_GAIN = 40, 5, 1.08
 def test_humanoid_episodes_get_longer(algo, tmp_run_dir):
     train(["task=humanoid_all_residual", f"algo={algo}", "seed=1", "device=cpu", f"max_iterations={ITERATIONS}",
            "eval.at_end=false", f"run_dir={tmp_run_dir}"])  # fmt: skip
-    rows = read_progress(tmp_run_dir)
+    rows = read_rows(tmp_run_dir)
     assert len(rows) == ITERATIONS
     length = np.array([r["episode_length_mean"] for r in rows])
     gain = length[-WINDOW:].mean() / length[:WINDOW].mean()

@@ -5,9 +5,9 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
+from refpo_warp.tasks.humanoid.mjcf_builder import MJCF_PATH, build_mjcf
 
 from refpo_warp.motion import skeleton as sk
-from tasks.humanoid.mjcf_builder import MJCF_PATH, build_mjcf
 
 
 def _mjcf_bodies():
@@ -26,7 +26,7 @@ def _mjcf_bodies():
 
 
 def test_shipped_mjcf_is_the_generated_one():
-    assert MJCF_PATH.read_text() == build_mjcf(), "regenerate with: python -m tasks.humanoid.mjcf_builder"
+    assert MJCF_PATH.read_text() == build_mjcf(), "regenerate with: python -m refpo_warp.tasks.humanoid.mjcf_builder"
 
 
 def test_mjcf_matches_skeleton():
@@ -49,7 +49,7 @@ def test_mjcf_matches_skeleton():
 
 @pytest.fixture(scope="module")
 def sim():
-    from tasks.humanoid.model import HumanoidSim
+    from refpo_warp.tasks.humanoid.model import HumanoidSim
 
     return HumanoidSim(4, "cpu")
 
@@ -113,7 +113,7 @@ def test_pd_hold_keeps_the_standing_pose_and_nothing_touches_itself(sim):
 
 def test_random_targets_stay_within_contact_and_constraint_capacity():
     """Flailing under random PD targets (with ground and self contacts) must not overflow the per-world buffers."""
-    from tasks.humanoid.model import HumanoidSim, SimOptions
+    from refpo_warp.tasks.humanoid.model import HumanoidSim, SimOptions
 
     sim = HumanoidSim(4, "cpu", SimOptions())
     rng = np.random.default_rng(0)

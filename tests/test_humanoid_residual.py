@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 import torch
 
+from refpo_warp.envs.registry import make_env
 from refpo_warp.motion import skeleton as sk
-from refpo_warp.registry import make_env
 
 DT = 1.0 / 30.0
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import torch
 import warp as wp
+from refpo_warp.tasks.humanoid.cfg import HumanoidTrackingCfg
+from refpo_warp.tasks.humanoid.reward_terms import TERMS, reward_params
 
-from refpo_warp.registry import make_env
-from tasks.humanoid.cfg import HumanoidTrackingCfg
-from tasks.humanoid.reward_terms import TERMS, reward_params
+from refpo_warp.envs.registry import make_env
 
 NB, NDOF = 24, 69
 
@@ -21,7 +21,7 @@ def _launch(params, episode_length=5):
     simulated body at rest with identity rotation; the reference 0.1 m further along x, turned 0.2 rad about z, moving
     at 1 m/s along x and spinning at 2 rad/s about z; every hinge at angle 0 with rate 1 rad/s and PD target 0.01 rad
     (kp 100, kd 10)."""
-    from tasks.humanoid.tracking_kernels import evaluate_step_kernel
+    from refpo_warp.tasks.humanoid.tracking_kernels import evaluate_step_kernel
 
     n = 2
     pos = np.stack([np.zeros(NB), np.zeros(NB), 1.0 + 0.01 * np.arange(NB)], -1)

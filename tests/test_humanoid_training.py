@@ -7,9 +7,10 @@ from pathlib import Path
 import pytest
 import torch
 
-from refpo_warp.config import resolve_config
-from refpo_warp.registry import make_env
-from refpo_warp.training import build_runner, rsl_rl_config, train
+from refpo_warp.config.resolve import resolve_config
+from refpo_warp.envs.registry import make_env
+from refpo_warp.runner.build import build_runner, rsl_rl_config
+from refpo_warp.training import train
 
 
 @pytest.mark.parametrize("algo, reflow", [("refpo", 0.1), ("fpo", 0.0)])

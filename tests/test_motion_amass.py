@@ -6,13 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from refpo_warp.errors import MotionDataError
 from refpo_warp.motion import kinematics as kin
 from refpo_warp.motion import rotations as rot
 from refpo_warp.motion.amass import read_amass, write_amass
 from refpo_warp.motion.clip import build_clip, resample
 from refpo_warp.motion.sources import find_amass_files, load_amass_clips
 from refpo_warp.motion.synthetic import DEFAULT_CLIP_SPECS, generate_amass, with_fps
+from refpo_warp.utils.errors import MotionDataError
 
 WALK = DEFAULT_CLIP_SPECS[1]  # walk_normal
 WAVE = DEFAULT_CLIP_SPECS[9]  # wave_right

@@ -10,15 +10,15 @@ import mujoco
 import numpy as np
 import pytest
 import warp as wp
+from test_motion_kinematics import skeleton_mjcf  # noqa: E402  (tests/ is on sys.path under pytest)
 
-from refpo_warp.errors import MotionDataError
 from refpo_warp.motion import rotations as rot
 from refpo_warp.motion.amass import write_amass
 from refpo_warp.motion.clip import MotionClip
 from refpo_warp.motion.motion_library import MotionLibrary
 from refpo_warp.motion.skeleton import BODY_NAMES
 from refpo_warp.motion.synthetic import DEFAULT_CLIP_SPECS, generate_amass, with_fps
-from test_motion_kinematics import skeleton_mjcf  # noqa: E402  (tests/ is on sys.path under pytest)
+from refpo_warp.utils.errors import MotionDataError
 
 SPECS = {s.name: s for s in DEFAULT_CLIP_SPECS}
 

@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 import torch
 
-from refpo_warp.distributed import RankInfo, rank_device
-from refpo_warp.errors import ConfigError
-from refpo_warp.rsl_rl_compat import NORMALIZERS_UPDATE_PER_STEP
+from refpo_warp.runner.distributed import RankInfo, rank_device
+from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ["task=gridworld", "algo=refpo", "device=cpu", "seed=3", "num_envs=8", "runner.num_steps_per_env=16",
@@ -93,7 +93,7 @@ def test_rank_device_under_torchrun():
 
 
 def test_env_step_budget_counts_every_rank():
-    from refpo_warp.training import num_iterations
+    from refpo_warp.runner.build import num_iterations
 
     cfg = {"max_iterations": None, "total_env_steps": 1000, "num_envs": 10, "runner": {"num_steps_per_env": 10}}
     assert (num_iterations(cfg), num_iterations(cfg, world_size=2), num_iterations(cfg, world_size=3)) == (10, 5, 4)

@@ -1,4 +1,4 @@
-"""Option rules (refpo_warp.options): every option has one, the resolver and the constructors apply the same one."""
+"""Option rules (refpo_warp.utils.option_rules): every option has one, the resolver and the constructors apply the same one."""
 
 import dataclasses
 import inspect
@@ -6,12 +6,12 @@ import inspect
 import pytest
 import yaml
 
-from refpo_warp.config import CONFIG_DIR, _POSITIONAL, resolve_class, resolve_config
-from refpo_warp.errors import ConfigError
-from refpo_warp.options import Check, Flag, Int, ListOf, OneOf, Real, checks_options, rules_for
-from refpo_warp.registry import get_task, list_tasks
-from refpo_warp.run_dir import fixed_changes
-from refpo_warp.run_options import NOT_RULED, RUN_RULES
+from refpo_warp.config.resolve import _POSITIONAL, CONFIG_DIR, resolve_class, resolve_config
+from refpo_warp.config.run_options import NOT_RULED, RUN_RULES
+from refpo_warp.envs.registry import get_task, list_tasks
+from refpo_warp.runner.run_dir import fixed_changes
+from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real, checks_options, rules_for
 
 # Constructor arguments rsl_rl passes itself (never a config option).
 _PASSED_BY_RSL_RL = {"device", "multi_gpu_cfg"}
@@ -75,7 +75,7 @@ def test_every_run_option_has_a_rule():
                 yield dotted
 
     missing = sorted(set(keys(yaml.safe_load((CONFIG_DIR / "default.yaml").read_text()))) - set(RUN_RULES))
-    assert not missing, f"configs/default.yaml keys without a rule in refpo_warp/run_options.py: {missing}"
+    assert not missing, f"configs/default.yaml keys without a rule in refpo_warp/config/run_options.py: {missing}"
 
 
 @pytest.mark.parametrize(
@@ -124,8 +124,9 @@ def test_rules_refuse_with_key_and_valid_range(rule, value, message):
 
 
 def test_constructor_and_resolver_apply_the_same_rule():
+    from refpo_warp.tasks.gridworld.env import GridWorldCfg
+
     from refpo_warp.algorithms import ReFPO
-    from tasks.gridworld.env import GridWorldCfg
 
     with pytest.raises(ConfigError, match=r"algorithm\.num_mc_samples=0 is invalid.*\[1, 1024\]"):
         resolve_config(["task=gridworld", "algorithm.num_mc_samples=0"])

@@ -12,8 +12,8 @@ from tensordict import TensorDict
 from refpo_warp.algorithms import ReFPO
 from refpo_warp.algorithms.on_policy import soft_bound_loss, value_regression_loss
 from refpo_warp.algorithms.refpo import sample_tau
-from refpo_warp.errors import NonFiniteLossError
 from refpo_warp.models import FlowActor
+from refpo_warp.utils.errors import NonFiniteLossError
 
 N, T, OBS, ACT = 6, 3, 4, 2
 

@@ -15,8 +15,16 @@ import json
 import numpy as np
 import pytest
 import torch
-from reliability_helpers import assert_refused, copy_run, run_python, run_tool, tiny, tree_hash, truncate, \
-    write_malicious  # fmt: skip
+from reliability_helpers import (
+    assert_refused,
+    copy_run,
+    run_python,
+    run_tool,
+    tiny,
+    tree_hash,
+    truncate,
+    write_malicious,  # fmt: skip
+)
 
 from refpo_warp.motion.amass import write_amass
 
@@ -406,13 +414,13 @@ def test_bad_motion_library_given_to_train_is_named(damage, tmp_path):
 _PATCHED_RUN = """
 import sys
 {patch}
-from refpo_warp.cli import main
+from refpo_warp.cli.guard import main
 sys.exit(main("train", {args!r}, ""))
 """
 
 
 def test_unexpected_error_before_the_run_dir_exists_goes_to_a_log_file(tmp_path):
-    patch = ("import refpo_warp.training as t\n"
+    patch = ("import refpo_warp.training.train_run as t\n"
              "def boom(*a, **k): raise RuntimeError('injected fault')\n"
              "t.build_runner = boom")  # fmt: skip
     args = tiny("max_iterations=2", f"run_dir={tmp_path / 'never'}")
@@ -425,7 +433,7 @@ def test_unexpected_error_before_the_run_dir_exists_goes_to_a_log_file(tmp_path)
 
 @SLOW
 def test_unexpected_error_during_training_goes_to_the_run_dir(tmp_path):
-    patch = ("from refpo_warp.runner import Runner\n"
+    patch = ("from refpo_warp.runner.runner import Runner\n"
              "def boom(*a, **k): raise RuntimeError('injected fault')\n"
              "Runner.learn = boom")  # fmt: skip
     run_dir = tmp_path / "run"

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from reliability_helpers import kill_when, run_tool, start_tool, tiny, tree_hash
 
-from refpo_warp.checkpoints import list_checkpoints, read_checkpoint
-from refpo_warp.config import load_yaml
-from refpo_warp.errors import DataFileError
+from refpo_warp.config.resolve import load_yaml
 from refpo_warp.motion.amass import write_amass
 from refpo_warp.motion.motion_library import MotionLibrary
-from refpo_warp.progress import read_rows
+from refpo_warp.runner.checkpoints import list_checkpoints, read_checkpoint
+from refpo_warp.runner.progress import read_rows
+from refpo_warp.utils.errors import DataFileError
 
 pytestmark = pytest.mark.slow
 

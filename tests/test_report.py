@@ -12,10 +12,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-from refpo_warp.sweep_plots import seed_mean
-from refpo_warp.sweep_report import write_report
-from refpo_warp.sweep_spec import fingerprint
-from refpo_warp.tables import aggregate, fmt_number, run_metrics
+from refpo_warp.sweeps.figures import seed_mean
+from refpo_warp.sweeps.report import write_report
+from refpo_warp.sweeps.spec import fingerprint
+from refpo_warp.sweeps.tables import aggregate, fmt_number, run_metrics
 
 ROOT = Path(__file__).resolve().parents[1]
 

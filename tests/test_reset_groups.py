@@ -5,7 +5,7 @@ import pytest
 import torch
 import warp as wp
 
-from refpo_warp.registry import make_env
+from refpo_warp.envs.registry import make_env
 
 GROUP, GROUPS = 2, 4
 

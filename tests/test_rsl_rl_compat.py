@@ -1,4 +1,4 @@
-"""What differs between the supported rsl-rl-lib versions (refpo_warp/rsl_rl_compat.py), checked on the installed
+"""What differs between the supported rsl-rl-lib versions (refpo_warp/utils/rsl_rl_versions.py), checked on the installed
 one: CI runs this file on 5.0.1 (Isaac Lab's pin) and on the newest 5.x."""
 
 import copy
@@ -9,7 +9,7 @@ import torch
 from rsl_rl.runners import OnPolicyRunner
 
 from refpo_warp import make_env
-from refpo_warp.rsl_rl_compat import NORMALIZERS_UPDATE_PER_STEP, RSL_RL_VERSION
+from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, RSL_RL_VERSION
 
 NUM_ENVS, STEPS = 8, 16
 
@@ -60,7 +60,7 @@ def test_newer_ppo_arguments_are_accepted(algorithm, actor):
 
 
 def test_unsupported_newer_argument_values_warn_on_older_versions():
-    from refpo_warp.rsl_rl_compat import split_newer_ppo_args
+    from refpo_warp.utils.rsl_rl_versions import split_newer_ppo_args
 
     kwargs = {"clip_param": 0.1, "grad_reduce_bucket_mb": 50, "use_mixed_precision": True}
     with warnings.catch_warnings(record=True) as caught:

@@ -10,10 +10,10 @@ import pytest
 import torch
 import yaml
 
-from refpo_warp.config import parse_overrides, resolve_config
-from refpo_warp.errors import ConfigError
-from refpo_warp.sweep import run_sweep
-from refpo_warp.sweep_spec import cli_value, fingerprint, load_sweep, validate
+from refpo_warp.config.resolve import parse_overrides, resolve_config
+from refpo_warp.sweeps.run import run_sweep
+from refpo_warp.sweeps.spec import cli_value, fingerprint, load_sweep, validate
+from refpo_warp.utils.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = {"max_iterations": 2, "num_envs": 4, "runner.num_steps_per_env": 8, "eval.num_envs": 4,
@@ -114,7 +114,7 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     text = result.stdout
     assert result.returncode == 1, text + result.stderr
     broken = out / "gridworld" / "broken" / "seed1"
-    assert f"FAILED gridworld/broken/seed1 (attempt 1, exit 3" in text and f"log: {broken / 'train.log'}" in text
+    assert "FAILED gridworld/broken/seed1 (attempt 1, exit 3" in text and f"log: {broken / 'train.log'}" in text
     assert "retrying gridworld/broken/seed1 from scratch (attempt 2)" in text
     assert "FAILED gridworld/broken/seed1 (attempt 2, exit 3" in text
     assert "finished 2 run(s), skipped 0 already done, failed 1" in text

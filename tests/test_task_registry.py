@@ -3,13 +3,13 @@
 import dataclasses
 
 import pytest
+from refpo_warp.tasks.dmc import suite
+from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
 
-from refpo_warp.config import CONFIG_DIR, resolve_config, task_config_path
-from refpo_warp.errors import ConfigError
-from refpo_warp.registry import _TASKS, get_task, list_tasks, register_task, task_families
-from refpo_warp.task_spec import TaskSpec
-from tasks.dmc import suite
-from tasks.gridworld.cfg import GridWorldCfg
+from refpo_warp.config.resolve import CONFIG_DIR, resolve_config, task_config_path
+from refpo_warp.envs.registry import _TASKS, get_task, list_tasks, register_task, task_families
+from refpo_warp.envs.task_spec import TaskSpec
+from refpo_warp.utils.errors import ConfigError
 
 
 def test_every_registered_task_has_a_config_file():
@@ -32,7 +32,7 @@ def test_families_are_found_not_listed():
 
 
 def test_a_registered_task_without_a_config_file_is_an_error(tmp_path):
-    spec = TaskSpec("test_no_config", "tasks.gridworld.env:GridWorldEnv", GridWorldCfg,
+    spec = TaskSpec("test_no_config", "refpo_warp.tasks.gridworld.env:GridWorldEnv", GridWorldCfg,
                     config_file=tmp_path / "missing.yaml")  # fmt: skip
     register_task(spec)
     try:
@@ -44,7 +44,7 @@ def test_a_registered_task_without_a_config_file_is_an_error(tmp_path):
 
 def test_a_spec_names_only_fields_of_its_cfg_and_ids_are_unique():
     with pytest.raises(ConfigError, match="grid_size.*size"):
-        TaskSpec("bad", "tasks.gridworld.env:GridWorldEnv", GridWorldCfg, {"grid_size": 5})
-    clash = dataclasses.replace(get_task("gridworld"), entry_point="tasks.dmc.env:DmcEnv")
+        TaskSpec("bad", "refpo_warp.tasks.gridworld.env:GridWorldEnv", GridWorldCfg, {"grid_size": 5})
+    clash = dataclasses.replace(get_task("gridworld"), entry_point="refpo_warp.tasks.dmc.env:DmcEnv")
     with pytest.raises(ValueError, match="already registered"):
         register_task(clash)

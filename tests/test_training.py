@@ -7,10 +7,10 @@ import torch
 from rsl_rl.runners import OnPolicyRunner
 
 from refpo_warp import make_env
-from refpo_warp.errors import ConfigError, NonFiniteLossError
-from refpo_warp.evaluation import run_episodes
-from refpo_warp.runner import latest_checkpoint
+from refpo_warp.evaluation.episodes import run_episodes
+from refpo_warp.runner.runner import latest_checkpoint
 from refpo_warp.training import train
+from refpo_warp.utils.errors import ConfigError, NonFiniteLossError
 
 QUICK = ["task=gridworld", "algo=refpo", "num_envs=8", "runner.num_steps_per_env=32", "max_iterations=3",
          "algorithm.num_mc_samples=4", "algorithm.num_learning_epochs=2", "runner.save_interval=1",
@@ -114,8 +114,8 @@ def test_dmc_learner_stores_the_pre_tanh_action_the_env_squashes():
     physics receives tanh of it."""
     import warp as wp
 
-    from refpo_warp.config import resolve_config
-    from refpo_warp.training import build_runner
+    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.runner.build import build_runner
 
     cfg = resolve_config(["task=dmc_cartpole_balance", "algo=refpo", "device=cpu", "num_envs=64",
                           "runner.num_steps_per_env=4"])  # fmt: skip

@@ -3,9 +3,9 @@
 
 Each task family with a benchmark has it in tasks/<family>/bench.py (found there, not listed here);
 `python tools/bench.py dmc --help` shows its options. `all` runs every family's benchmark. `latency`
-(refpo_warp/latency.py) times action generation at N = 10 vs N = 1 for
+(refpo_warp/benchmarks/latency.py) times action generation at N = 10 vs N = 1 for
 chosen tasks and algorithms; `--json PATH` writes the rows for `tools/report.py` (the latency figure).
-`algorithms` (refpo_warp/algorithm_bench.py) times the update of every algorithm on one batch size, as ratios to
+`algorithms` (refpo_warp/benchmarks/update_time.py) times the update of every algorithm on one batch size, as ratios to
 FPO.
 """
 
@@ -13,12 +13,12 @@ import importlib
 import importlib.util
 import sys
 
-OTHERS = {"latency": "refpo_warp.latency", "algorithms": "refpo_warp.algorithm_bench"}  # not a task family
+OTHERS = {"latency": "refpo_warp.benchmarks.latency", "algorithms": "refpo_warp.benchmarks.update_time"}  # not a task family
 
 
 def benchmarked_families() -> list[str]:
     """The task families (found by the registry) that have a ``bench.py``."""
-    from refpo_warp.registry import TASK_ROOT, task_families
+    from refpo_warp.envs.registry import TASK_ROOT, task_families
 
     return [f for f in task_families() if importlib.util.find_spec(f"{TASK_ROOT}.{f}.bench") is not None]
 
@@ -30,11 +30,11 @@ def main(argv: list[str]) -> int:
     family, rest = argv[0], argv[1:]
     families = benchmarked_families()
     if family not in (*families, "all", *OTHERS):
-        from refpo_warp.errors import unknown
+        from refpo_warp.utils.errors import unknown
 
         print(f"error: {unknown('benchmark', family, (*families, 'all', *OTHERS))}", file=sys.stderr)
         return 2
-    from refpo_warp.device import set_torch_threads
+    from refpo_warp.utils.device import set_torch_threads
 
     set_torch_threads()
     if family in OTHERS:
@@ -42,7 +42,7 @@ def main(argv: list[str]) -> int:
         return 0
     for name in families if family == "all" else (family,):
         print(f"\n## {name}", flush=True)  # each family's tables follow as ### blocks
-        importlib.import_module(f"tasks.{name}.bench").main(rest)
+        importlib.import_module(f"refpo_warp.tasks.{name}.bench").main(rest)
     return 0
 
 

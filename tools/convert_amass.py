@@ -14,10 +14,10 @@ import sys
 import time
 from pathlib import Path
 
-from refpo_warp.cli import EXIT_USAGE, run_guarded
-from refpo_warp.errors import ConfigError
+from refpo_warp.cli.guard import EXIT_USAGE, run_guarded
 from refpo_warp.motion.library_file import LIBRARY_SUFFIX
 from refpo_warp.motion.limits import LIBRARY_FPS
+from refpo_warp.utils.errors import ConfigError
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """The module layers as a picture: python tools/draw_layers.py [out=docs/figures/architecture_layers.png]
 
-One band per layer of ``refpo_warp/layering.py`` (top: cli), with its modules; an arrow from a band to a lower one
+One band per layer of ``refpo_warp/utils/layering.py`` (top: cli), with its modules; an arrow from a band to a lower one
 carries the number of imports between them, measured from the code (lazy imports included). No arrow goes up.
 """
 
@@ -19,8 +19,8 @@ def main(argv: list[str]) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from refpo_warp.atomic import atomic_write
-    from refpo_warp.layering import LAYERS, first_party_modules, import_graph, layer_of, upward_imports
+    from refpo_warp.utils.atomic_files import atomic_write
+    from refpo_warp.utils.layering import LAYERS, first_party_modules, import_graph, layer_of, upward_imports
 
     graph = import_graph(first_party_modules())
     edges = Counter((layer_of(m), layer_of(t)) for m, ts in graph.items() for t in ts

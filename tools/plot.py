@@ -12,8 +12,8 @@ over its seeds with their range as a band, and each seed's episode length and re
 import sys
 from pathlib import Path
 
-from refpo_warp.cli import EXIT_USAGE, run_guarded
-from refpo_warp.errors import DataFileError
+from refpo_warp.cli.guard import EXIT_USAGE, run_guarded
+from refpo_warp.utils.errors import DataFileError
 
 
 def main(argv: list[str]) -> int:
@@ -30,7 +30,7 @@ def main(argv: list[str]) -> int:
         return EXIT_USAGE
 
     def plot() -> None:
-        from refpo_warp.plots import plot_runs, sweep_curves
+        from refpo_warp.evaluation.curves import plot_runs, sweep_curves
 
         if sweep and not Path(sweep).is_dir():
             raise DataFileError(f"sweep={sweep}: no such directory (a tools/sweep.py output dir, e.g. "

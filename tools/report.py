@@ -40,8 +40,8 @@ def main(argv: list[str]) -> int:
     if args.help or not args.sweep_dir:
         print(__doc__)
         return 0 if args.help else 2
-    from refpo_warp.errors import ConfigError
-    from refpo_warp.sweep_report import write_report
+    from refpo_warp.sweeps.report import write_report
+    from refpo_warp.utils.errors import ConfigError
 
     try:
         written = write_report(args.sweep_dir, args.out, args.latency, _names(args.curve_methods),

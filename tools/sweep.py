@@ -41,9 +41,9 @@ def main(argv: list[str]) -> int:
     if unknown:
         print(f"error: unknown option(s) {unknown}; see python tools/sweep.py --help", file=sys.stderr)
         return 2
-    from refpo_warp.errors import ConfigError
-    from refpo_warp.sweep import run_sweep
-    from refpo_warp.sweep_spec import load_sweep
+    from refpo_warp.sweeps.run import run_sweep
+    from refpo_warp.sweeps.spec import load_sweep
+    from refpo_warp.utils.errors import ConfigError
 
     signal.signal(signal.SIGTERM, signal.default_int_handler)  # stop the runs cleanly on SIGTERM too
     try:

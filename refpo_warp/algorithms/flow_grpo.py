@@ -33,7 +33,7 @@ from torch import nn
 
 from refpo_warp.algorithms.flow_sde import gaussian_log_prob, sample_sde_chain, sde_grid, sde_means
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm
-from refpo_warp.options import Flag, Int, OneOf, Real
+from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real
 
 KL_REFERENCES = ("rollout", "initial")
 GROUP_STD = ("global", "group")
@@ -90,7 +90,7 @@ class FlowGRPO(OnPolicyAlgorithm):
     """
 
     uses_critic = False
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.options)
+    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
         "noise_level": Real(0, 100, lo_open=True),  # the log-probabilities need noise
         "feather_std": Real(0, 100),
         "feather_in_chain": Flag(),

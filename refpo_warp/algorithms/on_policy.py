@@ -31,11 +31,11 @@ from rsl_rl.algorithms import PPO as RslPPO
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp import rsl_rl_rules  # noqa: F401  (the rules of rsl_rl's PPO arguments, inherited here)
+from refpo_warp.algorithms import rsl_rl_rules  # noqa: F401  (the rules of rsl_rl's PPO arguments, inherited here)
 from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_indices
-from refpo_warp.errors import NonFiniteLossError
-from refpo_warp.options import Flag, Real, checks_options
-from refpo_warp.rsl_rl_compat import NORMALIZERS_UPDATE_PER_STEP, split_newer_ppo_args
+from refpo_warp.utils.errors import NonFiniteLossError
+from refpo_warp.utils.option_rules import Flag, Real, checks_options
+from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, split_newer_ppo_args
 
 
 @dataclass
@@ -73,7 +73,7 @@ class OnPolicyAlgorithm(RslPPO):
     """Shared update loop; subclasses implement ``act`` and ``policy_loss`` (see the module docstring)."""
 
     uses_critic: bool = True
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.options)
+    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
         "reward_scale": Real(0, 1e6, lo_open=True),
         "value_clip_param": Real(0, None, lo_open=True, optional=True),
         "reshuffle_each_epoch": Flag(),

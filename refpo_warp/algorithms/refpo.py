@@ -28,7 +28,7 @@ from torch import nn
 
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm, soft_bound_loss
 from refpo_warp.models.flow_actor import OUTPUT_MODES, cfm_loss
-from refpo_warp.options import Int, OneOf, Real
+from refpo_warp.utils.option_rules import Int, OneOf, Real
 
 TAU_SAMPLING = ("uniform", "discrete", "logit_normal")
 RATIO_MODES = ("mean", "per_sample")
@@ -65,7 +65,7 @@ class ReFPO(OnPolicyAlgorithm):
         explosion_threshold: |log-ratio| above which an action (or pair) counts towards the Explosion Rate.
     """
 
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.options)
+    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
         "reflow_coef": Real(0, 1e6),
         "num_mc_samples": Int(1, 1024),
         "output_mode": OneOf(None, OUTPUT_MODES),

@@ -20,7 +20,7 @@ import torch.nn.functional as F
 
 from refpo_warp.algorithms.on_policy import Minibatch
 from refpo_warp.algorithms.refpo import ReFPO
-from refpo_warp.options import OneOf
+from refpo_warp.utils.option_rules import OneOf
 
 REFLOW_WEIGHTINGS = ("positive", "softplus", "relu", "trajectory")
 

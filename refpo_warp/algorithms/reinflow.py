@@ -27,8 +27,8 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm
-from refpo_warp.errors import ConfigError
-from refpo_warp.options import Check, Int, ListOf, Real
+from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_rules import Check, Int, ListOf, Real
 
 
 def decayed_sigma_max(update: int, total: int, sigma_min: float, sigma_max: float, hold_ratio: float,
@@ -59,7 +59,7 @@ class ReinFlow(OnPolicyAlgorithm):
         explosion_threshold: |log rho| above which a sample counts towards ``Flow/explosion_rate``.
     """
 
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.options)
+    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
         "logprob_clip": Check(log_prob_range, "null or [min, max] with min < max", optional=True),
         "noise_decay_updates": Int(1, None, optional=True),
         "noise_hold_ratio": Real(0, 1),

@@ -16,7 +16,7 @@ every env:
 
 from __future__ import annotations
 
-from refpo_warp.device import configure_warp
+from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()
 

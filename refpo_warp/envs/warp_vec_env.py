@@ -27,10 +27,10 @@ import torch
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
-from refpo_warp.device import configure_warp, init_warp, resolve_device
 from refpo_warp.envs.env_cfg import EnvCfg
 from refpo_warp.envs.episode import finish_reward_terms, finish_step, restart_episodes
 from refpo_warp.envs.random_streams import RandomStreams
+from refpo_warp.utils.device import configure_warp, init_warp, resolve_device
 
 wp = configure_warp()
 

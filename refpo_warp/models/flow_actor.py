@@ -23,10 +23,10 @@ import torch
 from tensordict import TensorDict
 from torch import nn
 
+from refpo_warp.models.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS
 from refpo_warp.models.sampled_policy import SampledPolicyProtocol
 from refpo_warp.models.velocity_field import DATA_GUARD, PARAMETERIZATIONS, TIME_CONDITIONINGS, VelocityField
-from refpo_warp.options import Check, Flag, Int, OneOf, Real, checks_options
-from refpo_warp.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS, mapping_or_none
+from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, Real, checks_options, mapping_or_none
 
 OUTPUT_MODES = ("u", "eps", "data")
 INITIAL_NOISE = ("random", "zero")
@@ -75,7 +75,7 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
         obs_clip: Clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); None: no clamp.
     """
 
-    option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.options)
+    option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.utils.option_rules)
         "hidden_dims": HIDDEN_DIMS,
         "activation": OneOf(ACTIVATIONS),
         "obs_normalization": Flag(),

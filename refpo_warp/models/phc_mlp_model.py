@@ -14,8 +14,8 @@ from rsl_rl.models import MLPModel
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
-from refpo_warp.options import Real, checks_options
-from refpo_warp.rsl_rl_compat import split_learn_std
+from refpo_warp.utils.option_rules import Real, checks_options
+from refpo_warp.utils.rsl_rl_versions import split_learn_std
 
 
 @checks_options
@@ -23,7 +23,7 @@ class PhcMLPModel(MLPModel):
     """``MLPModel`` plus ``head_init_gain`` and ``obs_clip`` (see the module docstring)."""
 
     option_rules = {"head_init_gain": Real(0, 1e3, lo_open=True, optional=True),
-                    "obs_clip": Real(0, 1e6, lo_open=True, optional=True)}  # fmt: skip  (refpo_warp.options)
+                    "obs_clip": Real(0, 1e6, lo_open=True, optional=True)}  # fmt: skip  (refpo_warp.utils.option_rules)
 
     def __init__(self, *args, head_init_gain: float | None = None, obs_clip: float | None = None, **kwargs) -> None:
         kwargs["distribution_cfg"], learn_std = split_learn_std(kwargs.get("distribution_cfg"))

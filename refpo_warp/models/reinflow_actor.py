@@ -32,10 +32,10 @@ from rsl_rl.utils import resolve_nn_activation
 from tensordict import TensorDict
 from torch import nn
 
+from refpo_warp.models.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS
 from refpo_warp.models.sampled_policy import SampledPolicyProtocol
 from refpo_warp.models.velocity_field import VelocityField
-from refpo_warp.options import Check, Flag, Int, OneOf, Real, checks_options
-from refpo_warp.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS, mapping_or_none
+from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, Real, checks_options, mapping_or_none
 
 NOISE_SCHEDULES = ("lin", "vp", "const")
 INITIAL_NOISE = ("random", "zero")
@@ -76,7 +76,7 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         action_clip: Clamp of the final action (table (d) action range [-1, 1]).
     """
 
-    option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.options)
+    option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.utils.option_rules)
         "hidden_dims": HIDDEN_DIMS,
         "activation": OneOf(ACTIVATIONS),
         "obs_normalization": Flag(),

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from refpo_warp.atomic import atomic_write
-from refpo_warp.errors import MotionDataError
 from refpo_warp.motion.limits import check_source
+from refpo_warp.utils.atomic_files import atomic_write
+from refpo_warp.utils.errors import MotionDataError
 
 NUM_BODY_POSE = 63  # 21 body joints x 3 (axis-angle), after the 3 root values
 SMPLH_POSE_DIM = 156

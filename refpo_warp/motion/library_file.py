@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from refpo_warp.atomic import atomic_write
-from refpo_warp.errors import MotionDataError
 from refpo_warp.motion.amass import load_npz
 from refpo_warp.motion.limits import check_library
 from refpo_warp.motion.skeleton import BODY_NAMES, NUM_BODIES, NUM_DOFS
+from refpo_warp.utils.atomic_files import atomic_write
+from refpo_warp.utils.errors import MotionDataError
 
 LIBRARY_SUFFIX = ".motionlib.npz"
 FORMAT_NAME = "refpo_warp.motionlib"

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from refpo_warp.errors import ConfigError, MotionDataError
+from refpo_warp.utils.errors import ConfigError, MotionDataError
 
 SOURCE_FPS = (1.0, 2000.0)  # capture rates (AMASS: 60 to 250 Hz)
 LIBRARY_FPS = (1.0, 1000.0)  # the rate clips are converted to

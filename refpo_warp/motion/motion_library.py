@@ -13,13 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
-from refpo_warp.device import configure_warp, init_warp, resolve_device
-from refpo_warp.errors import MotionDataError
 from refpo_warp.motion.clip import MotionClip
 from refpo_warp.motion.library_file import FRAME_ARRAYS, is_library_file, load_library, save_library
 from refpo_warp.motion.limits import check_fps_argument
 from refpo_warp.motion.skeleton import NUM_BODIES, NUM_DOFS
 from refpo_warp.motion.sources import load_amass_clips
+from refpo_warp.utils.device import configure_warp, init_warp, resolve_device
+from refpo_warp.utils.errors import MotionDataError
 
 wp = configure_warp()  # before this module defines kernels
 

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from refpo_warp.errors import MotionDataError
 from refpo_warp.motion import kinematics as kin
 from refpo_warp.motion.amass import AmassMotion, is_metadata_file, read_amass
 from refpo_warp.motion.clip import MotionClip, build_clip
 from refpo_warp.motion.library_file import is_library_file
 from refpo_warp.motion.limits import MIN_FRAMES, resampled_frame_count
+from refpo_warp.utils.errors import MotionDataError
 
 
 def find_amass_files(folder: Path) -> list[Path]:

@@ -1,6 +1,6 @@
 """Generic Newton helpers for Warp environments: N-world MJCF models on SolverMuJoCo, per-world views, resets."""
 
-from refpo_warp.device import configure_warp
+from refpo_warp.utils.device import configure_warp
 
 configure_warp()  # Warp options must be set before Newton's kernel modules are imported
 

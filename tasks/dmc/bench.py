@@ -19,9 +19,9 @@ import time
 import numpy as np
 import torch
 
-from refpo_warp.benchmarking import env_steps_per_second, print_table
-from refpo_warp.device import resolve_device
-from refpo_warp.registry import make_env
+from refpo_warp.envs.registry import make_env
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.timing import env_steps_per_second, print_table
 
 
 def _timed_steps(seconds: float, steps_per_second_guess: float, minimum: int = 10) -> int:
@@ -84,7 +84,7 @@ def mujoco_c(env, seconds: float) -> tuple[float, float]:
 
 
 def main(argv: list[str]) -> None:
-    from tasks.dmc.suite import task_names
+    from refpo_warp.tasks.dmc.suite import task_names
 
     TASKS = task_names()
 

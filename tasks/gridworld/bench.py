@@ -1,29 +1,28 @@
-"""GridWorld benchmark: Warp env vs gymnasium SyncVectorEnv, action latency N=1 vs N=10, ReFPO vs FPO update time.
+"""GridWorld benchmark: the Warp env against the same dynamics in numpy under gymnasium's SyncVectorEnv.
 
     python tools/bench.py gridworld [--envs 4096] [--device auto]
+
+Action latency and update time on the GridWorld config: ``tools/bench.py latency --tasks gridworld`` and
+``tools/bench.py algorithms --task gridworld``.
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
-import io
 import time
 
 import numpy as np
 import torch
-from tensordict import TensorDict
 
-from refpo_warp.benchmarking import env_steps_per_second, print_table, time_call
-from refpo_warp.device import resolve_device
-from refpo_warp.registry import make_env
+from refpo_warp.envs.registry import make_env
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.timing import env_steps_per_second, print_table
 
 
 def gym_steps_per_second(num_envs: int, steps: int) -> float:
     """The same dynamics as a numpy gymnasium env, vectorised by gymnasium's SyncVectorEnv."""
     import gymnasium as gym
-
-    from tasks.gridworld.gym_env import GridWorldGymEnv
+    from refpo_warp.tasks.gridworld.gym_env import GridWorldGymEnv
 
     envs = gym.vector.SyncVectorEnv([GridWorldGymEnv for _ in range(num_envs)])
     envs.reset(seed=0)
@@ -35,28 +34,6 @@ def gym_steps_per_second(num_envs: int, steps: int) -> float:
     elapsed = time.perf_counter() - start
     envs.close()
     return steps * num_envs / elapsed
-
-
-def build_algorithm(reflow_coef: float, device: str, num_envs: int):
-    """ReFPO with the paper's GridWorld settings (task config) on a filled rollout, ready for update()."""
-    from refpo_warp.config import resolve_config
-    from refpo_warp.runner_setup import build_runner
-
-    cfg = resolve_config(["task=gridworld", f"algorithm.reflow_coef={reflow_coef}", f"device={device}",
-                          f"num_envs={num_envs}"])  # fmt: skip
-    with contextlib.redirect_stdout(io.StringIO()):  # rsl_rl prints the model structure
-        env, runner = build_runner(cfg, None)
-    return env, runner.alg
-
-
-def fill_rollout(env, alg) -> None:
-    obs = env.get_observations()
-    with torch.inference_mode():
-        for _ in range(alg.storage.num_transitions_per_env):
-            actions = alg.act(obs)
-            obs, rew, dones, extras = env.step(actions)
-            alg.process_env_step(obs, rew, dones, extras)
-        alg.compute_returns(obs)
 
 
 def main(argv: list[str]) -> None:
@@ -76,32 +53,3 @@ def main(argv: list[str]) -> None:
         {"env": "gymnasium SyncVectorEnv (numpy)", "env steps/s": f"{gym_sps:,.0f}"},
         {"env": "speed-up", "env steps/s": f"{warp_sps / gym_sps:,.0f}x"},
     ], ["env", "env steps/s"], title=f"Env steps per second, {args.envs} envs, uniform random actions")  # fmt: skip
-
-    env, alg = build_algorithm(0.1, device, 16)
-    actor = alg.get_policy().eval()
-    obs = TensorDict({"policy": torch.rand(args.envs, 2, device=device) * 2 - 1}, batch_size=[args.envs])
-    rows = []
-    for n in (1, 10):
-        actor.num_flow_steps = n
-        with torch.inference_mode():
-            latency = time_call(lambda: actor(obs, stochastic_output=True), device=device)
-        rows.append({"flow steps N": n, f"latency for {args.envs} obs (ms)": f"{latency * 1e3:.3f}"})
-    ratio = float(rows[1][list(rows[1])[1]]) / float(rows[0][list(rows[0])[1]])
-    print_table(rows, ["flow steps N", f"latency for {args.envs} obs (ms)"], title="Action latency, N = 1 vs N = 10",
-                notes=(f"N=10 / N=1 latency ratio: {ratio:.1f}x",))  # fmt: skip
-
-    update_times = {}
-    for name, coef in (("FPO", 0.0), ("ReFPO", 0.1)):
-        torch.manual_seed(0)
-        env, alg = build_algorithm(coef, device, 16)
-        times = []
-        for _ in range(3):
-            fill_rollout(env, alg)
-            start = time.perf_counter()
-            alg.update()
-            times.append(time.perf_counter() - start)
-        update_times[name] = sorted(times)[1]
-    ratio = update_times["ReFPO"] / update_times["FPO"]
-    print_table([{"algorithm": k, "update time (s)": f"{v:.3f}"} for k, v in update_times.items()],
-                ["algorithm", "update time (s)"], title="Update time, GridWorld config (16 envs), median of 3",
-                notes=(f"ReFPO / FPO update-time ratio: {ratio:.3f}",))  # fmt: skip

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from refpo_warp.envs.env_cfg import EnvCfg
-from refpo_warp.options import Int, Real
+from refpo_warp.utils.option_rules import Int, Real
 
 
 @dataclass

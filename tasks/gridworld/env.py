@@ -11,11 +11,11 @@ c = (size-1)/2.
 from __future__ import annotations
 
 import torch
+from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
 
-from refpo_warp.device import configure_warp
 from refpo_warp.envs.episode import finish_env_step
 from refpo_warp.envs.warp_vec_env import WarpVecEnv
-from tasks.gridworld.cfg import GridWorldCfg
+from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()
 

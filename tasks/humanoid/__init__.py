@@ -1,7 +1,8 @@
 """SMPL humanoid motion tracking (ReFPO paper §4.3): one env, task ids that fix its goal conditioning (and options)."""
 
-from refpo_warp.task_spec import TaskSpec
-from tasks.humanoid.cfg import HumanoidTrackingCfg
+from refpo_warp.tasks.humanoid.cfg import HumanoidTrackingCfg
+
+from refpo_warp.envs.task_spec import TaskSpec
 
 # task id: (description, the env options the id fixes); humanoid_all_residual's residual PD targets are in its YAML
 _VARIANTS = {
@@ -13,7 +14,7 @@ _VARIANTS = {
 }
 
 TASKS = [
-    TaskSpec(task_id, "tasks.humanoid.env:HumanoidTrackingEnv", HumanoidTrackingCfg, fixed,
+    TaskSpec(task_id, "refpo_warp.tasks.humanoid.env:HumanoidTrackingEnv", HumanoidTrackingCfg, fixed,
              description=f"SMPL humanoid tracking, {description}")
     for task_id, (description, fixed) in _VARIANTS.items()
 ]  # fmt: skip

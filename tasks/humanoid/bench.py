@@ -24,9 +24,9 @@ import time
 import numpy as np
 import torch
 
-from refpo_warp.benchmarking import env_steps_per_second, print_title
-from refpo_warp.device import resolve_device
-from refpo_warp.registry import make_env
+from refpo_warp.envs.registry import make_env
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.timing import env_steps_per_second, print_title
 
 
 class _CountEpisodes:
@@ -72,7 +72,7 @@ def measure(task: str, num_envs: int, device: str, steps: int, warmup: int, seed
 def mujoco_c(env, steps: int, episode_length: int, seed: int = 0) -> dict:
     """MuJoCo C env steps per second on ``env``'s model and worlds: ``steps`` control steps in episodes of
     ``episode_length`` from the env's reference-state starts, uniform random actions mapped to PD targets as ours."""
-    from tasks.humanoid import mujoco_c as mc
+    from refpo_warp.tasks.humanoid import mujoco_c as mc
 
     env.reset()  # fresh reference-state starts
     model = mc.c_model(env.sim)

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from refpo_warp.tasks.humanoid.obs_layout import CONDITIONING_REGIMES
+
 from refpo_warp.envs.env_cfg import EnvCfg
-from refpo_warp.options import Flag, Int, OneOf, Real, Text
-from tasks.humanoid.obs_layout import CONDITIONING_REGIMES
+from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real, Text
 
 REWARD_TERMS = ("pos", "rot", "vel", "angvel", "power")
 
@@ -65,7 +66,7 @@ class HumanoidTrackingCfg(EnvCfg):
     Capping at 3 moves bodies by up to 0.15 m in one control step from a cold start: not a safe speed-up."""
     solver_ls_iterations: int = 50
 
-    option_rules = {  # valid values (refpo_warp.options)
+    option_rules = {  # valid values (refpo_warp.utils.option_rules)
         "conditioning": OneOf(CONDITIONING_REGIMES, fixed=True),
         "motion_file": Text(),
         "eval_mode": Flag(),

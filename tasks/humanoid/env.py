@@ -11,23 +11,23 @@ from __future__ import annotations
 
 import numpy as np
 import torch
-
-from refpo_warp.device import configure_warp
-from refpo_warp.envs.warp_vec_env import WarpVecEnv
-from refpo_warp.motion import skeleton as sk
-from tasks.humanoid import motions
-from tasks.humanoid.cfg import HumanoidTrackingCfg
-from tasks.humanoid.model import CONTROL_HZ, EFFORT_LIMIT, HumanoidSim, SimOptions
-from tasks.humanoid.obs_layout import OBS_DIM, conditioning_mask
-from tasks.humanoid.observations import observation_kernel
-from tasks.humanoid.reward_terms import TERMS, reward_params
-from tasks.humanoid.tracking_kernels import (
+from refpo_warp.tasks.humanoid import motions
+from refpo_warp.tasks.humanoid.cfg import HumanoidTrackingCfg
+from refpo_warp.tasks.humanoid.model import CONTROL_HZ, EFFORT_LIMIT, HumanoidSim, SimOptions
+from refpo_warp.tasks.humanoid.obs_layout import OBS_DIM, conditioning_mask
+from refpo_warp.tasks.humanoid.observations import observation_kernel
+from refpo_warp.tasks.humanoid.reward_terms import TERMS, reward_params
+from refpo_warp.tasks.humanoid.tracking_kernels import (
     advance_time_kernel,
     apply_actions_kernel,
     evaluate_step_kernel,
     start_episodes_kernel,
     write_reference_state_kernel,
 )
+
+from refpo_warp.envs.warp_vec_env import WarpVecEnv
+from refpo_warp.motion import skeleton as sk
+from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()
 

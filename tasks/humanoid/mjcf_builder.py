@@ -7,7 +7,7 @@ geometry sized here. Every body frame is aligned with the world frame in the res
 actuators and no joint stiffness: the PD gains are set as Newton joint target gains when the model is built
 (``tasks/humanoid/model.py``), because Newton would read MJCF joint stiffness as a passive spring.
 
-Regenerate after changing the skeleton or the geometry table: ``python -m tasks.humanoid.mjcf_builder``.
+Regenerate after changing the skeleton or the geometry table: ``python -m refpo_warp.tasks.humanoid.mjcf_builder``.
 """
 
 from __future__ import annotations

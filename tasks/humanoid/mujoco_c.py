@@ -21,7 +21,6 @@ import numpy as np
 from refpo_warp.motion.rotations import quat_rotate
 
 
-
 def c_model(sim):
     """A MuJoCo C copy of the model ``sim`` (a ``HumanoidSim``) simulates, with the physics timestep set."""
     model = copy.copy(sim.solver.mj_model)

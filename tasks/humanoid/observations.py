@@ -6,9 +6,10 @@ The critic group gets the full observation, the policy group the same values tim
 
 from __future__ import annotations
 
-from refpo_warp.device import configure_warp
-from tasks.humanoid.obs_layout import OFFSET
-from tasks.humanoid.rotation_funcs import heading_inverse, normal, origin_velocity, tangent
+from refpo_warp.tasks.humanoid.obs_layout import OFFSET
+from refpo_warp.tasks.humanoid.rotation_funcs import heading_inverse, normal, origin_velocity, tangent
+
+from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()
 

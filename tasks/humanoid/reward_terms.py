@@ -10,7 +10,7 @@ step's weighted terms add up to the reward; the base env sums them over each epi
 
 from __future__ import annotations
 
-from refpo_warp.device import configure_warp
+from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()
 

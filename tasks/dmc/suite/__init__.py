@@ -28,7 +28,7 @@ def describe(name: str) -> str:
 
 def task_class(name: str) -> type:
     """The ``DmcTask`` subclass that the module ``name`` defines (importing the module, and so Warp)."""
-    from tasks.dmc.task import DmcTask
+    from refpo_warp.tasks.dmc.task import DmcTask
 
     module = importlib.import_module(f"{__name__}.{name}")
     found = [c for c in vars(module).values()

@@ -12,9 +12,8 @@ from __future__ import annotations
 import math
 
 import warp as wp
-
-from tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, tolerance
-from tasks.dmc.task import DmcTask
+from refpo_warp.tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, tolerance
+from refpo_warp.tasks.dmc.task import DmcTask
 
 TARGET = wp.constant(wp.vec3(0.0, 0.0, 4.0))  # target site (world frame)
 TARGET_RADIUS = wp.constant(0.2)

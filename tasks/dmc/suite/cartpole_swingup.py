@@ -6,7 +6,7 @@ pole pi + 0.01 N(0,1), velocities 0.01 N(0,1).
 
 from __future__ import annotations
 
-from tasks.dmc.suite.cartpole_balance import CartpoleBalance
+from refpo_warp.tasks.dmc.suite.cartpole_balance import CartpoleBalance
 
 
 class CartpoleSwingup(CartpoleBalance):

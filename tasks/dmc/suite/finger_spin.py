@@ -15,8 +15,7 @@ from __future__ import annotations
 import math
 
 import warp as wp
-
-from tasks.dmc.task import DmcTask
+from refpo_warp.tasks.dmc.task import DmcTask
 
 SPIN_VELOCITY = wp.constant(15.0)
 TIP = wp.constant(wp.vec3(0.0, 0.0, 0.13))  # tip site in the spinner frame

@@ -11,9 +11,8 @@ from __future__ import annotations
 import math
 
 import warp as wp
-
-from tasks.dmc.rewards import GAUSSIAN, tolerance
-from tasks.dmc.task import DmcTask
+from refpo_warp.tasks.dmc.rewards import GAUSSIAN, tolerance
+from refpo_warp.tasks.dmc.task import DmcTask
 
 COS_8_DEG = wp.constant(math.cos(math.radians(8.0)))
 

@@ -9,9 +9,8 @@ Reset: x, y U(-0.29, 0.29) (the joint ranges), zero velocity.
 from __future__ import annotations
 
 import warp as wp
-
-from tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, small_control, tolerance
-from tasks.dmc.task import DmcTask
+from refpo_warp.tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, small_control, tolerance
+from refpo_warp.tasks.dmc.task import DmcTask
 
 TARGET_RADIUS = wp.constant(0.015)  # the target geom; it sits at the origin, at the point mass's height
 

@@ -1,0 +1,100 @@
+"""Action-latency benchmark (the paper's Figure 5b): time to compute one batch of actions with N = 10 and N = 1
+Euler steps for flow policies, and with the mean action for a Gaussian policy.
+
+    python tools/bench.py latency [--tasks dmc_cheetah_run] [--algos ppo,fpo,refpo] [--batch 1,128]
+                                  [--device auto] [--repeats 50] [--json PATH]
+
+Each policy is the task's actor at its resolved config (the device's profile) with freshly initialised weights:
+latency depends on the architecture and N, not on the weights. The observation batch comes from the task's env
+after reset; each timing is the median of ``repeats`` calls after warm-up, synchronising the device every call.
+``--json PATH`` also writes the rows (read by ``tools/report.py`` for the latency figure).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import datetime
+import io
+import platform
+from pathlib import Path
+
+import torch
+
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.timing import print_table, time_call
+
+
+def device_name(device: str) -> str:
+    if device.startswith("cuda"):
+        return torch.cuda.get_device_name(torch.device(device))
+    with contextlib.suppress(OSError):  # Linux: the CPU model; elsewhere the platform's word for it
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    return platform.processor() or platform.machine() or "cpu"
+
+
+def policy_latency(task: str, algo: str, device: str, batches: list[int], flow_steps: list[int],
+                   repeats: int = 50) -> list[dict]:  # fmt: skip
+    """Latency rows (``latency_ms`` per call) of ``algo``'s actor on ``task`` for every batch size and N."""
+    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.evaluation.evaluate_run import is_flow, make_policy
+    from refpo_warp.runner.build import build_runner
+
+    cfg = resolve_config([f"task={task}", f"algo={algo}", f"device={device}", f"num_envs={max(batches)}"])
+    with contextlib.redirect_stdout(io.StringIO()):  # rsl_rl prints the model structure
+        env, runner = build_runner(cfg, None)
+    actor = runner.get_inference_policy(device=device)
+    obs = env.get_observations().to(device)
+    rows = []
+    for n in flow_steps if is_flow(actor) else [None]:
+        policy = make_policy(actor, n)  # random initial noise, no perturbation: the evaluation protocol
+        for batch in batches:
+            part = obs[:batch]
+            with torch.inference_mode():
+                seconds = time_call(lambda: policy(part), device=device, repeats=repeats, warmup=5)
+            rows.append({"task": task, "algo": algo, "flow_steps": n, "batch": batch, "latency_ms": seconds * 1e3})
+    return rows
+
+
+def main(argv: list[str]) -> None:
+    parser = argparse.ArgumentParser(prog="tools/bench.py latency", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--tasks", default="dmc_cheetah_run", help="comma-separated task ids")
+    parser.add_argument("--algos", default="ppo,fpo,refpo", help="comma-separated algo names")
+    parser.add_argument("--batch", default="1,num_envs", help="observations per call; 'num_envs': the profile's")
+    parser.add_argument("--flow-steps", default="10,1")
+    parser.add_argument("--device", default="auto")
+    parser.add_argument("--repeats", type=int, default=50)
+    parser.add_argument("--json", default=None, help="also write the rows to this JSON file")
+    args = parser.parse_args(argv)
+
+    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.evaluation.evaluate_run import write_json
+
+    device = resolve_device(args.device)
+    flow_steps = [int(n) for n in args.flow_steps.split(",")]
+    rows = []
+    for task in [t.strip() for t in args.tasks.split(",") if t.strip()]:
+        profile_envs = resolve_config([f"task={task}", f"device={device}"])["num_envs"]
+        batches = sorted({profile_envs if b.strip() == "num_envs" else int(b) for b in args.batch.split(",")})
+        for algo in [a.strip() for a in args.algos.split(",") if a.strip()]:
+            rows += policy_latency(task, algo, device, batches, flow_steps, args.repeats)
+    ratios = []
+    for task, algo, batch in sorted({(r["task"], r["algo"], r["batch"]) for r in rows if r["flow_steps"]}):
+        by_n = {r["flow_steps"]: r["latency_ms"] for r in rows
+                if (r["task"], r["algo"], r["batch"]) == (task, algo, batch)}  # fmt: skip
+        if 1 in by_n and 10 in by_n:
+            ratios.append(f"{task} {algo} batch {batch}: N=10 / N=1 latency ratio {by_n[10] / by_n[1]:.1f}x")
+    print_table([{**r, "flow_steps": r["flow_steps"] or "mean action", "latency_ms": f"{r['latency_ms']:.3f}"}
+                 for r in rows], ["task", "algo", "flow_steps", "batch", "latency_ms"],
+                title=f"Action latency on {device} ({device_name(device)}), torch threads {torch.get_num_threads()}, "
+                      f"median of {args.repeats} calls", notes=tuple(ratios))  # fmt: skip
+    if args.json:
+        path = Path(args.json)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_json({"benchmark": "action_latency", "device": device, "device_name": device_name(device),
+                    "torch_threads": torch.get_num_threads(), "torch_version": torch.__version__,
+                    "repeats": args.repeats, "created": datetime.datetime.now().isoformat(timespec="seconds"),
+                    "rows": rows}, path)  # fmt: skip
+        print(f"wrote {path}")

@@ -1,0 +1,101 @@
+"""Update time of every algorithm on one batch size: python tools/bench.py algorithms [--task T] [--envs E] ...
+
+Each algorithm is built from its config for the task (its own actor, pairs/chain and losses), collects one rollout
+of ``envs x steps`` transitions and times ``update()`` (median of ``--repeats`` fresh rollouts, 5 by default) with
+the same number of passes and minibatches for all, so the ratio to FPO is the per-transition cost of each method's
+update. A second
+ratio scales each time to the paper's settings per env step (DMC tables (a)-(d): 16 passes for PPO/FPO/ReFPO, 8 for
+Flow-GRPO and ReinFlow, and ReinFlow's transitions are chunks of 4 env steps).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import time
+
+import torch
+
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.timing import print_table, synchronize
+
+ORDER = ("fpo", "refpo", "refpo_aw", "flow_grpo", "reinflow", "ppo")  # table order; other algos follow, sorted
+NAMES = {"fpo": "FPO", "refpo": "ReFPO", "refpo_aw": "ReFPO (adv.-weighted)", "flow_grpo": "Flow-GRPO",
+         "reinflow": "ReinFlow", "ppo": "PPO"}  # fmt: skip
+PAPER_PASSES = {"fpo": 16, "refpo": 16, "refpo_aw": 16, "flow_grpo": 8, "reinflow": 8, "ppo": 16}
+"""Passes per batch in the paper's DMC tables; an algorithm not in them is scaled with ``--passes``."""
+
+
+def algorithms() -> list[str]:
+    """Every configs/algo/<algo>.yaml (nothing to list here when an algorithm is added)."""
+    from refpo_warp.config.resolve import algo_names
+
+    found = algo_names()
+    return [a for a in ORDER if a in found] + sorted(set(found) - set(ORDER))
+
+
+def build(algo: str, task: str, device: str, envs: int, steps: int, minibatches: int, passes: int):
+    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.runner.build import build_runner
+
+    cfg = resolve_config([f"task={task}", f"algo={algo}", f"device={device}", f"num_envs={envs}",
+                          f"runner.num_steps_per_env={steps}", f"algorithm.num_mini_batches={minibatches}",
+                          f"algorithm.num_learning_epochs={passes}", "eval.interval=0"])  # fmt: skip
+    with contextlib.redirect_stdout(io.StringIO()):  # rsl_rl prints the model structure
+        env, runner = build_runner(cfg, None)
+    return env, runner.alg, cfg
+
+
+def fill_rollout(env, alg) -> None:
+    obs = env.get_observations()
+    with torch.inference_mode():
+        for _ in range(alg.storage.num_transitions_per_env):
+            actions = alg.act(obs)
+            obs, rewards, dones, extras = env.step(actions)
+            alg.process_env_step(obs, rewards, dones, extras)
+        alg.compute_returns(obs)
+
+
+def update_time(alg, env, device: str, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        fill_rollout(env, alg)
+        synchronize(device)
+        start = time.perf_counter()
+        alg.update()
+        synchronize(device)
+        times.append(time.perf_counter() - start)
+    return sorted(times)[len(times) // 2]
+
+
+def main(argv: list[str]) -> None:
+    parser = argparse.ArgumentParser(prog="bench.py algorithms", description=__doc__)
+    parser.add_argument("--task", default="dmc_cheetah_run")
+    parser.add_argument("--envs", type=int, default=256, help="a multiple of 8 (Flow-GRPO's groups)")
+    parser.add_argument("--steps", type=int, default=60, help="policy steps per env and rollout")
+    parser.add_argument("--minibatches", type=int, default=8)
+    parser.add_argument("--passes", type=int, default=2)
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--algos", nargs="+", default=algorithms(), choices=algorithms())
+    parser.add_argument("--device", default="auto")
+    args = parser.parse_args(argv)
+    device = resolve_device(args.device)
+    if "fpo" not in args.algos:
+        args.algos = ["fpo", *args.algos]
+    title = (f"Update time on {args.task}, {device}, torch threads {torch.get_num_threads()}: {args.envs} envs x "
+             f"{args.steps} steps = {args.envs * args.steps} transitions, {args.minibatches} minibatches, "
+             f"{args.passes} passes")  # fmt: skip
+    seconds, chunks = {}, {}
+    for algo in args.algos:
+        torch.manual_seed(0)
+        env, alg, cfg = build(algo, args.task, device, args.envs, args.steps, args.minibatches, args.passes)
+        seconds[algo] = update_time(alg, env, device, args.repeats)
+        chunks[algo] = cfg["env"].get("action_chunk", 1)
+    per_env_step = {a: seconds[a] / args.passes * PAPER_PASSES.get(a, args.passes) / chunks[a] for a in seconds}
+    rows = [{"algorithm": NAMES.get(a, a), "update (s)": f"{seconds[a]:.3f}",
+             "ratio to FPO": f"{seconds[a] / seconds['fpo']:.2f}",
+             "paper passes, per env step, ratio to FPO": f"{per_env_step[a] / per_env_step['fpo']:.2f}"}
+            for a in seconds]  # fmt: skip
+    print_table(rows, ["algorithm", "update (s)", "ratio to FPO", "paper passes, per env step, ratio to FPO"],
+                title=title)

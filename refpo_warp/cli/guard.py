@@ -1,0 +1,164 @@
+"""Command-line front ends shared by tools/*.py: argument parsing, one clear message and a documented exit code
+for every failure (``docs/cli.md``).
+
+Exit codes: 0 done; 1 unexpected error (the message, and the file holding the full traceback); 2 invalid command
+line or config (bad option value, unknown key, a resume that would change the run, a run dir that cannot be used);
+3 training stopped on a non-finite loss; 4 an input file is missing, damaged or refused (checkpoint, motion file,
+saved config, progress log); 5 the system refused (disk full, permission denied, out of memory); 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import tempfile
+import time
+import traceback
+from collections.abc import Callable
+from pathlib import Path
+
+from refpo_warp.utils.errors import ConfigError, DataFileError, NonFiniteLossError
+
+EXIT_OK, EXIT_UNEXPECTED, EXIT_USAGE, EXIT_NONFINITE, EXIT_BAD_FILE, EXIT_SYSTEM = 0, 1, 2, 3, 4, 5
+EXIT_INTERRUPTED = 130
+ERROR_LOG = "error.log"
+
+
+def _train(args: list[str]) -> None:
+    from refpo_warp.runner.distributed import close_process_group, main_rank_stdout, process_rank
+    from refpo_warp.training import train
+
+    # Under torchrun only rank 0 prints progress; every rank leaves the process group when done.
+    try:
+        with main_rank_stdout(process_rank()):
+            train(args)
+    finally:
+        close_process_group()
+
+
+def _eval(args: list[str]) -> None:
+    from refpo_warp.config.resolve import parse_overrides
+    from refpo_warp.evaluation.evaluate_run import evaluate_run
+    from refpo_warp.utils.errors import tag_run_dir
+
+    overrides = parse_overrides(args)
+    run_dir = overrides.pop("run_dir", None)
+    if run_dir is None:
+        raise ConfigError("tools/eval.py needs run_dir=PATH (a directory written by tools/train.py)")
+    checkpoint = overrides.pop("checkpoint", None)
+    if checkpoint is not None and not isinstance(checkpoint, str):
+        raise ConfigError(f"checkpoint={checkpoint!r} is invalid; expected a path to a model_<iteration>.pt file")
+    with tag_run_dir(run_dir) if Path(str(run_dir)).is_dir() else contextlib.nullcontext():
+        results = evaluate_run(Path(str(run_dir)), checkpoint=checkpoint, overrides=overrides)
+    from refpo_warp.utils.console import headline_numbers, run_outputs, summary_block
+
+    run_dir = Path(str(run_dir))
+    evaluated = checkpoint or run_dir / f"model_{results['checkpoint_iteration']}.pt"
+    title = f"Evaluated {results['task']} / {results['algo']} at iteration {results['checkpoint_iteration']}"
+    print(summary_block(title, run_outputs(run_dir, evaluated, results), headline_numbers(results)), flush=True)
+
+
+COMMANDS = {"train": _train, "eval": _eval}
+
+
+def main(command: str, args: list[str], usage: str) -> int:
+    if any(a in ("-h", "--help", "help") for a in args):
+        print(usage)
+        return EXIT_OK
+    if "--tasks" in args:
+        from refpo_warp.envs.registry import get_task, list_tasks
+
+        for task in list_tasks():
+            print(f"{task:28s} {get_task(task).description}")
+        return EXIT_OK
+
+    def run() -> None:
+        from refpo_warp.utils.device import set_torch_threads
+
+        set_torch_threads(cuda_cap=4)
+        COMMANDS[command](args)
+
+    return run_guarded(run)
+
+
+def run_guarded(fn: Callable[[], object]) -> int:
+    """Run ``fn``; turn every failure into one message on stderr and its exit code (see the module docstring)."""
+    try:
+        fn()
+    except ConfigError as err:
+        return _fail(f"error: {err}", EXIT_USAGE)
+    except DataFileError as err:
+        return _fail(f"error: {err}", EXIT_BAD_FILE)
+    except NonFiniteLossError as err:
+        return _fail(non_finite_message(err), EXIT_NONFINITE)
+    except KeyboardInterrupt as err:
+        latest = _latest(err)
+        kept = f" (newest: {latest})" if latest else ""
+        message = f"interrupted; checkpoints written so far are intact{kept}; resume=true continues"
+        return _fail(message, EXIT_INTERRUPTED)
+    except MemoryError:
+        return _fail("error: out of memory; lower num_envs, runner.num_steps_per_env or the network sizes", EXIT_SYSTEM)
+    except OSError as err:
+        where = f"{err.filename}: " if err.filename else ""
+        return _fail(f"error: {where}{err.strerror or err}", EXIT_SYSTEM)
+    except Exception as err:  # noqa: BLE001  (the last resort: a message and the traceback in a file)
+        if type(err).__name__ == "OutOfMemoryError":  # torch's CUDA out-of-memory error
+            return _fail(f"error: out of GPU memory ({str(err).splitlines()[0]}); lower num_envs or the network "
+                         f"sizes", EXIT_SYSTEM)  # fmt: skip
+        log = write_traceback(err)
+        summary = " ".join(str(err).split())[:500] or "(no message)"
+        return _fail(f"error: unexpected {type(err).__name__}: {summary}\nThis is a bug or a case refpo_warp does not "
+                     f"foresee; the full traceback is in {log}", EXIT_UNEXPECTED)  # fmt: skip
+    return EXIT_OK
+
+
+def non_finite_message(err: NonFiniteLossError) -> str:
+    """What stopped, whether a checkpoint survives, and a command that continues (or restarts) the run."""
+    run_dir, checkpoint = getattr(err, "run_dir", None), getattr(err, "checkpoint", None)
+    lr = getattr(err, "learning_rate", None)
+    smaller = f"a learning rate below {lr:g}" if lr else "a smaller learning rate"
+    lines = [f"error: training stopped: {err}"]
+    if checkpoint is not None:
+        lines.append(f"The checkpoints written before the failure are intact; the newest is {checkpoint}. To continue "
+                     f"from it with {smaller}: python tools/train.py run_dir={run_dir} resume=true "
+                     f"algorithm.learning_rate=<value>")  # fmt: skip
+    else:
+        where = f" in {run_dir}" if run_dir else ""
+        lines.append(f"No checkpoint was written before the failure{where}, so there is nothing to resume; start the "
+                     f"run again with {smaller} (algorithm.learning_rate=<value>) or, for flow policies, "
+                     f"algorithm.log_ratio_clip=<value>")  # fmt: skip
+    return "\n".join(lines)
+
+
+def write_traceback(err: BaseException) -> Path | str:
+    """Write the full traceback to ``<run dir>/error.log`` (or a temp file when no run dir exists); its path."""
+    text = "".join(traceback.format_exception(type(err), err, err.__traceback__))
+    run_dir = getattr(err, "run_dir", None)
+    candidates = [Path(run_dir) / ERROR_LOG] if run_dir and Path(run_dir).is_dir() else []
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    candidates.append(Path(tempfile.gettempdir()) / f"refpo_warp-error-{stamp}-{os.getpid()}.log")
+    for path in candidates:
+        try:
+            from refpo_warp.utils.atomic_files import write_text
+
+            write_text(path, text)
+            return path
+        except OSError:
+            continue
+    print(text, file=sys.stderr)  # nowhere to write it: better on the screen than lost
+    return "the output above"
+
+
+def _latest(err: BaseException):
+    run_dir = getattr(err, "run_dir", None)
+    if run_dir is None:
+        return None
+    from refpo_warp.runner.checkpoints import latest_checkpoint
+
+    return latest_checkpoint(run_dir)
+
+
+def _fail(message: str, code: int) -> int:
+    print(message, file=sys.stderr, flush=True)
+    return code

@@ -1,0 +1,95 @@
+"""Task registry: task ids map to a ``TaskSpec`` (env cfg dataclass, lazily imported env class, config file).
+
+Task families are the subpackages of the task root package (``tasks``); each declares its tasks as a ``TASKS`` list
+of ``refpo_warp.task_spec.TaskSpec`` next to its code. The registry finds the families (nothing lists them by hand),
+imports each once and reads its list; the families never import the registry. Listing tasks and resolving configs
+never import a simulator: the env module is imported only when ``make_env`` builds that task. Code outside the task
+root adds tasks with ``register_task``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import pkgutil
+from typing import Any
+
+from refpo_warp.envs.task_spec import TaskSpec
+from refpo_warp.utils.errors import ConfigError, unknown
+
+__all__ = ["TaskSpec", "get_task", "list_tasks", "make_env", "make_env_cfg", "register_task", "task_families"]
+
+TASK_ROOT = "refpo_warp.tasks"  # the package whose subpackages are the task families (the repository's tasks/)
+
+_TASKS: dict[str, TaskSpec] = {}
+_FAMILIES: list[str] = []
+
+
+def register_task(spec: TaskSpec) -> None:
+    """Add a task (a family's ``TASKS`` entries are added this way when the family is discovered)."""
+    if not isinstance(spec, TaskSpec):
+        raise TypeError(f"register_task takes a TaskSpec, got {type(spec).__name__}")
+    if spec.task_id in _TASKS and _TASKS[spec.task_id] != spec:
+        raise ValueError(f"Task id '{spec.task_id}' is already registered by {_TASKS[spec.task_id].entry_point}")
+    _TASKS[spec.task_id] = spec
+
+
+def task_families() -> list[str]:
+    """The task families (subpackages of the task root), each imported once and its ``TASKS`` registered."""
+    if not _FAMILIES:
+        root = importlib.import_module(TASK_ROOT)
+        names = sorted(m.name for m in pkgutil.iter_modules(root.__path__) if m.ispkg and not m.name.startswith("_"))
+        for name in names:
+            family = importlib.import_module(f"{TASK_ROOT}.{name}")
+            if not isinstance(getattr(family, "TASKS", None), (list, tuple)):
+                raise ConfigError(f"{family.__file__}: a task family must declare its tasks as TASKS = [TaskSpec(...)]")
+            for spec in family.TASKS:
+                register_task(spec)
+        _FAMILIES.extend(names)
+    return list(_FAMILIES)
+
+
+def list_tasks() -> list[str]:
+    """All registered task ids, sorted."""
+    task_families()
+    return sorted(_TASKS)
+
+
+def get_task(task_id: str) -> TaskSpec:
+    """The spec of ``task_id``; an unknown id raises an error naming the closest registered id."""
+    task_families()
+    if task_id not in _TASKS:
+        raise unknown("task", task_id, _TASKS)
+    return _TASKS[task_id]
+
+
+def make_env_cfg(task_id: str, **overrides: Any):
+    """The env cfg dataclass of ``task_id`` with ``overrides`` applied (unknown fields raise with a suggestion)."""
+    spec = get_task(task_id)
+    valid = {f.name for f in dataclasses.fields(spec.cfg_class)}
+    for key in overrides:
+        if key not in valid:
+            raise unknown(f"env option for task '{task_id}'", key, valid)
+    return spec.cfg_class(**{**spec.cfg_overrides, **overrides})
+
+
+def make_env(task_id: str, num_envs: int = 64, device: str = "auto", seed: int = 0, **env_cfg: Any):
+    """Build the rsl_rl ``VecEnv`` of a registered task.
+
+    Args:
+        task_id: A registered id such as ``"gridworld"``, ``"dmc_cartpole_balance"`` or ``"humanoid_root"``.
+        num_envs: Number of parallel environments (one Warp thread / Newton world each).
+        device: ``"auto"`` (CUDA when available, else CPU), ``"cpu"`` or ``"cuda:N"``.
+        seed: Seed of the per-env random streams.
+        **env_cfg: Fields of the task's env cfg dataclass to override.
+
+    With ``action_chunk`` above 1 the env comes wrapped in an ``ActionChunkWrapper`` (H env steps per action).
+    """
+    spec = get_task(task_id)
+    cfg = make_env_cfg(task_id, **env_cfg)
+    env = spec.env_class()(cfg, num_envs=num_envs, device=device, seed=seed)
+    if cfg.action_chunk > 1:
+        from refpo_warp.envs.action_chunk import ActionChunkWrapper
+
+        env = ActionChunkWrapper(env, cfg.action_chunk)
+    return env

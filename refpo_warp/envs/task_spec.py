@@ -1,0 +1,49 @@
+"""``TaskSpec``: what a task family declares about one task id (no imports of its own, so families depend on it and
+not on the registry that discovers them).
+
+A family package ``tasks/<family>/__init__.py`` lists its tasks as ``TASKS = [TaskSpec(...), ...]``; the registry
+(``refpo_warp.envs.registry``) finds the families and reads these lists. Code outside ``tasks/`` registers a spec with
+``refpo_warp.registry.register_task``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """One task: its env (built lazily), its Warp-free env cfg class, the cfg fields its id fixes, and its training
+    config file."""
+
+    task_id: str
+    entry_point: str
+    """``"module.path:ClassName"`` of a ``WarpVecEnv`` subclass, imported only when an env is built."""
+    cfg_class: type
+    """Its env cfg dataclass (an ``EnvCfg`` subclass from a module that does not import Warp)."""
+    cfg_overrides: dict[str, Any] = field(default_factory=dict)
+    """Env cfg fields this id fixes (e.g. the DMC suite task)."""
+    description: str = ""
+    config_file: str | Path | None = None
+    """Its training config (YAML layers over ``configs/default.yaml``); None: ``configs/task/<task_id>.yaml``."""
+
+    def __post_init__(self) -> None:
+        valid = {f.name for f in dataclasses.fields(self.cfg_class)}
+        for key in self.cfg_overrides:
+            if key not in valid:
+                from refpo_warp.utils.errors import unknown
+
+                raise unknown(f"env option of {self.cfg_class.__name__} (task '{self.task_id}')", key, valid)
+
+    def env_class(self) -> type:
+        module_path, name = self.entry_point.split(":")
+        return getattr(importlib.import_module(module_path), name)
+
+    @property
+    def package(self) -> str:
+        """The package of the env module: the family (``tasks.<family>``), home of its optional ``report.py``."""
+        return self.entry_point.split(":")[0].rsplit(".", 1)[0]

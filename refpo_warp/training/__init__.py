@@ -1,0 +1,5 @@
+"""Train a run from a resolved config: ``train(["task=gridworld", "algo=refpo"])`` (behind ``tools/train.py``)."""
+
+from refpo_warp.training.train_run import train
+
+__all__ = ["train"]

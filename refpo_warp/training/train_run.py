@@ -1,0 +1,213 @@
+"""Train a policy from a resolved config: the implementation behind ``tools/train.py``.
+
+``train(["task=gridworld", "algo=refpo", "seed=1"])`` builds the env and rsl_rl's runner (extended in
+``refpo_warp.runner.runner``), writes the resolved config next to the checkpoints, trains (or resumes), evaluates at the
+end and returns the evaluation results (also written to ``eval.json`` in the run dir).
+
+Order of work: everything that can refuse a run (options, run dir, resume compatibility, env, runner, checkpoint)
+happens before the first byte is written, so a refused run leaves the disk as it was.
+
+Under torchrun every rank trains on its own device (``cuda:LOCAL_RANK``, or the CPU) with seed ``seed + RANK``;
+rank 0 alone writes the run dir (config, checkpoints, logs) and evaluates (``refpo_warp.runner.distributed``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from pathlib import Path
+from typing import Any
+
+from refpo_warp.config.resolve import dump_config, parse_overrides, resolve_config
+from refpo_warp.evaluation.evaluate_run import evaluate_run, periodic_evaluator
+from refpo_warp.runner.build import (
+    build_runner,
+    env_steps_per_iteration,
+    num_iterations,
+    rsl_rl_config,
+    seed_everything,
+)
+from refpo_warp.runner.checkpoints import checkpoint_progress, latest_checkpoint, load_latest
+from refpo_warp.runner.distributed import process_rank
+from refpo_warp.runner.progress import progress_path, truncate_after
+from refpo_warp.runner.run_dir import (
+    RUN_CONFIG,
+    RUN_FILES,
+    check_new_run_dir,
+    check_writable,
+    flatten,
+    load_run_config,
+    run_lock,
+)
+from refpo_warp.runner.runner import Runner
+from refpo_warp.utils.atomic_files import remove_stale_temp_files
+from refpo_warp.utils.errors import ConfigError, NonFiniteLossError, tag_run_dir
+
+__all__ = ["RUN_CONFIG", "build_runner", "flatten", "load_run_config", "num_iterations", "rsl_rl_config",
+           "seed_everything", "train"]  # fmt: skip
+
+
+def default_run_dir(cfg: dict) -> Path:
+    return Path("runs") / cfg["task"] / f"{cfg['algo']}_seed{cfg['seed']}"
+
+
+def resolve_run(flat: dict[str, Any]) -> dict:
+    """The config of the run ``flat`` asks for: a new one, or a resumed one (its saved config + the overrides)."""
+    resume = flat.get("resume", False)
+    if resume not in (True, False):
+        raise ConfigError(f"resume={resume!r} is invalid; expected true or false")
+    if not resume:
+        cfg = resolve_config(flat)
+    else:
+        run_dir = Path(flat["run_dir"]) if flat.get("run_dir") else default_run_dir(resolve_config(flat))
+        cfg = load_run_config(run_dir, {**flat, "run_dir": str(run_dir)})
+    cfg["run_dir"] = str(cfg["run_dir"] or default_run_dir(cfg))
+    return cfg
+
+
+def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
+    """Train (or resume) a run and evaluate it; returns the evaluation results (``{}`` if ``eval.at_end`` is off).
+
+    ``resume=true`` continues the newest usable checkpoint of ``run_dir``; it is an error when the run dir has no
+    checkpoint (nothing is started from scratch behind the user's back). Without it, a run dir that already holds
+    checkpoints is refused.
+    """
+    flat = parse_overrides(overrides) if isinstance(overrides, list) else dict(overrides or {})
+    cfg = resolve_run(flat)
+    run_dir, resume = Path(cfg["run_dir"]), cfg["resume"]
+    check_writable(run_dir)
+    checkpoint = latest_checkpoint(run_dir) if run_dir.is_dir() else None
+    if checkpoint is not None and not resume:
+        raise ConfigError(f"{run_dir} already holds checkpoints ({checkpoint.name}); pass resume=true to continue "
+                          f"that run, or choose another run_dir")  # fmt: skip
+    if checkpoint is None and resume:
+        raise ConfigError(f"resume=true, but {run_dir} holds no checkpoint (model_<iteration>.pt) to continue from; "
+                          f"start it again without resume=true (that replaces its config.yaml and progress.jsonl)")
+    if not resume:
+        check_new_run_dir(run_dir)
+    rank = process_rank()
+    with contextlib.ExitStack() as stack:
+        locked = rank.is_main and run_dir.is_dir()
+        if locked:
+            stack.enter_context(run_lock(run_dir))
+        seed_everything(cfg["seed"] + rank.rank)
+        env, runner = build_runner(cfg, run_dir)
+        start = 0
+        if resume:  # every rank loads the checkpoint
+            start = _resume(runner, cfg, run_dir, flat, rank.world_size)
+        # --- everything below writes (rank 0 only); everything above could refuse the run without touching the disk
+        if rank.is_main:
+            run_dir.mkdir(parents=True, exist_ok=True)
+            if not locked:  # the directory did not exist before
+                stack.enter_context(run_lock(run_dir))
+            if not resume and latest_checkpoint(run_dir) is not None:  # another process got here first
+                raise ConfigError(f"{run_dir} received checkpoints from another process meanwhile; not touching it")
+            remove_stale_temp_files(run_dir, RUN_FILES)
+            if not resume:
+                for stale in (progress_path(run_dir), run_dir / "eval.json", run_dir / "eval.prev.json"):
+                    stale.unlink(missing_ok=True)
+            else:
+                truncate_after(run_dir, start - 1)
+            dump_config(cfg, run_dir / RUN_CONFIG)
+        with tag_run_dir(run_dir):
+            return _train_and_evaluate(cfg, env, runner, run_dir, start)
+
+
+def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: int = 1) -> int:
+    """Load the newest usable checkpoint, apply a learning-rate override, restore the counters; returns the next
+    iteration."""
+    path, data = load_latest(runner, run_dir, cfg["task"], cfg["algo"])
+    iteration = int(data["iter"])
+    env_steps, time_s = checkpoint_progress(data)
+    if env_steps is None:  # not written by refpo_warp: read the count from the progress log, or assume this batch
+        from refpo_warp.runner.progress import read_rows
+
+        rows = [r for r in read_rows(run_dir) if r["iteration"] == iteration] if progress_path(run_dir).exists() else []
+        env_steps = rows[-1]["env_steps"] if rows else (iteration + 1) * env_steps_per_iteration(cfg, world_size)
+        time_s = rows[-1].get("time_s", 0.0) if rows else 0.0
+    alg = runner.alg
+    if "algorithm.learning_rate" in flat:  # rsl_rl restored the checkpoint's rate with the optimizer state
+        restored = alg.optimizer.param_groups[0]["lr"]
+        alg.learning_rate = float(cfg["algorithm"]["learning_rate"])
+        for group in alg.optimizer.param_groups:
+            group["lr"] = alg.learning_rate
+        print(f"[refpo_warp] learning_rate {alg.learning_rate:g} from the command line replaces {restored:g} "
+              f"restored from {path.name}", flush=True)  # fmt: skip
+    print(f"[refpo_warp] resuming {run_dir} from {path.name}: iteration {iteration}, {env_steps:,} env steps",
+          flush=True)  # fmt: skip
+    return runner.continue_after(iteration, env_steps, time_s or 0.0)
+
+
+def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
+    rank = process_rank()
+    total = num_iterations(cfg, rank.world_size)
+    notice = cfg["notice"].format(task=cfg["task"], algo=cfg["algo"]) if cfg["notice"] else None
+    if notice:
+        print(f"[refpo_warp] NOTE: {notice}", flush=True)
+    ranks = f" x {rank.world_size} ranks" if rank.is_distributed else ""
+    steps = total * env_steps_per_iteration(cfg, rank.world_size)
+    print(f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs{ranks}, "
+          f"iterations {start}..{total - 1} ({steps:,} env steps), run dir {run_dir}", flush=True)  # fmt: skip
+    if cfg["eval"]["interval"] is None:  # periodic evaluation on by default: 10 evaluations per run
+        cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
+    interval = int(cfg["eval"]["interval"])
+    evaluate = periodic_evaluator(cfg, runner) if interval > 0 and rank.is_main else None  # rank 0 evaluates
+    if total > start:
+        try:
+            _learn_in_chunks(runner, start, total, interval, evaluate, cfg["runner"]["init_at_random_ep_len"])
+        except NonFiniteLossError as err:  # the CLI's message says what survives and how to go on
+            err.checkpoint, err.run_dir = latest_checkpoint(run_dir), run_dir
+            err.learning_rate = float(runner.alg.learning_rate)
+            raise
+    else:
+        print(f"[refpo_warp] nothing to train: the run is at iteration {start} and the budget is {total} iterations "
+              f"(raise max_iterations or total_env_steps to continue)", flush=True)  # fmt: skip
+    results = {}
+    if cfg["eval"]["at_end"] and rank.is_main:
+        results = evaluate_run(run_dir, cfg=cfg, runner=runner)
+        log_final_evaluation(runner, results)
+    if rank.is_main:
+        print(training_summary(cfg, runner, run_dir, results), flush=True)
+    if notice:
+        print(f"[refpo_warp] NOTE: {notice}", flush=True)
+    return results
+
+
+def training_summary(cfg: dict, runner, run_dir: Path, results: dict) -> str:
+    """The closing block: where every output went, the training budget spent and the final evaluation's numbers."""
+    from refpo_warp.utils.console import headline_numbers, run_outputs, summary_block
+
+    logger, checkpoint = runner.logger, latest_checkpoint(run_dir)
+    last = checkpoint.stem.split("_")[-1] if checkpoint is not None else "-"
+    spent = [("trained", f"iterations 0..{last}, {int(logger.tot_timesteps):,} env steps, {logger.tot_time:.0f} s")]
+    title = f"Trained {cfg['task']} / {cfg['algo']} (seed {cfg['seed']})"
+    return summary_block(title, run_outputs(run_dir, checkpoint, results), spent + headline_numbers(results))
+
+
+def _learn_in_chunks(runner, start: int, total: int, interval: int, evaluate, init_at_random_ep_len: bool) -> None:
+    """Iterations ``start .. total - 1`` in chunks that end where periodic evaluation is due (every ``interval``
+    iterations and at the last); the evaluation runs here, between chunks, and its numbers join the progress row
+    of the chunk's last iteration (``eval/return_N<n>`` ...). Every rank learns in the same chunks."""
+    it = start
+    while it < total:
+        end = min(total, (it // interval + 1) * interval) if interval > 0 else total
+        runner.learn_chunk(end - it, total, init_at_random_ep_len=init_at_random_ep_len and it == start)
+        runner.end_chunk(evaluate(end - 1, end == total) if evaluate is not None else {})
+        it = end
+
+
+def log_final_evaluation(runner, results: dict) -> None:
+    """The final evaluation's returns, task metrics and scalar diagnostics as TensorBoard scalars (``Eval/...``)."""
+    writer = runner.logger.writer
+    if writer is None:
+        return
+    it = results["checkpoint_iteration"]
+    for setting, summary in results["results"].items():
+        for key, value in summary.items():
+            if isinstance(value, float):
+                writer.add_scalar(f"Eval/{setting}/{key}", value, it)
+    for key, value in results.get("diagnostics", {}).items():
+        if isinstance(value, float):
+            writer.add_scalar(f"Eval/diagnostics/{key}", value, it)
+    if hasattr(writer, "flush"):
+        writer.flush()

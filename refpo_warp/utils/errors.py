@@ -1,0 +1,66 @@
+"""Error types and the 'did you mean' helper shared by configs, the task registry and data loaders.
+
+Every foreseeable failure is one of these types; ``refpo_warp.cli.guard`` maps each to a message and an exit code
+(``docs/cli.md``): ``ConfigError`` 2, ``NonFiniteLossError`` 3, ``DataFileError`` (and its subclasses) 4.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import difflib
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+
+
+class ConfigError(ValueError):
+    """A configuration key, value or task id is invalid."""
+
+
+class NonFiniteLossError(FloatingPointError):
+    """A training loss or statistic became NaN or infinite; training stops before the bad step is applied."""
+
+
+class DataFileError(ValueError):
+    """An input file (checkpoint, motion, saved config, progress log) is unreadable or invalid; names the file."""
+
+
+class MotionDataError(DataFileError):
+    """A motion file is malformed; the message names the file and the problem."""
+
+
+class CheckpointError(DataFileError):
+    """A checkpoint is missing, truncated, foreign, of another shape, or holds objects that are not plain data."""
+
+
+def closest(name: str, choices: Iterable[str]) -> str | None:
+    """Return the valid choice closest to ``name`` (or None when nothing is close)."""
+    choices = list(choices)
+    match = difflib.get_close_matches(name, choices, n=1, cutoff=0.4)
+    if match:
+        return match[0]
+    # Fall back to a prefix/suffix match so short typos of long dotted keys still get a suggestion.
+    leaf = name.rsplit(".", 1)[-1]
+    for choice in choices:
+        if choice.rsplit(".", 1)[-1] == leaf:
+            return choice
+    return None
+
+
+def unknown(kind: str, name: str, choices: Iterable[str]) -> ConfigError:
+    """Build the error for an unknown ``kind`` (task, key, ...) that names the closest valid choice."""
+    choices = sorted(choices)
+    suggestion = closest(name, choices)
+    hint = f" Did you mean '{suggestion}'?" if suggestion else ""
+    return ConfigError(f"Unknown {kind} '{name}'.{hint} Valid choices: {', '.join(choices)}")
+
+
+@contextlib.contextmanager
+def tag_run_dir(run_dir: str | Path) -> Iterator[None]:
+    """Record on any exception leaving this block the run dir it happened in (the CLI writes its log there)."""
+    try:
+        yield
+    except BaseException as err:
+        if getattr(err, "run_dir", None) is None:
+            with contextlib.suppress(AttributeError):  # a few built-in exception types take no attributes
+                err.run_dir = Path(run_dir)
+        raise

@@ -1,0 +1,295 @@
+"""Option rules: the valid values of every option, declared once next to the option and checked in two places.
+
+How to declare the options of a class (algorithm, actor/critic model, env cfg dataclass)::
+
+    from refpo_warp.utils.option_rules import Int, OneOf, Real, checks_options
+
+    @checks_options                                   # the constructor checks its arguments against the rules
+    class MyAlgo(PPO):
+        option_rules = {                              # next to the constructor it describes
+            "num_samples": Int(1, 1024),              # integer in [1, 1024]
+            "mode": OneOf("fast", "exact"),           # one of the listed values
+            "clip": Real(0, None, lo_open=True, optional=True),   # null or a number > 0
+        }
+        def __init__(self, ..., num_samples: int = 8, mode: str = "fast", clip: float | None = None, **kw): ...
+
+Env cfg dataclasses declare ``option_rules: ClassVar[dict] = {...}`` after their fields; ``EnvCfg.__post_init__``
+checks them. Run options (``configs/default.yaml``) have theirs in ``refpo_warp/config/run_options.py``; classes we do not
+own (rsl_rl's) get theirs through ``register_rules``.
+
+The same rules serve:
+- the config resolver (``refpo_warp.config.resolve``), which checks every option when a run's config is resolved, before
+  anything is built or written, and names the dotted key (``algorithm.num_samples``) in its error;
+- the constructor (``checks_options`` / ``EnvCfg.__post_init__``), so code that builds the class directly (an
+  rsl_rl config dict, a test) gets the same errors;
+- resume: ``fixed=True`` marks an option that may not change when a run is resumed (it changes the model or the
+  spaces; e.g. hidden sizes). Without ``fixed``, actor and critic options are fixed and all others may change
+  (``fixed=False`` frees an actor option such as the number of flow steps).
+
+Subclasses inherit their bases' rules and may replace them. ``tests/test_option_rules.py`` fails for any option
+without a rule, so a new option cannot be forgotten.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import math
+from collections.abc import Callable
+from typing import Any
+
+from refpo_warp.utils.errors import ConfigError
+
+_EXTERNAL_RULES: dict[type, dict[str, Rule]] = {}
+
+
+class Rule:
+    """Valid values of one option; ``check`` returns the value (normalised) or raises ``ConfigError``."""
+
+    def __init__(self, optional: bool = False, fixed: bool | None = None) -> None:
+        self.optional = optional  # null (None) is valid
+        self.fixed = fixed  # may not change on resume (None: the section's default)
+
+    def check(self, key: str, value: Any) -> Any:
+        if value is None and self.optional:
+            return None
+        if value is None:
+            raise self.error(key, value)
+        return self._check(key, value)
+
+    def _check(self, key: str, value: Any) -> Any:
+        return value
+
+    def describe(self) -> str:
+        return "any value"
+
+    def error(self, key: str, value: Any, why: str = "") -> ConfigError:
+        expected = ("null or " if self.optional else "") + self.describe()
+        return ConfigError(f"{key}={_show(value)} is invalid{': ' + why if why else ''}; expected {expected}")
+
+
+class Num(Rule):
+    """A finite number in [lo, hi] (``lo_open``/``hi_open`` exclude the bound); ``integer`` requires a whole number."""
+
+    def __init__(self, lo: float | None = None, hi: float | None = None, *, integer: bool = False,
+                 lo_open: bool = False, hi_open: bool = False, multiple_of: int | None = None,
+                 optional: bool = False, fixed: bool | None = None) -> None:  # fmt: skip
+        super().__init__(optional, fixed)
+        self.lo, self.hi, self.integer = lo, hi, integer
+        self.lo_open, self.hi_open, self.multiple_of = lo_open, hi_open, multiple_of
+
+    def _check(self, key: str, raw: Any) -> Any:
+        value = raw
+        if isinstance(value, bool):
+            raise self.error(key, raw)
+        if isinstance(value, str):  # YAML reads 3e-4 as a string
+            try:
+                value = float(value)
+            except ValueError:
+                raise self.error(key, raw) from None
+        if not isinstance(value, (int, float)):
+            raise self.error(key, raw)
+        if not math.isfinite(value):
+            raise self.error(key, raw, "not a finite number")
+        if self.integer:
+            if value != int(value):
+                raise self.error(key, raw, "not a whole number")
+            value = int(value)
+        else:
+            value = float(value)
+        below = self.lo is not None and (value <= self.lo if self.lo_open else value < self.lo)
+        above = self.hi is not None and (value >= self.hi if self.hi_open else value > self.hi)
+        if below or above:
+            raise self.error(key, raw, "out of range")
+        if self.multiple_of and value % self.multiple_of:
+            raise self.error(key, raw, f"not a multiple of {self.multiple_of}")
+        return value
+
+    def describe(self) -> str:
+        kind = "an integer" if self.integer else "a number"
+        if self.multiple_of:
+            kind = f"{kind} multiple of {self.multiple_of}"
+        if self.lo is not None and self.hi is not None:
+            left, right = "(" if self.lo_open else "[", ")" if self.hi_open else "]"
+            return f"{kind} in {left}{_fmt(self.lo)}, {_fmt(self.hi)}{right}"
+        if self.lo is not None:
+            return f"{kind} {'>' if self.lo_open else '>='} {_fmt(self.lo)}"
+        if self.hi is not None:
+            return f"{kind} {'<' if self.hi_open else '<='} {_fmt(self.hi)}"
+        return f"a finite {kind[2:] if kind.startswith('a ') else kind}"
+
+
+def Int(lo: int | None = None, hi: int | None = None, **kwargs) -> Num:  # noqa: N802 (reads like a type)
+    """An integer in [lo, hi]."""
+    return Num(lo, hi, integer=True, **kwargs)
+
+
+def Real(lo: float | None = None, hi: float | None = None, **kwargs) -> Num:  # noqa: N802
+    """A finite real number in [lo, hi] (``lo_open``/``hi_open`` exclude a bound)."""
+    return Num(lo, hi, **kwargs)
+
+
+class OneOf(Rule):
+    """One of the listed values (an enum option); ``None`` among the choices makes it optional."""
+
+    def __init__(self, *choices: Any, fixed: bool | None = None) -> None:
+        flat = [c for group in choices for c in (group if isinstance(group, (tuple, list)) else [group])]
+        super().__init__(optional=None in flat, fixed=fixed)
+        self.choices = tuple(c for c in flat if c is not None)
+
+    def _check(self, key: str, value: Any) -> Any:
+        if isinstance(value, bool) or value not in self.choices:
+            raise self.error(key, value)
+        return value
+
+    def describe(self) -> str:
+        return "one of " + ", ".join(_show(c) for c in self.choices)
+
+
+class Flag(Rule):
+    """``true`` or ``false``."""
+
+    def _check(self, key: str, value: Any) -> Any:
+        if not isinstance(value, bool):
+            raise self.error(key, value)
+        return value
+
+    def describe(self) -> str:
+        return "true or false"
+
+
+class Text(Rule):
+    """A string (a path, a name)."""
+
+    def _check(self, key: str, value: Any) -> Any:
+        if not isinstance(value, str):
+            raise self.error(key, value)
+        return value
+
+    def describe(self) -> str:
+        return "a string"
+
+
+class ListOf(Rule):
+    """A list of ``min_len`` to ``max_len`` items, each valid for ``item``."""
+
+    def __init__(self, item: Rule, min_len: int = 1, max_len: int | None = None, optional: bool = False,
+                 fixed: bool | None = None) -> None:  # fmt: skip
+        super().__init__(optional, fixed)
+        self.item, self.min_len, self.max_len = item, min_len, max_len
+
+    def _check(self, key: str, value: Any) -> Any:
+        if not isinstance(value, (list, tuple)):
+            raise self.error(key, value, "not a list")
+        if len(value) < self.min_len or (self.max_len is not None and len(value) > self.max_len):
+            raise self.error(key, value, f"{len(value)} items")
+        return [self.item.check(f"{key}[{i}]", v) for i, v in enumerate(value)]
+
+    def describe(self) -> str:
+        size = f"at least {self.min_len}" if self.max_len is None else f"{self.min_len} to {self.max_len}"
+        return f"a list of {size} items, each {self.item.describe()}"
+
+
+class Check(Rule):
+    """A rule given by a function ``fn(key, value) -> value`` that raises ``ConfigError`` (for the odd option)."""
+
+    def __init__(self, fn: Callable[[str, Any], Any], description: str, optional: bool = False,
+                 fixed: bool | None = None) -> None:  # fmt: skip
+        super().__init__(optional, fixed)
+        self.fn, self.description = fn, description
+
+    def _check(self, key: str, value: Any) -> Any:
+        return self.fn(key, value)
+
+    def describe(self) -> str:
+        return self.description
+
+
+def mapping_or_none(key: str, value: Any) -> Any:
+    """For ``Check``: null or a mapping of options (e.g. rsl_rl's ``rnd_cfg``), checked by whoever consumes it."""
+    if value is not None and not isinstance(value, dict):
+        raise ConfigError(f"{key}={value!r} is invalid; expected null or a mapping of options")
+    return value
+
+
+# ---------------------------------------------------------------------------------------------------- lookup
+def register_rules(cls: type, rules: dict[str, Rule]) -> None:
+    """Declare the rules of a class we do not own (e.g. rsl_rl's PPO); subclasses inherit them."""
+    _EXTERNAL_RULES[cls] = {**_EXTERNAL_RULES.get(cls, {}), **rules}
+
+
+def rules_for(cls: type) -> dict[str, Rule]:
+    """The option rules of ``cls`` and its bases (a subclass's rule for an option replaces its base's)."""
+    rules: dict[str, Rule] = {}
+    for klass in reversed(inspect.getmro(cls) if inspect.isclass(cls) else (cls,)):
+        rules.update(_EXTERNAL_RULES.get(klass, {}))
+        rules.update(getattr(klass, "__dict__", {}).get("option_rules", {}))
+    return rules
+
+
+def check_options(rules: dict[str, Rule], values: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """``values`` with every option that has a rule checked (and normalised); raises ``ConfigError``."""
+    return {k: rules[k].check(f"{prefix}{k}", v) if k in rules else v for k, v in values.items()}
+
+
+def checks_options(cls: type) -> type:
+    """Class decorator: the constructor checks the arguments it receives against the rules of the object's class.
+
+    Subclasses are covered too (their constructors are wrapped when they are defined), with their own
+    ``option_rules``; only the outermost constructor of an object checks, bases called through ``super()`` do not
+    check again.
+    """
+    _wrap_init(cls)
+    inherited = cls.__dict__.get("__init_subclass__")
+
+    def __init_subclass__(sub, **kwargs):
+        if inherited is not None:
+            inherited.__func__(sub, **kwargs)
+        else:
+            super(cls, sub).__init_subclass__(**kwargs)
+        if "__init__" in sub.__dict__:
+            _wrap_init(sub)
+
+    cls.__init_subclass__ = classmethod(__init_subclass__)
+    return cls
+
+
+def _wrap_init(cls: type) -> None:
+    init = cls.__init__
+    if getattr(init, "_checks_options", False):
+        return
+    signature = inspect.signature(init)
+    var_kw = next((n for n, p in signature.parameters.items() if p.kind is p.VAR_KEYWORD), None)
+
+    @functools.wraps(init)
+    def __init__(self, *args, **kwargs):
+        if id(self) in _CONSTRUCTING:
+            return init(self, *args, **kwargs)
+        _CONSTRUCTING.add(id(self))
+        try:
+            bound = signature.bind(self, *args, **kwargs)
+            rules, owner = rules_for(type(self)), type(self).__name__
+            for name, value in list(bound.arguments.items()):
+                if name == var_kw:
+                    bound.arguments[name] = check_options(rules, value, f"{owner}.")
+                elif name in rules:
+                    bound.arguments[name] = rules[name].check(f"{owner}.{name}", value)
+            init(*bound.args, **bound.kwargs)
+        finally:
+            _CONSTRUCTING.discard(id(self))
+
+    __init__._checks_options = True
+    cls.__init__ = __init__
+
+
+_CONSTRUCTING: set[int] = set()  # ids of objects whose outermost decorated constructor is running
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}" if isinstance(x, float) else f"{x:,}" if abs(x) >= 10_000 else str(x)
+
+
+def _show(value: Any) -> str:
+    text = repr(value) if isinstance(value, str) else "null" if value is None else str(value).lower() \
+        if isinstance(value, bool) else str(value)  # fmt: skip
+    return text if len(text) <= 80 else text[:77] + "..."
