@@ -1,4 +1,4 @@
-"""Where the humanoid env step's time goes: ``python -m refpo_warp.tasks.humanoid.profile_step [--num-envs 64] [--solver K=V]``.
+"""Where the humanoid env step's time goes: ``python tools/profile_humanoid_step.py [--num-envs 64] [--solver K=V]``.
 
 Two measurements on one env (uniform random actions in [-1, 1], as ``tools/bench.py humanoid``):
 
@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 import torch
-from refpo_warp.tasks.humanoid.bench import _option
+from refpo_warp.tasks.humanoid.bench import key_value_option
 
 
 def _patch_solver(extra: dict) -> None:
@@ -76,7 +76,7 @@ def kernel_profile(env, steps: int) -> dict[str, list]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="python -m refpo_warp.tasks.humanoid.profile_step", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python tools/profile_humanoid_step.py", description=__doc__.split("\n")[0])
     parser.add_argument("--num-envs", type=int, default=64)
     parser.add_argument("--steps", type=int, default=30, help="timed graph steps")
     parser.add_argument("--profile-steps", type=int, default=8, help="profiled eager steps")
@@ -86,11 +86,11 @@ def main() -> None:
     args = parser.parse_args()
     torch.set_num_threads(1)
     if args.solver:
-        _patch_solver(dict(_option(item) for item in args.solver))
+        _patch_solver(dict(key_value_option(item) for item in args.solver))
     from refpo_warp.envs.registry import make_env
 
     env = make_env("humanoid_all", num_envs=args.num_envs, device="cpu", seed=0,
-                   **dict(_option(item) for item in args.env))  # fmt: skip
+                   **dict(key_value_option(item) for item in args.env))  # fmt: skip
     cpu_rate(env, 3)  # compile and capture
     rate = cpu_rate(env, args.steps)
     niter = env.sim.solver.mjw_data.solver_niter.numpy()

@@ -93,7 +93,7 @@ def mujoco_c(env, steps: int, episode_length: int, seed: int = 0) -> dict:
     return {"c_env_steps_per_s": run(episodes), "c_episode_length": length, "c_settings": mc.solver_settings(model)}
 
 
-def _option(item: str) -> tuple[str, object]:
+def key_value_option(item: str) -> tuple[str, object]:
     key, sep, value = item.partition("=")
     if not sep:
         raise SystemExit(f"--env expects KEY=VALUE, got {item!r}")
@@ -120,7 +120,7 @@ def main(argv: list[str]) -> None:
     cpu = device == "cpu"
     num_envs = args.num_envs or (64 if cpu else 4096)
     steps = args.steps or (30 if cpu else 300)
-    env_cfg = dict(_option(item) for item in args.env)
+    env_cfg = dict(key_value_option(item) for item in args.env)
     result = measure(args.task, num_envs, device, steps, args.warmup, with_c=not args.no_mujoco_c, **env_cfg)
     if args.json:
         print(json.dumps(result))
