@@ -10,7 +10,8 @@ from pathlib import Path
 
 import torch
 
-from refpo_warp.config.resolve import parse_overrides, resolve_config
+from refpo_warp.config.dotted import parse_overrides
+from refpo_warp.config.resolve import resolve_config
 from refpo_warp.runner.build import build_runner, seed_everything
 from refpo_warp.runner.distributed import close_process_group, process_rank
 

@@ -3,6 +3,7 @@ profiles hold the paper's tables (c) and (d) with Brax batch semantics."""
 
 import pytest
 
+from refpo_warp.config.explain import effective_config
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.envs.registry import list_tasks
 
@@ -22,7 +23,7 @@ def test_every_task_resolves(algo, device):
 
 
 def test_dmc_cuda_profiles_follow_tables_c_and_d():
-    grpo = resolve_config(["task=dmc_cheetah_run", "algo=flow_grpo"], device_type="cuda")
+    grpo = effective_config(resolve_config(["task=dmc_cheetah_run", "algo=flow_grpo"], device_type="cuda"))
     alg = grpo["algorithm"]
     # 2048 envs x 480 steps = 983,040 transitions in 32 minibatches of 30,720, 8 passes, 200M env steps
     assert (grpo["num_envs"], grpo["runner"]["num_steps_per_env"], grpo["total_env_steps"]) == (2048, 480, 200_000_000)
@@ -32,7 +33,7 @@ def test_dmc_cuda_profiles_follow_tables_c_and_d():
     assert grpo["env"]["reset_group_size"] == 8
     assert grpo["actor"]["num_flow_steps"] == 10 and grpo["actor"]["output_scale"] == 0.5
     assert grpo["actor"]["hidden_dims"] == [32, 32, 32, 32]
-    rf = resolve_config(["task=dmc_cheetah_run", "algo=reinflow"], device_type="cuda")
+    rf = effective_config(resolve_config(["task=dmc_cheetah_run", "algo=reinflow"], device_type="cuda"))
     alg, actor = rf["algorithm"], rf["actor"]
     # 2048 envs x 120 chunks of 4 = 983,040 env steps per iteration; 204 iterations ~ 200M env steps
     assert (rf["num_envs"], rf["runner"]["num_steps_per_env"], rf["env"]["action_chunk"]) == (2048, 120, 4)
@@ -42,7 +43,7 @@ def test_dmc_cuda_profiles_follow_tables_c_and_d():
     assert (alg["value_loss_coef"], alg["entropy_coef"]) == (0.3, 0.05)  # ReinFlow's 0.5 MSE x 0.6
     assert (actor["num_flow_steps"], actor["ft_denoising_steps"], actor["time_embed_dim"]) == (4, 2, 16)
     assert (actor["sigma_min"], actor["sigma_max"], actor["min_sampling_std"]) == (0.08, 0.16, 0.1)
-    aw = resolve_config(["task=dmc_cheetah_run", "algo=refpo_aw"], device_type="cuda")
-    refpo = resolve_config(["task=dmc_cheetah_run", "algo=refpo"], device_type="cuda")
+    aw = effective_config(resolve_config(["task=dmc_cheetah_run", "algo=refpo_aw"], device_type="cuda"))
+    refpo = effective_config(resolve_config(["task=dmc_cheetah_run", "algo=refpo"], device_type="cuda"))
     differs = {k for k in aw["algorithm"] if aw["algorithm"][k] != refpo["algorithm"].get(k)}
     assert differs == {"class_name", "reflow_weighting"} and aw["actor"] == refpo["actor"]

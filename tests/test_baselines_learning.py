@@ -14,7 +14,7 @@ import io
 import pytest
 
 from refpo_warp.config.resolve import resolve_config
-from refpo_warp.evaluation.evaluate_run import evaluate_actor, make_eval_env
+from refpo_warp.evaluation.evaluate_policy import evaluate_actor, make_eval_env
 from refpo_warp.runner.build import build_runner, seed_everything
 from refpo_warp.training import train
 

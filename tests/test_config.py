@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from refpo_warp.config.resolve import merge, parse_overrides, resolve_config
+from refpo_warp.config.dotted import merge, parse_overrides
+from refpo_warp.config.resolve import resolve_config
 from refpo_warp.utils.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -52,7 +53,7 @@ def test_unknown_names_suggest_the_closest_valid_one(override, suggestion):
 
 
 def test_bad_values_are_reported():
-    with pytest.raises(ConfigError, match="expects an integer"):
+    with pytest.raises(ConfigError, match="num_envs=.many. is invalid; expected an integer"):
         resolve_config(["task=gridworld", "num_envs=many"])
     with pytest.raises(ConfigError, match="key=value"):
         parse_overrides(["gridworld"])

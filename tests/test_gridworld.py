@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 import torch
+
+from refpo_warp import make_env
 from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
 from refpo_warp.tasks.gridworld.env import GridWorldEnv
 from refpo_warp.tasks.gridworld.gym_env import GridWorldGymEnv
-
-from refpo_warp import make_env
 
 NUM_ENVS = 32
 

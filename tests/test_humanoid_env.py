@@ -67,6 +67,7 @@ def numpy_imitation_reward(pos, rot, vel, omega, rpos, rrot, rvel, romega):
 def set_sim_to_reference(env, ref):
     """Write the reference state into every world's joint coordinates and run forward kinematics (replay)."""
     import newton
+
     from refpo_warp.tasks.humanoid.tracking_kernels import write_reference_state_kernel
 
     s = env.sim

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 import torch
-from refpo_warp.tasks.humanoid.obs_layout import OBS_DIM, SELF_DIM, block_slice, conditioning_mask
 
 from refpo_warp.envs.registry import make_env
+from refpo_warp.tasks.humanoid.obs_layout import OBS_DIM, SELF_DIM, block_slice, conditioning_mask
 
 # Hand-worked indices. Self part: 1 + 23*3 + 24*6 + 24*3 + 24*3 = 358. Task blocks start at 358 (position
 # difference, 24*3), 430 (rotation difference, 24*6), 574 (velocity difference), 646 (angular-velocity

@@ -5,9 +5,9 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from refpo_warp.tasks.humanoid.mjcf_builder import MJCF_PATH, build_mjcf
 
 from refpo_warp.motion import skeleton as sk
+from refpo_warp.tasks.humanoid.mjcf_builder import MJCF_PATH, build_mjcf
 
 
 def _mjcf_bodies():

@@ -4,10 +4,10 @@ one control step from the same states agrees with MuJoCo Warp to float32 roundin
 import numpy as np
 import pytest
 import torch
-from refpo_warp.tasks.humanoid import mujoco_c
 
 from refpo_warp.envs.registry import make_env
 from refpo_warp.motion import skeleton as sk
+from refpo_warp.tasks.humanoid import mujoco_c
 
 
 @pytest.fixture(scope="module")

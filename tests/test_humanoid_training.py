@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 import torch
 
+from refpo_warp.config.explain import effective_config
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.envs.registry import make_env
 from refpo_warp.runner.build import build_runner, rsl_rl_config
@@ -15,7 +16,7 @@ from refpo_warp.training import train
 
 @pytest.mark.parametrize("algo, reflow", [("refpo", 0.1), ("fpo", 0.0)])
 def test_cuda_profile_carries_the_reference_hyperparameters(algo, reflow):
-    cfg = resolve_config(["task=humanoid_root_hands", f"algo={algo}"], device_type="cuda")
+    cfg = effective_config(resolve_config(["task=humanoid_root_hands", f"algo={algo}"], device_type="cuda"))
     alg, actor = cfg["algorithm"], cfg["actor"]
     assert cfg["num_envs"] * cfg["runner"]["num_steps_per_env"] == 131072  # batch size
     assert cfg["num_envs"] * cfg["runner"]["num_steps_per_env"] // alg["num_mini_batches"] == 32768  # minibatch

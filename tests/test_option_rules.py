@@ -6,12 +6,14 @@ import inspect
 import pytest
 import yaml
 
-from refpo_warp.config.resolve import _POSITIONAL, CONFIG_DIR, resolve_class, resolve_config
+from refpo_warp.config.classes import POSITIONAL, resolve_class
+from refpo_warp.config.resolve import resolve_config
 from refpo_warp.config.run_options import NOT_RULED, RUN_RULES
+from refpo_warp.config.saved import fixed_changes
 from refpo_warp.envs.registry import get_task, list_tasks
-from refpo_warp.runner.run_dir import fixed_changes
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real, checks_options, rules_for
+from refpo_warp.utils.paths import CONFIG_DIR
 
 # Constructor arguments rsl_rl passes itself (never a config option).
 _PASSED_BY_RSL_RL = {"device", "multi_gpu_cfg"}
@@ -51,7 +53,7 @@ def _selected_classes():
 
 @pytest.mark.parametrize("section,cls", list(_selected_classes()), ids=lambda x: getattr(x, "__name__", x))
 def test_every_constructor_option_has_a_rule(section, cls):
-    options = _constructor_options(cls) - set(_POSITIONAL[section]) - _PASSED_BY_RSL_RL
+    options = _constructor_options(cls) - set(POSITIONAL[section]) - _PASSED_BY_RSL_RL
     missing = sorted(options - set(rules_for(cls)))
     assert not missing, f"{cls.__name__} options without a rule (add them to its option_rules): {missing}"
 
@@ -83,7 +85,7 @@ def test_every_run_option_has_a_rule():
     [
         (Int(1, 10), 1, 1),
         (Int(1, 10), 10.0, 10),  # a whole float is an integer
-        (Real(0, 1, lo_open=True), "3e-4", 3e-4),  # YAML reads 3e-4 as a string
+        (Real(0, 1, lo_open=True), 3e-4, 3e-4),
         (Real(0, 1), 1, 1.0),
         (OneOf("a", "b"), "b", "b"),
         (OneOf(None, "a"), None, None),
@@ -124,9 +126,8 @@ def test_rules_refuse_with_key_and_valid_range(rule, value, message):
 
 
 def test_constructor_and_resolver_apply_the_same_rule():
-    from refpo_warp.tasks.gridworld.env import GridWorldCfg
-
     from refpo_warp.algorithms import ReFPO
+    from refpo_warp.tasks.gridworld.env import GridWorldCfg
 
     with pytest.raises(ConfigError, match=r"algorithm\.num_mc_samples=0 is invalid.*\[1, 1024\]"):
         resolve_config(["task=gridworld", "algorithm.num_mc_samples=0"])

@@ -414,7 +414,7 @@ def test_bad_motion_library_given_to_train_is_named(damage, tmp_path):
 _PATCHED_RUN = """
 import sys
 {patch}
-from refpo_warp.cli.guard import main
+from refpo_warp.cli.commands import main
 sys.exit(main("train", {args!r}, ""))
 """
 

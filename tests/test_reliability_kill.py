@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from reliability_helpers import kill_when, run_tool, start_tool, tiny, tree_hash
 
-from refpo_warp.config.resolve import load_yaml
+from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.motion.amass import write_amass
 from refpo_warp.motion.motion_library import MotionLibrary
 from refpo_warp.runner.checkpoints import list_checkpoints, read_checkpoint

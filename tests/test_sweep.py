@@ -10,7 +10,8 @@ import pytest
 import torch
 import yaml
 
-from refpo_warp.config.resolve import parse_overrides, resolve_config
+from refpo_warp.config.dotted import parse_overrides
+from refpo_warp.config.resolve import resolve_config
 from refpo_warp.sweeps.run import run_sweep
 from refpo_warp.sweeps.spec import cli_value, fingerprint, load_sweep, validate
 from refpo_warp.utils.errors import ConfigError

@@ -3,13 +3,15 @@
 import dataclasses
 
 import pytest
-from refpo_warp.tasks.dmc import suite
-from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
 
-from refpo_warp.config.resolve import CONFIG_DIR, resolve_config, task_config_path
+from refpo_warp.config.layers import task_config_path
+from refpo_warp.config.resolve import resolve_config
 from refpo_warp.envs.registry import _TASKS, get_task, list_tasks, register_task, task_families
 from refpo_warp.envs.task_spec import TaskSpec
+from refpo_warp.tasks.dmc import suite
+from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.paths import CONFIG_DIR
 
 
 def test_every_registered_task_has_a_config_file():

@@ -7,7 +7,7 @@ task's figures into the run dir. Overrides apply on top of the run's saved confi
 
 import sys
 
-from refpo_warp.cli.guard import main
+from refpo_warp.cli.commands import main
 
 if __name__ == "__main__":
     sys.exit(main("eval", sys.argv[1:], __doc__))

@@ -14,9 +14,9 @@ import json
 
 import numpy as np
 import torch
-from refpo_warp.tasks.humanoid.motions import SHIPPED_MOTIONS
 
 from refpo_warp.envs.registry import make_env
+from refpo_warp.tasks.humanoid.motions import SHIPPED_MOTIONS
 
 CLIPS = {"standing": str(SHIPPED_MOTIONS / "stand_sway_poses.npz"), "default": ""}
 

@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 import torch
+
 from refpo_warp.tasks.humanoid.bench import key_value_option
 
 

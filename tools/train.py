@@ -11,7 +11,7 @@ Any config key can be overridden (see configs/default.yaml); list tasks with `py
 
 import sys
 
-from refpo_warp.cli.guard import main
+from refpo_warp.cli.commands import main
 
 if __name__ == "__main__":
     sys.exit(main("train", sys.argv[1:], __doc__))

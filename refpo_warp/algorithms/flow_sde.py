@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import torch
 
+from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS
+
 LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
 
@@ -39,8 +41,7 @@ class SdeGrid:
 
 def sde_grid(num_steps: int, noise_level: float, device="cpu") -> SdeGrid:
     """The grid of an N-step SDE with noise level a (see the module docstring)."""
-    if num_steps < 1:
-        raise ValueError(f"num_steps must be >= 1, got {num_steps}")
+    NUM_FLOW_STEPS.check("num_steps", num_steps)
     h = 1.0 / num_steps
     tau = torch.arange(num_steps, dtype=torch.float64) * h
     sigma = 1.0 - tau

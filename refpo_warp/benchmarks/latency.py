@@ -39,7 +39,7 @@ def policy_latency(task: str, algo: str, device: str, batches: list[int], flow_s
                    repeats: int = 50) -> list[dict]:  # fmt: skip
     """Latency rows (``latency_ms`` per call) of ``algo``'s actor on ``task`` for every batch size and N."""
     from refpo_warp.config.resolve import resolve_config
-    from refpo_warp.evaluation.evaluate_run import is_flow, make_policy
+    from refpo_warp.evaluation.evaluate_policy import is_flow, make_policy
     from refpo_warp.runner.build import build_runner
 
     cfg = resolve_config([f"task={task}", f"algo={algo}", f"device={device}", f"num_envs={max(batches)}"])
@@ -70,7 +70,7 @@ def main(argv: list[str]) -> None:
     args = parser.parse_args(argv)
 
     from refpo_warp.config.resolve import resolve_config
-    from refpo_warp.evaluation.evaluate_run import write_json
+    from refpo_warp.utils.atomic_files import write_json
 
     device = resolve_device(args.device)
     flow_steps = [int(n) for n in args.flow_steps.split(",")]

@@ -29,7 +29,7 @@ PAPER_PASSES = {"fpo": 16, "refpo": 16, "refpo_aw": 16, "flow_grpo": 8, "reinflo
 
 def algorithms() -> list[str]:
     """Every configs/algo/<algo>.yaml (nothing to list here when an algorithm is added)."""
-    from refpo_warp.config.resolve import algo_names
+    from refpo_warp.config.layers import algo_names
 
     found = algo_names()
     return [a for a in ORDER if a in found] + sorted(set(found) - set(ORDER))

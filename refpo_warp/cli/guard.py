@@ -1,5 +1,4 @@
-"""Command-line front ends shared by tools/*.py: argument parsing, one clear message and a documented exit code
-for every failure (``docs/cli.md``).
+"""One clear message and a documented exit code for every failure of a tool (``docs/cli.md``).
 
 Exit codes: 0 done; 1 unexpected error (the message, and the file holding the full traceback); 2 invalid command
 line or config (bad option value, unknown key, a resume that would change the run, a run dir that cannot be used);
@@ -9,7 +8,6 @@ saved config, progress log); 5 the system refused (disk full, permission denied,
 
 from __future__ import annotations
 
-import contextlib
 import os
 import sys
 import tempfile
@@ -23,63 +21,6 @@ from refpo_warp.utils.errors import ConfigError, DataFileError, NonFiniteLossErr
 EXIT_OK, EXIT_UNEXPECTED, EXIT_USAGE, EXIT_NONFINITE, EXIT_BAD_FILE, EXIT_SYSTEM = 0, 1, 2, 3, 4, 5
 EXIT_INTERRUPTED = 130
 ERROR_LOG = "error.log"
-
-
-def _train(args: list[str]) -> None:
-    from refpo_warp.runner.distributed import close_process_group, main_rank_stdout, process_rank
-    from refpo_warp.training import train
-
-    # Under torchrun only rank 0 prints progress; every rank leaves the process group when done.
-    try:
-        with main_rank_stdout(process_rank()):
-            train(args)
-    finally:
-        close_process_group()
-
-
-def _eval(args: list[str]) -> None:
-    from refpo_warp.config.resolve import parse_overrides
-    from refpo_warp.evaluation.evaluate_run import evaluate_run
-    from refpo_warp.utils.errors import tag_run_dir
-
-    overrides = parse_overrides(args)
-    run_dir = overrides.pop("run_dir", None)
-    if run_dir is None:
-        raise ConfigError("tools/eval.py needs run_dir=PATH (a directory written by tools/train.py)")
-    checkpoint = overrides.pop("checkpoint", None)
-    if checkpoint is not None and not isinstance(checkpoint, str):
-        raise ConfigError(f"checkpoint={checkpoint!r} is invalid; expected a path to a model_<iteration>.pt file")
-    with tag_run_dir(run_dir) if Path(str(run_dir)).is_dir() else contextlib.nullcontext():
-        results = evaluate_run(Path(str(run_dir)), checkpoint=checkpoint, overrides=overrides)
-    from refpo_warp.utils.console import headline_numbers, run_outputs, summary_block
-
-    run_dir = Path(str(run_dir))
-    evaluated = checkpoint or run_dir / f"model_{results['checkpoint_iteration']}.pt"
-    title = f"Evaluated {results['task']} / {results['algo']} at iteration {results['checkpoint_iteration']}"
-    print(summary_block(title, run_outputs(run_dir, evaluated, results), headline_numbers(results)), flush=True)
-
-
-COMMANDS = {"train": _train, "eval": _eval}
-
-
-def main(command: str, args: list[str], usage: str) -> int:
-    if any(a in ("-h", "--help", "help") for a in args):
-        print(usage)
-        return EXIT_OK
-    if "--tasks" in args:
-        from refpo_warp.envs.registry import get_task, list_tasks
-
-        for task in list_tasks():
-            print(f"{task:28s} {get_task(task).description}")
-        return EXIT_OK
-
-    def run() -> None:
-        from refpo_warp.utils.device import set_torch_threads
-
-        set_torch_threads(cuda_cap=4)
-        COMMANDS[command](args)
-
-    return run_guarded(run)
 
 
 def run_guarded(fn: Callable[[], object]) -> int:

@@ -9,13 +9,13 @@ from __future__ import annotations
 import importlib.util
 from typing import Any
 
-from refpo_warp.models.flow_actor import INITIAL_NOISE
+from refpo_warp.models.sampled_policy import INITIAL_NOISE_RULE, NUM_FLOW_STEPS
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Text
 
 MAX_ENVS = 1 << 22  # 4M envs: far above what one GPU holds, low enough to catch a typo before allocating
 MAX_TRANSITIONS = 1 << 28  # num_envs x num_steps_per_env held in the rollout storage
-FLOW_STEPS = ListOf(Int(1, 1000), min_len=1, max_len=32)
+FLOW_STEPS = ListOf(NUM_FLOW_STEPS, min_len=1, max_len=32)
 
 
 def _check_device(key: str, value: Any) -> str:
@@ -80,7 +80,7 @@ RUN_RULES = {
     "eval.flow_steps": FLOW_STEPS,
     "eval.num_envs": Int(1, MAX_ENVS, optional=True),
     "eval.max_steps": Int(1, 10**8, optional=True),
-    "eval.initial_noise": OneOf(INITIAL_NOISE),
+    "eval.initial_noise": INITIAL_NOISE_RULE,
     "eval.perturbation": Flag(),
     "eval.interval": Int(0, 10**8, optional=True),
     "eval.interval_flow_steps": FLOW_STEPS,

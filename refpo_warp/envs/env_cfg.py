@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from collections.abc import Iterable
+from dataclasses import MISSING, dataclass, fields
+from typing import Any
 
+from refpo_warp.utils.errors import unknown
 from refpo_warp.utils.option_rules import Flag, Int, OneOf, check_options, rules_for
 
 ACTION_TRANSFORMS = ("clip", "tanh")
@@ -36,3 +39,16 @@ class EnvCfg:
         values = {f.name: getattr(self, f.name) for f in fields(self)}
         for name, value in check_options(rules_for(type(self)), values, "env.").items():
             object.__setattr__(self, name, value)
+
+    @classmethod
+    def defaults(cls) -> dict[str, Any]:
+        """Every option and its default value."""
+        return {f.name: f.default for f in fields(cls) if f.default is not MISSING}
+
+    @classmethod
+    def check_keys(cls, keys: Iterable[str], what: str, prefix: str = "") -> None:
+        """Refuse a key that is not an option of this cfg, naming the closest one (``what`` says whose option)."""
+        valid = [f.name for f in fields(cls)]
+        for key in keys:
+            if key not in valid:
+                raise unknown(what, f"{prefix}{key}", [f"{prefix}{k}" for k in valid])

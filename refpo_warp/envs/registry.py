@@ -9,7 +9,6 @@ root adds tasks with ``register_task``.
 
 from __future__ import annotations
 
-import dataclasses
 import importlib
 import pkgutil
 from typing import Any
@@ -66,10 +65,7 @@ def get_task(task_id: str) -> TaskSpec:
 def make_env_cfg(task_id: str, **overrides: Any):
     """The env cfg dataclass of ``task_id`` with ``overrides`` applied (unknown fields raise with a suggestion)."""
     spec = get_task(task_id)
-    valid = {f.name for f in dataclasses.fields(spec.cfg_class)}
-    for key in overrides:
-        if key not in valid:
-            raise unknown(f"env option for task '{task_id}'", key, valid)
+    spec.cfg_class.check_keys(overrides, f"env option for task '{task_id}'")
     return spec.cfg_class(**{**spec.cfg_overrides, **overrides})
 
 

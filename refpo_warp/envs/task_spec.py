@@ -8,7 +8,6 @@ A family package ``tasks/<family>/__init__.py`` lists its tasks as ``TASKS = [Ta
 
 from __future__ import annotations
 
-import dataclasses
 import importlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,18 +31,8 @@ class TaskSpec:
     """Its training config (YAML layers over ``configs/default.yaml``); None: ``configs/task/<task_id>.yaml``."""
 
     def __post_init__(self) -> None:
-        valid = {f.name for f in dataclasses.fields(self.cfg_class)}
-        for key in self.cfg_overrides:
-            if key not in valid:
-                from refpo_warp.utils.errors import unknown
-
-                raise unknown(f"env option of {self.cfg_class.__name__} (task '{self.task_id}')", key, valid)
+        self.cfg_class.check_keys(self.cfg_overrides, f"env option of {self.cfg_class.__name__} (task '{self.task_id}')")
 
     def env_class(self) -> type:
         module_path, name = self.entry_point.split(":")
         return getattr(importlib.import_module(module_path), name)
-
-    @property
-    def package(self) -> str:
-        """The package of the env module: the family (``tasks.<family>``), home of its optional ``report.py``."""
-        return self.entry_point.split(":")[0].rsplit(".", 1)[0]

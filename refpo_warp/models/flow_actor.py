@@ -24,12 +24,11 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.models.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS
-from refpo_warp.models.sampled_policy import SampledPolicyProtocol
+from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyProtocol
 from refpo_warp.models.velocity_field import DATA_GUARD, PARAMETERIZATIONS, TIME_CONDITIONINGS, VelocityField
 from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, Real, checks_options, mapping_or_none
 
 OUTPUT_MODES = ("u", "eps", "data")
-INITIAL_NOISE = ("random", "zero")
 
 
 @dataclass
@@ -80,7 +79,7 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
         "activation": OneOf(ACTIVATIONS),
         "obs_normalization": Flag(),
         "distribution_cfg": Check(mapping_or_none, "null (ignored: a flow has no distribution)", optional=True),
-        "num_flow_steps": Int(1, 1000, fixed=False),  # any N samples the same flow: may change on resume
+        "num_flow_steps": NUM_FLOW_STEPS,  # any N samples the same flow: may change on resume
         "time_embed_dim": Int(2, 1024, multiple_of=2),
         "output_mode": OneOf(OUTPUT_MODES),
         "output_scale": Real(0, 1e6, lo_open=True),
@@ -129,11 +128,7 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
                perturbation: bool = False, noise: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
         """Actions from the flow: integrate from random (or zero, or the given) noise with ``num_steps`` Euler steps
         (default ``num_flow_steps``), then add the ``action_noise_std`` perturbation if ``perturbation``."""
-        n = int(num_steps or self.num_flow_steps)
-        if n < 1:
-            raise ValueError(f"num_steps must be >= 1, got {n}")
-        if initial_noise not in INITIAL_NOISE:
-            raise ValueError(f"initial_noise must be one of {INITIAL_NOISE}, got '{initial_noise}'")
+        n = self._sampling_steps(num_steps, initial_noise)
         obs_norm = self.encode(obs)
         if noise is None:
             shape = (obs_norm.shape[0], self.action_dim)

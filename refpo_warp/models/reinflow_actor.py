@@ -33,12 +33,11 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.models.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS
-from refpo_warp.models.sampled_policy import SampledPolicyProtocol
+from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyProtocol
 from refpo_warp.models.velocity_field import VelocityField
 from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, Real, checks_options, mapping_or_none
 
 NOISE_SCHEDULES = ("lin", "vp", "const")
-INITIAL_NOISE = ("random", "zero")
 GAUSSIAN_ENTROPY = 0.5 * math.log(2.0 * math.pi * math.e)
 LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
@@ -81,7 +80,7 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         "activation": OneOf(ACTIVATIONS),
         "obs_normalization": Flag(),
         "distribution_cfg": Check(mapping_or_none, "null (ignored: the chain defines the distribution)", optional=True),
-        "num_flow_steps": Int(1, 1000),
+        "num_flow_steps": NUM_FLOW_STEPS.with_fixed(None),  # K shapes the noisy chain it trains on
         "time_embed_dim": Int(2, 1024, multiple_of=2),
         "output_scale": Real(0, 1e6, lo_open=True),
         "noise_hidden_dims": HIDDEN_DIMS,
@@ -205,11 +204,7 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
                perturbation: bool = False, noise: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
         """Actions from the chain with ``num_steps`` steps (default K) from random, zero or the given x_0: the
         deterministic chain, or with ``perturbation`` the noisy one the rollout samples."""
-        n = int(num_steps or self.num_flow_steps)
-        if n < 1:
-            raise ValueError(f"num_steps must be >= 1, got {n}")
-        if initial_noise not in INITIAL_NOISE:
-            raise ValueError(f"initial_noise must be one of {INITIAL_NOISE}, got '{initial_noise}'")
+        n = self._sampling_steps(num_steps, initial_noise)
         if noise is None:
             first = next(iter(obs.values()))
             shape = (first.shape[0], self.action_dim)

@@ -15,6 +15,11 @@ from torch import nn
 
 from refpo_warp.models.normalization import with_clip
 from refpo_warp.models.stateless import Stateless
+from refpo_warp.utils.option_rules import Int, OneOf
+
+NUM_FLOW_STEPS = Int(1, 1000, fixed=False)  # Euler / chain steps N of a sampler; any N samples the same policy
+INITIAL_NOISE = ("random", "zero")
+INITIAL_NOISE_RULE = OneOf(INITIAL_NOISE)
 
 
 class SampledPolicyProtocol(Stateless):
@@ -36,6 +41,11 @@ class SampledPolicyProtocol(Stateless):
         self.obs_normalizer = with_clip(EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity(),
                                         obs_clip)  # fmt: skip
         self._last_actions = torch.zeros(1, self.action_dim)
+
+    def _sampling_steps(self, num_steps: int | None, initial_noise: str) -> int:
+        """The steps of one ``sample`` call (``num_flow_steps`` by default), both arguments checked."""
+        INITIAL_NOISE_RULE.check("initial_noise", initial_noise)
+        return NUM_FLOW_STEPS.check("num_steps", int(num_steps or self.num_flow_steps))
 
     def _flat_obs(self, obs: TensorDict) -> torch.Tensor:
         return torch.cat([obs[g] for g in self.obs_groups], dim=-1)

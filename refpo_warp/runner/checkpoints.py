@@ -117,7 +117,8 @@ def _raw(alg, name: str):
 
 
 def apply_checkpoint(runner, path: str | Path, data: dict, load_cfg: dict | None = None, strict: bool = True) -> None:
-    """Load a checked checkpoint into ``runner`` (models, optimizer, iteration)."""
+    """Load a checked checkpoint into ``runner`` (models, optimizer, iteration, and the env steps and training time
+    it recorded)."""
     alg = runner.alg
     try:
         load_iteration = alg.load(data, load_cfg, strict)
@@ -128,6 +129,9 @@ def apply_checkpoint(runner, path: str | Path, data: dict, load_cfg: dict | None
         alg.learning_rate = alg.optimizer.param_groups[0]["lr"]
     if load_iteration:
         runner.current_learning_iteration = data["iter"]
+    env_steps, time_s = checkpoint_progress(data)
+    if env_steps is not None:
+        runner.logger.tot_timesteps, runner.logger.tot_time = env_steps, time_s or 0.0
 
 
 def load_latest(runner, run_dir: str | Path, task: str | None = None, algo: str | None = None) -> tuple[Path, dict]:

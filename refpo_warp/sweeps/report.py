@@ -19,7 +19,7 @@ from pathlib import Path
 
 import yaml
 
-from refpo_warp.config.resolve import load_yaml
+from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.runner.progress import read_rows
 from refpo_warp.sweeps.figures import (
     CURVE_KEYS,

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import yaml
 
-from refpo_warp.config.resolve import dump_config, load_yaml
+from refpo_warp.config.yaml_files import dump_config, load_yaml
 from refpo_warp.sweeps.spec import Run, Sweep, device_type, fingerprint, validate
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import REPO_ROOT, TOOLS_DIR

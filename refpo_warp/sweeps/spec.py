@@ -31,8 +31,11 @@ from typing import Any
 
 import yaml
 
-from refpo_warp.config.resolve import CONFIG_DIR, LEAF_KEYS, load_yaml, parse_overrides, resolve_config
+from refpo_warp.config.dotted import LEAF_KEYS, parse_overrides
+from refpo_warp.config.resolve import resolve_config
+from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.paths import CONFIG_DIR
 
 SWEEP_CONFIG_DIR = CONFIG_DIR / "sweep"
 SPEC_KEYS = ("name", "description", "device", "tasks", "seeds", "overrides", "methods", "report", "out")
@@ -172,7 +175,7 @@ def _substitute(template: str, values: dict[str, Any]) -> tuple[str, set[str]]:
 
 def _list_valued(cfg: dict, key: str) -> bool:
     """Whether the option ``key`` of a resolved config takes a list (then a list value is not a grid axis)."""
-    from refpo_warp.config.resolve import class_parameters
+    from refpo_warp.config.classes import class_parameters
 
     node: Any = cfg
     parts = key.split(".")

@@ -18,50 +18,40 @@ import math
 from pathlib import Path
 from typing import Any
 
-from refpo_warp.config.resolve import dump_config, parse_overrides, resolve_config
-from refpo_warp.evaluation.evaluate_run import evaluate_run, periodic_evaluator
-from refpo_warp.runner.build import (
-    build_runner,
-    env_steps_per_iteration,
-    num_iterations,
-    rsl_rl_config,
-    seed_everything,
-)
+from refpo_warp.config.dotted import parse_overrides
+from refpo_warp.config.resolve import identity, resolve_config
+from refpo_warp.config.run_options import RUN_RULES
+from refpo_warp.config.saved import RUN_CONFIG, load_run_config
+from refpo_warp.config.yaml_files import dump_config, load_yaml
+from refpo_warp.evaluation.evaluate_run import evaluate_run
+from refpo_warp.evaluation.periodic import periodic_evaluator
+from refpo_warp.runner.build import build_runner, env_steps_per_iteration, num_iterations, seed_everything
 from refpo_warp.runner.checkpoints import checkpoint_progress, latest_checkpoint, load_latest
 from refpo_warp.runner.distributed import process_rank
 from refpo_warp.runner.progress import progress_path, truncate_after
-from refpo_warp.runner.run_dir import (
-    RUN_CONFIG,
-    RUN_FILES,
-    check_new_run_dir,
-    check_writable,
-    flatten,
-    load_run_config,
-    run_lock,
-)
+from refpo_warp.runner.run_dir import RUN_FILES, check_new_run_dir, check_writable, run_lock
 from refpo_warp.runner.runner import Runner
 from refpo_warp.utils.atomic_files import remove_stale_temp_files
 from refpo_warp.utils.errors import ConfigError, NonFiniteLossError, tag_run_dir
-
-__all__ = ["RUN_CONFIG", "build_runner", "flatten", "load_run_config", "num_iterations", "rsl_rl_config",
-           "seed_everything", "train"]  # fmt: skip
+from refpo_warp.utils.paths import CONFIG_DIR
 
 
-def default_run_dir(cfg: dict) -> Path:
-    return Path("runs") / cfg["task"] / f"{cfg['algo']}_seed{cfg['seed']}"
+def default_run_dir(task: str, algo: str, seed: int) -> Path:
+    return Path("runs") / task / f"{algo}_seed{seed}"
 
 
 def resolve_run(flat: dict[str, Any]) -> dict:
-    """The config of the run ``flat`` asks for: a new one, or a resumed one (its saved config + the overrides)."""
-    resume = flat.get("resume", False)
-    if resume not in (True, False):
-        raise ConfigError(f"resume={resume!r} is invalid; expected true or false")
-    if not resume:
+    """The config of the run ``flat`` asks for, resolved once: a new one, or a resumed one (its saved config + the
+    overrides, from ``run_dir`` or the default run dir of the task, algo and seed asked for)."""
+    if not RUN_RULES["resume"].check("resume", flat.get("resume", False)):
         cfg = resolve_config(flat)
+    elif flat.get("run_dir"):
+        cfg = load_run_config(Path(flat["run_dir"]), flat)
     else:
-        run_dir = Path(flat["run_dir"]) if flat.get("run_dir") else default_run_dir(resolve_config(flat))
+        seed = RUN_RULES["seed"].check("seed", flat.get("seed", load_yaml(CONFIG_DIR / "default.yaml")["seed"]))
+        run_dir = default_run_dir(*identity(flat), seed)
         cfg = load_run_config(run_dir, {**flat, "run_dir": str(run_dir)})
-    cfg["run_dir"] = str(cfg["run_dir"] or default_run_dir(cfg))
+    cfg["run_dir"] = str(cfg["run_dir"] or default_run_dir(cfg["task"], cfg["algo"], cfg["seed"]))
     return cfg
 
 

@@ -10,6 +10,7 @@ line unless the disk fills up (its readers still tolerate a torn last line). Tem
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import tempfile
 from collections.abc import Iterator
@@ -43,6 +44,10 @@ def atomic_write(path: str | Path, mode: str = "wb") -> Iterator[IO]:
 def write_text(path: str | Path, text: str) -> None:
     with atomic_write(path, "w") as f:
         f.write(text)
+
+
+def write_json(data, path: str | Path) -> None:
+    write_text(path, json.dumps(data, indent=2))
 
 
 def save_figure(fig, path: str | Path, **savefig_kwargs) -> Path:

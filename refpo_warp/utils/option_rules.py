@@ -32,6 +32,7 @@ without a rule, so a new option cannot be forgotten.
 
 from __future__ import annotations
 
+import copy
 import functools
 import inspect
 import math
@@ -63,6 +64,12 @@ class Rule:
     def describe(self) -> str:
         return "any value"
 
+    def with_fixed(self, fixed: bool | None) -> Rule:
+        """The same rule with another resume behaviour."""
+        rule = copy.copy(self)
+        rule.fixed = fixed
+        return rule
+
     def error(self, key: str, value: Any, why: str = "") -> ConfigError:
         expected = ("null or " if self.optional else "") + self.describe()
         return ConfigError(f"{key}={_show(value)} is invalid{': ' + why if why else ''}; expected {expected}")
@@ -80,14 +87,7 @@ class Num(Rule):
 
     def _check(self, key: str, raw: Any) -> Any:
         value = raw
-        if isinstance(value, bool):
-            raise self.error(key, raw)
-        if isinstance(value, str):  # YAML reads 3e-4 as a string
-            try:
-                value = float(value)
-            except ValueError:
-                raise self.error(key, raw) from None
-        if not isinstance(value, (int, float)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.error(key, raw)
         if not math.isfinite(value):
             raise self.error(key, raw, "not a finite number")

@@ -4,10 +4,9 @@ Every module of ``tasks/dmc/suite/`` is one task, declared as ``dmc_<module name
 without importing it: the env module (and Newton) is imported only when an env is built.
 """
 
+from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.tasks.dmc import suite
 from refpo_warp.tasks.dmc.cfg import DmcCfg
-
-from refpo_warp.envs.task_spec import TaskSpec
 
 TASKS = [
     TaskSpec(f"dmc_{name}", "refpo_warp.tasks.dmc.env:DmcEnv", DmcCfg, {"task": name},

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from refpo_warp.tasks.dmc.suite import task_names
-
 from refpo_warp.envs.env_cfg import EnvCfg
+from refpo_warp.tasks.dmc.suite import task_names
 from refpo_warp.utils.option_rules import Int, OneOf
 
 

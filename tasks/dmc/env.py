@@ -11,11 +11,11 @@ as one captured graph after the first step.
 from __future__ import annotations
 
 import torch
-from refpo_warp.tasks.dmc import suite
-from refpo_warp.tasks.dmc.cfg import DmcCfg
 
 from refpo_warp.envs.warp_vec_env import WarpVecEnv
 from refpo_warp.sim import MuJoCoWorlds, world_state_finite
+from refpo_warp.tasks.dmc import suite
+from refpo_warp.tasks.dmc.cfg import DmcCfg
 from refpo_warp.utils.device import configure_warp
 from refpo_warp.utils.errors import unknown
 

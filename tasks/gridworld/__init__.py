@@ -1,8 +1,7 @@
 """Multimodal GridWorld (ReFPO paper §4.1): two goal bands, one at the top and one at the bottom of the grid."""
 
-from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
-
 from refpo_warp.envs.task_spec import TaskSpec
+from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
 
 TASKS = [
     TaskSpec("gridworld", "refpo_warp.tasks.gridworld.env:GridWorldEnv", GridWorldCfg,

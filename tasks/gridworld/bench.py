@@ -22,6 +22,7 @@ from refpo_warp.utils.timing import env_steps_per_second, print_table
 def gym_steps_per_second(num_envs: int, steps: int) -> float:
     """The same dynamics as a numpy gymnasium env, vectorised by gymnasium's SyncVectorEnv."""
     import gymnasium as gym
+
     from refpo_warp.tasks.gridworld.gym_env import GridWorldGymEnv
 
     envs = gym.vector.SyncVectorEnv([GridWorldGymEnv for _ in range(num_envs)])

@@ -11,10 +11,10 @@ c = (size-1)/2.
 from __future__ import annotations
 
 import torch
-from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
 
 from refpo_warp.envs.episode import finish_env_step
 from refpo_warp.envs.warp_vec_env import WarpVecEnv
+from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
 from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()

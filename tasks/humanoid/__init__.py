@@ -1,8 +1,7 @@
 """SMPL humanoid motion tracking (ReFPO paper §4.3): one env, task ids that fix its goal conditioning (and options)."""
 
-from refpo_warp.tasks.humanoid.cfg import HumanoidTrackingCfg
-
 from refpo_warp.envs.task_spec import TaskSpec
+from refpo_warp.tasks.humanoid.cfg import HumanoidTrackingCfg
 
 # task id: (description, the env options the id fixes); humanoid_all_residual's residual PD targets are in its YAML
 _VARIANTS = {

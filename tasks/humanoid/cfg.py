@@ -8,9 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from refpo_warp.tasks.humanoid.obs_layout import CONDITIONING_REGIMES
-
 from refpo_warp.envs.env_cfg import EnvCfg
+from refpo_warp.tasks.humanoid.obs_layout import CONDITIONING_REGIMES
 from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real, Text
 
 REWARD_TERMS = ("pos", "rot", "vel", "angvel", "power")

@@ -11,6 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 import torch
+
+from refpo_warp.envs.warp_vec_env import WarpVecEnv
+from refpo_warp.motion import skeleton as sk
 from refpo_warp.tasks.humanoid import motions
 from refpo_warp.tasks.humanoid.cfg import HumanoidTrackingCfg
 from refpo_warp.tasks.humanoid.model import CONTROL_HZ, EFFORT_LIMIT, HumanoidSim, SimOptions
@@ -24,9 +27,6 @@ from refpo_warp.tasks.humanoid.tracking_kernels import (
     start_episodes_kernel,
     write_reference_state_kernel,
 )
-
-from refpo_warp.envs.warp_vec_env import WarpVecEnv
-from refpo_warp.motion import skeleton as sk
 from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()

@@ -15,10 +15,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from refpo_warp.tasks.humanoid.mjcf_builder import MJCF_PATH
 
 from refpo_warp.motion import skeleton as sk
 from refpo_warp.sim import MuJoCoWorlds
+from refpo_warp.tasks.humanoid.mjcf_builder import MJCF_PATH
 from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()

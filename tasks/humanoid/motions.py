@@ -5,9 +5,8 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
-from refpo_warp.tasks.humanoid.model import CONTROL_HZ
-
 from refpo_warp.motion.motion_library import MotionLibrary
+from refpo_warp.tasks.humanoid.model import CONTROL_HZ
 
 SHIPPED_MOTIONS = Path(__file__).resolve().parent / "data" / "synthetic"
 LIBRARY_FPS = CONTROL_HZ  # AMASS input is converted at the control rate

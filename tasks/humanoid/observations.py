@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from refpo_warp.tasks.humanoid.obs_layout import OFFSET
 from refpo_warp.tasks.humanoid.rotation_funcs import heading_inverse, normal, origin_velocity, tangent
-
 from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()

@@ -9,11 +9,10 @@ episode's first 3 steps.
 
 from __future__ import annotations
 
+from refpo_warp.motion import skeleton as sk
 from refpo_warp.tasks.humanoid.model import FREE_COORDS, FREE_DOFS
 from refpo_warp.tasks.humanoid.reward_terms import RewardParams, imitation_term, term_vector, write_terms
 from refpo_warp.tasks.humanoid.rotation_funcs import com_velocity, origin_velocity, quat_angle
-
-from refpo_warp.motion import skeleton as sk
 from refpo_warp.utils.device import configure_warp
 
 wp = configure_warp()

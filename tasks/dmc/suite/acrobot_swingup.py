@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 import warp as wp
+
 from refpo_warp.tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
 

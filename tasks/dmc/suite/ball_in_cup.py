@@ -9,6 +9,7 @@ Reset: the model's default pose at rest (Playground does not randomise this task
 from __future__ import annotations
 
 import warp as wp
+
 from refpo_warp.tasks.dmc.task import DmcTask
 
 TARGET_OFFSET = wp.constant(wp.vec3(0.0, 0.0, -0.05))  # target site in the cup frame

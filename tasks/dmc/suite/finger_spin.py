@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 
 import warp as wp
+
 from refpo_warp.tasks.dmc.task import DmcTask
 
 SPIN_VELOCITY = wp.constant(15.0)

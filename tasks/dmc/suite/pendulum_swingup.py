@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 import warp as wp
+
 from refpo_warp.tasks.dmc.rewards import GAUSSIAN, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
 

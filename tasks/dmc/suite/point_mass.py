@@ -9,6 +9,7 @@ Reset: x, y U(-0.29, 0.29) (the joint ranges), zero velocity.
 from __future__ import annotations
 
 import warp as wp
+
 from refpo_warp.tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, small_control, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
 

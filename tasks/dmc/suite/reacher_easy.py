@@ -9,6 +9,7 @@ position radius * (sin, cos). The target is a mocap body in the file; each env k
 from __future__ import annotations
 
 import warp as wp
+
 from refpo_warp.tasks.dmc.rewards import GAUSSIAN, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
 

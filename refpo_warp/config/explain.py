@@ -1,0 +1,120 @@
+"""Where a run's option got its value: ``python tools/train.py task=gridworld algo=fpo --explain algorithm.reflow_coef``.
+
+For each key: the resolved value, the layer that set it (a file and section, the command line, a constructor's or an
+env cfg's default, or the task id) and what the earlier layers had set. A section (``--explain algorithm``) lists
+every option of it, the ones only a constructor sets included.
+"""
+
+from __future__ import annotations
+
+import inspect
+from typing import Any
+
+from refpo_warp.config.classes import CLASS_SECTIONS, POSITIONAL, class_defaults
+from refpo_warp.config.dotted import LEAF_KEYS, flatten
+from refpo_warp.config.layers import shown
+from refpo_warp.config.resolve import Resolution
+from refpo_warp.utils.errors import unknown
+
+
+def _class_default(cfg: dict, section: str, name: str) -> tuple[Any, str] | None:
+    found = class_defaults(cfg[section]["class_name"]).get(name)
+    if found is None or name in POSITIONAL[section]:
+        return None
+    default, owner = found
+    where = inspect.getsourcefile(owner)
+    return default, f"the default of {owner.__module__}.{owner.__qualname__}" + (f" ({shown(where)})" if where else "")
+
+
+def _env_default(cfg: dict, section: str, name: str) -> tuple[Any, str] | None:
+    from refpo_warp.envs.registry import get_task
+
+    spec = get_task(cfg["task"])
+    if name in spec.cfg_overrides:
+        return spec.cfg_overrides[name], f"the task id {cfg['task']} (its TaskSpec)"
+    defaults = spec.cfg_class.defaults()
+    if name not in defaults:
+        return None
+    return defaults[name], f"the default of {spec.cfg_class.__module__}.{spec.cfg_class.__qualname__}"
+
+
+def _fallback(cfg: dict, key: str) -> tuple[Any, str] | None:
+    """The value a key has when no layer sets it (a constructor's or an env cfg's default)."""
+    section, _, name = key.partition(".")
+    if section in CLASS_SECTIONS and name and "." not in name:
+        return _class_default(cfg, section, name)
+    if section == "env" and name and "." not in name:
+        return _env_default(cfg, section, name)
+    if key.startswith("eval.env.") and key.count(".") == 2:
+        return _env_default(cfg, "eval.env", key.rsplit(".", 1)[1])
+    return None
+
+
+def effective_config(cfg: dict) -> dict:
+    """A resolved config with every option a constructor or env cfg sets by default filled in: what the classes
+    receive (the saved ``config.yaml`` holds only what the layers set)."""
+    from refpo_warp.envs.registry import get_task
+
+    out = dict(cfg)
+    for section in CLASS_SECTIONS:
+        defaults = {n: d for n, (d, _) in class_defaults(cfg[section]["class_name"]).items() if n not in POSITIONAL[section]}
+        out[section] = {**defaults, **cfg[section]}
+    spec = get_task(cfg["task"])
+    out["env"] = {**spec.cfg_class.defaults(), **spec.cfg_overrides, **cfg["env"]}
+    return out
+
+
+def all_keys(cfg: dict) -> list[str]:
+    """Every option of a resolved config, the ones set only by a constructor or env cfg default included."""
+    keys = list(flatten(cfg))
+    for section in CLASS_SECTIONS:
+        keys += [f"{section}.{n}" for n in class_defaults(cfg[section]["class_name"]) if n not in POSITIONAL[section]]
+    from refpo_warp.envs.registry import get_task
+
+    keys += [f"env.{n}" for n in get_task(cfg["task"]).cfg_class.defaults()]
+    return list(dict.fromkeys(k for k in keys if not k.endswith(".") and k not in ("env", "eval.env")))
+
+
+def _value(cfg: dict, key: str) -> tuple[bool, Any]:
+    node: Any = cfg
+    for part in key.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return False, None
+        node = node[part]
+    return True, node
+
+
+def explain_key(res: Resolution, key: str) -> list[str]:
+    """The lines for one option (see the module docstring)."""
+    cfg = res.cfg
+    found, value = _value(cfg, key)
+    history = list(res.sources.get(key, []))
+    fallback = _fallback(cfg, key)
+    if fallback is not None:
+        history.insert(0, (fallback[1], fallback[0]))
+    if not found and fallback is not None:
+        value = fallback[0]
+    lines = [f"{key} = {value!r}"]
+    if history:
+        source, _ = history[-1]
+        lines.append(f"  set by  {source}")
+        for earlier, old in reversed(history[:-1]):
+            lines.append(f"  over    {old!r} from {earlier}")
+    return lines
+
+
+def explain(res: Resolution, keys: list[str] | None = None) -> str:
+    """The lines for each of ``keys`` (a section stands for all of its options; None: every option)."""
+    everything = all_keys(res.cfg)
+    chosen = []
+    for key in keys or everything:
+        below = [k for k in everything if k.startswith(f"{key}.")]
+        if key in LEAF_KEYS or key in everything:
+            chosen.append(key)
+        elif below:
+            chosen += below
+        else:
+            raise unknown("config key to explain", key, everything)
+    title = f"Config of task={res.cfg['task']} algo={res.cfg['algo']}, later layers win:"
+    layer_list = "\n".join(f"  {i + 1}. {layer.source}" for i, layer in enumerate(res.layers))
+    return "\n".join([title, layer_list, ""] + [line for key in chosen for line in explain_key(res, key)])

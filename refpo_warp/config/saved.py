@@ -1,0 +1,114 @@
+"""A run's saved config (``<run dir>/config.yaml``) with the overrides of a resume or an evaluation, resolved once.
+
+Resume rule: a resumed run keeps its task, algorithm and model. An option that would change them (``task``,
+``algo``, every ``class_name``, actor/critic options, and options whose rule says ``fixed=True``, such as
+``runner.obs_groups`` or ``algorithm.optimizer``) is refused, naming each differing key; everything else (learning
+rate, budget, evaluation, device, ...) may change.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from refpo_warp.config.classes import CLASS_SECTIONS, class_parameters, resolve_class
+from refpo_warp.config.dotted import flatten
+from refpo_warp.config.resolve import resolve_config
+from refpo_warp.config.run_options import RUN_RULES
+from refpo_warp.config.yaml_files import load_yaml
+from refpo_warp.utils.errors import ConfigError, DataFileError
+from refpo_warp.utils.option_rules import rules_for
+
+RUN_CONFIG = "config.yaml"
+IDENTITY_KEYS = ("task", "algo")
+
+
+def read_saved_config(run_dir: Path) -> dict:
+    """The saved config of a run as written (not resolved); ``ConfigError`` if ``run_dir`` is not a run,
+    ``DataFileError`` if the file is damaged."""
+    saved = Path(run_dir) / RUN_CONFIG
+    if not Path(run_dir).is_dir():
+        raise ConfigError(f"run_dir={run_dir}: no such run directory")
+    if not saved.exists():
+        raise ConfigError(f"{saved} not found: '{run_dir}' is not a refpo_warp run directory")
+    data = load_yaml(saved, error=DataFileError)
+    for key in IDENTITY_KEYS:
+        if not isinstance(data.get(key), str):
+            raise DataFileError(f"{saved}: no '{key}' in it; the file was edited or damaged")
+    return data
+
+
+def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
+    """The saved config of a run with ``overrides`` applied on top, resolved once (to resume and to evaluate);
+    refuses overrides that would change the run's task, algorithm or model."""
+    saved = read_saved_config(run_dir)
+    for key in IDENTITY_KEYS:
+        if key in overrides and str(overrides[key]) != saved[key]:
+            raise ConfigError(f"{key}={overrides[key]} differs from the run's {key}={saved[key]} ({run_dir}); a run "
+                              f"keeps its {key}: choose another run_dir for a new run")  # fmt: skip
+    try:
+        cfg = resolve_config({**flatten(saved), **overrides})
+    except ConfigError as err:
+        try:  # whose fault: the file's (it no longer resolves on its own) or the overrides'
+            resolve_config(flatten(saved))
+        except ConfigError:
+            raise DataFileError(f"{Path(run_dir) / RUN_CONFIG}: {err}") from None
+        raise
+    changed = fixed_changes(saved, cfg)
+    if changed:
+        raise ConfigError(f"the run in {run_dir} keeps its task, algorithm and model, but these options differ from "
+                          f"its config.yaml: {'; '.join(changed)}. Choose another run_dir for a new run")  # fmt: skip
+    return cfg
+
+
+def fixed_changes(saved: dict, cfg: dict) -> list[str]:
+    """``key: saved -> new`` for every option that may not change on resume and does. An option the saved config
+    does not list (left at its default, or added to the code since) is compared with its default."""
+    old, new = flatten(saved), flatten(cfg)
+    changes = []
+    for key, value in new.items():
+        if not _is_fixed(cfg, key):
+            continue
+        before = old[key] if key in old else _default(cfg, key)
+        if before is not _UNKNOWN and _plain(before) != _plain(value):
+            changes.append(f"{key}: {before!r} -> {value!r}")
+    return changes
+
+
+_UNKNOWN = object()
+
+
+def _plain(value: Any) -> Any:
+    """Tuples as lists: a constructor's default ``(256, 256)`` is the config's ``[256, 256]``."""
+    return [_plain(v) for v in value] if isinstance(value, (list, tuple)) else value
+
+
+def _default(cfg: dict, key: str) -> Any:
+    """The value an option has when a config does not set it (constructor or env cfg default)."""
+    section, _, name = key.partition(".")
+    if section in CLASS_SECTIONS and "." not in name:
+        return class_parameters(cfg[section]["class_name"]).get(name, _UNKNOWN)
+    if section == "env" and "." not in name:
+        from refpo_warp.envs.registry import get_task
+
+        return get_task(cfg["task"]).cfg_class.defaults().get(name, _UNKNOWN)
+    return _UNKNOWN
+
+
+def _is_fixed(cfg: dict, key: str) -> bool:
+    section, _, name = key.partition(".")
+    if key in IDENTITY_KEYS:
+        return True
+    if section in CLASS_SECTIONS:
+        if name == "class_name":
+            return True
+        rule = rules_for(resolve_class(cfg[section]["class_name"])).get(name.split(".")[0])
+        default = section in ("actor", "critic")  # the networks
+        return default if rule is None or rule.fixed is None else rule.fixed
+    if section == "env":
+        from refpo_warp.envs.registry import get_task
+
+        rule = rules_for(get_task(cfg["task"]).cfg_class).get(name)
+        return bool(rule is not None and rule.fixed)
+    rule = RUN_RULES.get(key)
+    return bool(rule is not None and rule.fixed)

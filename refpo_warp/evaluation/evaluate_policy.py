@@ -1,0 +1,103 @@
+"""Evaluate a policy on a vectorised env: returns and task metrics per evaluation setting, and the flow diagnostics
+on the observations it visited.
+
+Flow policies are evaluated at every N of a list of flow-step counts (1-step vs multi-step returns) under the protocol
+``eval.initial_noise`` (random | zero) and ``eval.perturbation`` (the rollout's post-sample noise on | off); a
+Gaussian actor once, with its mean action. A task family may add ``refpo_warp/tasks/<family>/evaluation.py`` with
+``summarize(episodes)`` (its own numbers, e.g. GridWorld's top/bottom goal shares), ``REPLACES`` (the generic
+``<metric>_mean`` entries its numbers stand for, dropped so every metric has one name in ``eval.json``) and
+``figures(run_dir, actor, cfg)`` (PNG files).
+"""
+
+from __future__ import annotations
+
+import importlib
+from functools import partial
+
+from refpo_warp.envs.registry import get_task, make_env, make_env_cfg
+from refpo_warp.evaluation.episodes import run_episodes, summarize
+from refpo_warp.utils.device import resolve_device
+
+EVAL_SEED_OFFSET = 10_000  # evaluation envs draw other initial states than the training envs of the same seed
+
+
+def is_flow(actor) -> bool:
+    return hasattr(actor, "num_flow_steps") and hasattr(actor, "sample")
+
+
+def family_evaluation(task: str):
+    """The task family's optional evaluation module (``refpo_warp.tasks.<family>.evaluation``) or None."""
+    family = get_task(task).entry_point.split(":")[0].rsplit(".", 1)[0]
+    try:
+        return importlib.import_module(f"{family}.evaluation")
+    except ModuleNotFoundError as err:
+        if err.name != f"{family}.evaluation":
+            raise
+        return None
+
+
+def make_policy(actor, flow_steps: int | None, initial_noise: str = "random", perturbation: bool = False):
+    """obs -> actions for evaluation: a flow integrated with ``flow_steps`` Euler steps, or a Gaussian's mean."""
+    if not is_flow(actor):
+        return lambda obs: actor(obs)
+    return lambda obs: actor.sample(obs, flow_steps, initial_noise, perturbation)
+
+
+def eval_num_envs(cfg: dict, interval: bool = False) -> int:
+    """Evaluation env count: ``eval.num_envs``, or what the task's env class asks for when that is null."""
+    n = cfg["eval"]["interval_num_envs" if interval else "num_envs"]
+    if n:
+        return int(n)
+    env_class = get_task(cfg["task"]).env_class()
+    env_cfg = make_env_cfg(cfg["task"], **{**cfg["env"], **cfg["eval"]["env"]})
+    return int(env_class.eval_num_envs(env_cfg)) if hasattr(env_class, "eval_num_envs") else 64
+
+
+def make_eval_env(cfg: dict, interval: bool = False):
+    """The evaluation env of a run's config (its ``eval.env`` options over ``env``)."""
+    return make_env(cfg["task"], num_envs=eval_num_envs(cfg, interval), device=resolve_device(cfg["device"]),
+                    seed=cfg["seed"] + EVAL_SEED_OFFSET, **{**cfg["env"], **cfg["eval"]["env"]})  # fmt: skip
+
+
+def evaluate_actor(cfg: dict, actor, env, flow_steps: list[int], record_obs: int = 0) -> tuple[dict, object]:
+    """Summaries per evaluation setting (``{"N=10": {...}, "N=1": {...}}`` for flows, ``{"mean_action": {...}}``
+    otherwise) and up to ``record_obs`` observations visited in the first setting (None if none were asked for)."""
+    hooks = family_evaluation(cfg["task"])
+    settings = [(f"N={n}", n) for n in flow_steps] if is_flow(actor) else [("mean_action", None)]
+    results, visited = {}, None
+    for name, n in settings:
+        policy = make_policy(actor, n, cfg["eval"]["initial_noise"], cfg["eval"]["perturbation"])
+        episodes = run_episodes(policy, env, max_steps=cfg["eval"]["max_steps"],
+                                record_obs=record_obs if visited is None else 0)  # fmt: skip
+        visited = episodes.pop("observations", visited)
+        summary = summarize(episodes)
+        if hooks is not None and hasattr(hooks, "summarize"):
+            for key in getattr(hooks, "REPLACES", ()):
+                summary.pop(key, None)
+            summary.update(hooks.summarize(episodes))
+        results[name] = summary
+    return results, visited
+
+
+def tau_sampler(alg):
+    """Draws flow times the way ``alg`` draws its (tau, eps) pairs in training (uniform for algorithms without)."""
+    from refpo_warp.algorithms.refpo import sample_tau
+
+    if not hasattr(alg, "tau_sampling"):
+        return partial(sample_tau, mode="uniform", num_flow_steps=1, logit_mean=0.0, logit_std=1.0, device="cpu")
+    return partial(sample_tau, mode=alg.tau_sampling, num_flow_steps=alg.actor.num_flow_steps,
+                   logit_mean=alg.tau_logit_mean, logit_std=alg.tau_logit_std, device="cpu")  # fmt: skip
+
+
+def flow_diagnostics(alg, actor, observations) -> dict:
+    """Straightness Error and Jacobian statistics on on-policy observations (for actors that define them)."""
+    from refpo_warp.models import flow_diagnostics as fd
+
+    out: dict = {}
+    if observations is None or not len(observations):
+        return out
+    if hasattr(actor, "cfm_terms"):
+        out["straightness_error_eval"] = fd.straightness_error(actor, observations, tau_sampler(alg))
+    if hasattr(actor, "velocity") and hasattr(actor.velocity, "project_obs"):
+        out.update(fd.jacobian_statistics(actor, observations, num_steps=actor.num_flow_steps))
+    return out
