@@ -1,3 +1,3 @@
 """Task families: every subpackage is one family, found by ``refpo_warp.envs.registry`` (nothing lists them) and imported
-once; its ``__init__`` declares the family's tasks as ``TASKS = [refpo_warp.task_spec.TaskSpec(...)]``: id, env cfg
+once; its ``__init__`` declares the family's tasks as ``TASKS = [refpo_warp.envs.task_spec.TaskSpec(...)]``: id, env cfg
 class (Warp-free), env entry point, training config file."""

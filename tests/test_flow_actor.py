@@ -7,7 +7,8 @@ import torch
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.models import FlowActor, SinusoidalEmbedding
+from refpo_warp.models import FlowActor
+from refpo_warp.models.velocity_field import SinusoidalEmbedding
 
 
 def make_actor(obs_dim=3, act_dim=2, **kwargs):

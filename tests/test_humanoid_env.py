@@ -92,7 +92,7 @@ def test_kinematic_replay_gives_zero_error_and_maximal_reward(env):
     import dataclasses
 
     from refpo_warp.tasks.humanoid.reward_terms import reward_params
-    from refpo_warp.tasks.humanoid.tracking_kernels import evaluate_step_kernel
+    from refpo_warp.tasks.humanoid.tracking_kernels import reward_and_termination_kernel
 
     no_power = reward_params(dataclasses.replace(env.cfg, power_coef=0.0))
     env.reset()
@@ -111,7 +111,7 @@ def test_kinematic_replay_gives_zero_error_and_maximal_reward(env):
         b, s, c = env.buffers, env.sim, env.cfg
         env._episode_length.fill_(5)  # past the power-free steps
         s.joint_target.assign(s.joint_q.numpy())  # targets at the current pose; the power term uses them
-        wp.launch(evaluate_step_kernel, dim=env.num_envs,
+        wp.launch(reward_and_termination_kernel, dim=env.num_envs,
                   inputs=[s.body_q, s.body_qd, s.body_com, s.joint_q, s.joint_qd, s.joint_target, env.kp, env.kd,
                           500.0, ref.body_pos, ref.body_rot, ref.body_vel, ref.body_angvel, env.eval_body,
                           env.clip_id, env.ref_time, env.motion.clip_duration_device, b.episode_length, 0,

@@ -21,7 +21,7 @@ def _launch(params, episode_length=5):
     simulated body at rest with identity rotation; the reference 0.1 m further along x, turned 0.2 rad about z, moving
     at 1 m/s along x and spinning at 2 rad/s about z; every hinge at angle 0 with rate 1 rad/s and PD target 0.01 rad
     (kp 100, kd 10)."""
-    from refpo_warp.tasks.humanoid.tracking_kernels import evaluate_step_kernel
+    from refpo_warp.tasks.humanoid.tracking_kernels import reward_and_termination_kernel
 
     n = 2
     pos = np.stack([np.zeros(NB), np.zeros(NB), 1.0 + 0.01 * np.arange(NB)], -1)
@@ -44,7 +44,7 @@ def _launch(params, episode_length=5):
     rewards, step_terms = wp.zeros(n, dtype=float), wp.zeros((n, len(TERMS)), dtype=float)
     flags = [wp.zeros(n, dtype=wp.bool) for _ in range(2)]  # terminated, clip end
     metrics = [wp.zeros(n, dtype=float) for _ in range(3)]
-    wp.launch(evaluate_step_kernel, dim=n,
+    wp.launch(reward_and_termination_kernel, dim=n,
               inputs=[*arrays.values(), wp.full(NDOF, 100.0, dtype=float), wp.full(NDOF, 10.0, dtype=float), 500.0,
                       *ref, wp.ones(NB, dtype=float), wp.zeros(n, dtype=int), wp.zeros(n, dtype=float),
                       wp.array([10.0], dtype=float), wp.full(n, episode_length - 1, dtype=wp.int32), 0, 0.25, 0.5,

@@ -23,7 +23,7 @@ from reliability_helpers import (
     tiny,
     tree_hash,
     truncate,
-    write_malicious,  # fmt: skip
+    write_malicious,
 )
 
 from refpo_warp.motion.amass import write_amass

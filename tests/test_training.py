@@ -8,7 +8,7 @@ from rsl_rl.runners import OnPolicyRunner
 
 from refpo_warp import make_env
 from refpo_warp.evaluation.episodes import run_episodes
-from refpo_warp.runner.runner import latest_checkpoint
+from refpo_warp.runner.checkpoints import latest_checkpoint
 from refpo_warp.training import train
 from refpo_warp.utils.errors import ConfigError, NonFiniteLossError
 

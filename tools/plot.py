@@ -30,7 +30,8 @@ def main(argv: list[str]) -> int:
         return EXIT_USAGE
 
     def plot() -> None:
-        from refpo_warp.evaluation.curves import plot_runs, sweep_curves
+        from refpo_warp.evaluation.curves import plot_runs
+        from refpo_warp.sweeps.figures import sweep_curves
 
         if sweep and not Path(sweep).is_dir():
             raise DataFileError(f"sweep={sweep}: no such directory (a tools/sweep.py output dir, e.g. "

@@ -27,7 +27,7 @@ class EnvCfg:
     """Envs [g G, (g + 1) G) form group g: the k-th episode of every member starts from the same initial state (one
     random stream per group and episode index; Flow-GRPO's groups). 1: an independent stream per env."""
     action_chunk: int = 1
-    """Env steps per policy action: above 1, ``refpo_warp.registry.make_env`` wraps the env in an
+    """Env steps per policy action: above 1, ``refpo_warp.envs.registry.make_env`` wraps the env in an
     ``ActionChunkWrapper`` whose actions are ``action_chunk`` env actions run open-loop (ReinFlow's horizon)."""
 
     # Valid values of the fields (refpo_warp.utils.option_rules); a subclass adds the rules of its own fields the same way.

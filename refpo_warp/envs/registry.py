@@ -1,7 +1,7 @@
 """Task registry: task ids map to a ``TaskSpec`` (env cfg dataclass, lazily imported env class, config file).
 
 Task families are the subpackages of the task root package (``tasks``); each declares its tasks as a ``TASKS`` list
-of ``refpo_warp.task_spec.TaskSpec`` next to its code. The registry finds the families (nothing lists them by hand),
+of ``refpo_warp.envs.task_spec.TaskSpec`` next to its code. The registry finds the families (nothing lists them by hand),
 imports each once and reads its list; the families never import the registry. Listing tasks and resolving configs
 never import a simulator: the env module is imported only when ``make_env`` builds that task. Code outside the task
 root adds tasks with ``register_task``.
@@ -16,7 +16,7 @@ from typing import Any
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, unknown
 
-__all__ = ["TaskSpec", "get_task", "list_tasks", "make_env", "make_env_cfg", "register_task", "task_families"]
+__all__ = ["get_task", "list_tasks", "make_env", "make_env_cfg", "register_task", "task_families"]
 
 TASK_ROOT = "refpo_warp.tasks"  # the package whose subpackages are the task families (the repository's tasks/)
 

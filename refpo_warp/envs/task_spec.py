@@ -3,7 +3,7 @@ not on the registry that discovers them).
 
 A family package ``tasks/<family>/__init__.py`` lists its tasks as ``TASKS = [TaskSpec(...), ...]``; the registry
 (``refpo_warp.envs.registry``) finds the families and reads these lists. Code outside ``tasks/`` registers a spec with
-``refpo_warp.registry.register_task``.
+``refpo_warp.envs.registry.register_task``.
 """
 
 from __future__ import annotations

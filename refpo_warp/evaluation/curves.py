@@ -28,9 +28,10 @@ DIAGNOSTICS = (
 )
 
 
-def _series(rows: list[dict], key: str) -> tuple[list[float], list[float]]:
-    pts = [(r["env_steps"], r[key]) for r in rows if key in r]
-    return [p[0] for p in pts], [p[1] for p in pts]
+def series(rows: list[dict], key: str) -> tuple[list[float], list[float]]:
+    """(env steps, values) of ``key`` over the progress rows that have it."""
+    points = [(r["env_steps"], r[key]) for r in rows if key in r and "env_steps" in r]
+    return [p[0] for p in points], [p[1] for p in points]
 
 
 def seed_stats(curves: list[tuple[list[float], list[float]]]):
@@ -48,7 +49,7 @@ def seed_stats(curves: list[tuple[list[float], list[float]]]):
 
 def _seed_series(seeds: list[list[dict]], key: str):
     """``seed_stats`` of ``key`` over the seeds' runs as arrays (None if no run has the key)."""
-    steps, mean, low, high = seed_stats([_series(rows, key) for rows in seeds])
+    steps, mean, low, high = seed_stats([series(rows, key) for rows in seeds])
     return (np.asarray(steps, float), np.asarray(mean), np.asarray(low), np.asarray(high)) if steps else None
 
 
@@ -119,7 +120,7 @@ def diagnostic_curves(runs: dict[str, list[dict]], path: Path) -> Path:
     fig, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
     for (key, title), ax in zip(DIAGNOSTICS, axes.flat):
         for label, rows in runs.items():
-            x, y = _series(rows, key)
+            x, y = series(rows, key)
             if x:
                 ax.plot(x, y, lw=1.0, label=label)
         ax.set_title(title, fontsize=10)
@@ -175,30 +176,3 @@ def plot_runs(run_dirs: list[str | Path], out_dir: str | Path | None = None) -> 
         written.append(diagnostic_curves(runs, out / "curves_diagnostics.png"))
     grid = figure_grid([Path(d) for d in run_dirs], out / "figures_grid.png")
     return written + ([grid] if grid else [])
-
-
-def sweep_curves(sweep_dir: str | Path, out_dir: str | Path | None = None, window: int = 5) -> list[Path]:
-    """Per task of a sweep dir (``<task>/<method>/seed<k>``, as tools/sweep.py writes it): ``<task>_curves.png``
-    with one line per method (mean over seeds, band: their range). Prints each seed's training episode length and
-    return at the start and the end (means over the first and the last ``window`` iterations)."""
-    sweep_dir = Path(sweep_dir)
-    out = Path(out_dir or sweep_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for task_dir in sorted(p for p in sweep_dir.iterdir() if p.is_dir()):
-        runs = {}
-        for method_dir in sorted(p for p in task_dir.iterdir() if p.is_dir()):
-            seeds = sorted(p for p in method_dir.glob("seed*") if (p / "progress.jsonl").is_file())
-            runs[method_dir.name] = [read_rows(p) for p in seeds]
-            for seed_dir, rows in zip(seeds, runs[method_dir.name]):
-                length = [r["episode_length_mean"] for r in rows if "episode_length_mean" in r]
-                ret = [r["reward_mean"] for r in rows if "reward_mean" in r]
-                if len(length) >= 2 * window and len(ret) >= 2 * window:
-                    first, last = np.mean(length[:window]), np.mean(length[-window:])
-                    print(f"{task_dir.name} {method_dir.name} {seed_dir.name}: episode length {first:.1f} -> "
-                          f"{last:.1f} ({last / first:.2f}x), return {np.mean(ret[:window]):.2f} -> "
-                          f"{np.mean(ret[-window:]):.2f}, {rows[-1]['env_steps']:,} env steps, "
-                          f"{rows[-1]['time_s']:.0f} s")  # fmt: skip
-        if any(runs.values()):
-            written.append(training_curves({k: v for k, v in runs.items() if v}, out / f"{task_dir.name}_curves.png"))
-    return written

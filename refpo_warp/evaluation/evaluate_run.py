@@ -19,7 +19,7 @@ from refpo_warp.evaluation.evaluate_policy import (
     family_evaluation,
     flow_diagnostics,
     is_flow,
-    make_eval_env,  # fmt: skip
+    make_eval_env,
 )
 from refpo_warp.runner.build import build_runner, env_steps_per_iteration
 from refpo_warp.runner.checkpoints import latest_checkpoint, load_latest

@@ -1,12 +1,10 @@
-"""Policy models (rsl_rl models selected by class_name): the flow-matching actor, its network and its export, ReinFlow's
-noisy-chain actor, and the empty critic of critic-free algorithms."""
+"""Policy models that rsl_rl selects by ``class_name`` (``refpo_warp.models:FlowActor``): the flow-matching actor, ReinFlow's
+noisy-chain actor, the Puffer-PHC MLP and the empty critic of critic-free algorithms. Their networks, export and
+diagnostics are the modules beside them."""
 
-from refpo_warp.models.flow_actor import CfmTerms, FlowActor, cfm_loss
-from refpo_warp.models.flow_export import FlowSampler
+from refpo_warp.models.flow_actor import FlowActor
 from refpo_warp.models.no_critic import NoCritic
 from refpo_warp.models.phc_mlp_model import PhcMLPModel
 from refpo_warp.models.reinflow_actor import ReinFlowActor
-from refpo_warp.models.velocity_field import SinusoidalEmbedding, TimestepEmbedding, VelocityField
 
-__all__ = ["CfmTerms", "FlowActor", "FlowSampler", "NoCritic", "PhcMLPModel", "ReinFlowActor", "SinusoidalEmbedding",
-           "TimestepEmbedding", "VelocityField", "cfm_loss"]
+__all__ = ["FlowActor", "NoCritic", "PhcMLPModel", "ReinFlowActor"]

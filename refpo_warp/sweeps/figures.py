@@ -10,7 +10,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from refpo_warp.evaluation.curves import plt, readable_log_axis, seed_stats
+import numpy as np
+
+from refpo_warp.evaluation.curves import plt, readable_log_axis, seed_stats, series, training_curves
+from refpo_warp.runner.progress import read_rows
 from refpo_warp.utils.atomic_files import save_figure
 
 RATIO_KEYS = ("Flow/ratio_max", "loss/ratio_max")  # the shared name, then the name of runs logged before it
@@ -18,18 +21,12 @@ CURVE_KEYS = ("eval/return_N10", "eval/return_N1", "eval/return", "reward_mean")
 EXPLOSION_RATIO = math.exp(3.0)  # |log rho| > 3: the paper's explosion threshold on the proxy ratio
 
 
-def series(rows: list[dict], key: str) -> tuple[list[float], list[float]]:
-    """(env steps, values) of ``key`` over the rows that have it."""
-    points = [(r["env_steps"], r[key]) for r in rows if key in r and "env_steps" in r]
-    return [p[0] for p in points], [p[1] for p in points]
-
-
 def ratio_key(rows: list[dict]) -> str | None:
     return next((k for k in RATIO_KEYS if any(k in r for r in rows)), None)
 
 
 def seed_mean(curves: list[tuple[list[float], list[float]]]) -> tuple[list[float], list[float]]:
-    """Mean over seeds at the env-step counts every seed has (``plots.seed_stats``)."""
+    """Mean over seeds at the env-step counts every seed has (``refpo_warp.evaluation.curves.seed_stats``)."""
     steps, mean, _, _ = seed_stats(curves)
     return steps, mean
 
@@ -133,3 +130,30 @@ def latency_bars(latency: dict, path: Path, names: dict[str, str] | None = None)
     save_figure(fig, path, dpi=130)
     plt.close(fig)
     return path
+
+
+def sweep_curves(sweep_dir: str | Path, out_dir: str | Path | None = None, window: int = 5) -> list[Path]:
+    """Per task of a sweep dir (``<task>/<method>/seed<k>``, as tools/sweep.py writes it): ``<task>_curves.png``
+    with one line per method (mean over seeds, band: their range). Prints each seed's training episode length and
+    return at the start and the end (means over the first and the last ``window`` iterations)."""
+    sweep_dir = Path(sweep_dir)
+    out = Path(out_dir or sweep_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for task_dir in sorted(p for p in sweep_dir.iterdir() if p.is_dir()):
+        runs = {}
+        for method_dir in sorted(p for p in task_dir.iterdir() if p.is_dir()):
+            seeds = sorted(p for p in method_dir.glob("seed*") if (p / "progress.jsonl").is_file())
+            runs[method_dir.name] = [read_rows(p) for p in seeds]
+            for seed_dir, rows in zip(seeds, runs[method_dir.name]):
+                length = [r["episode_length_mean"] for r in rows if "episode_length_mean" in r]
+                ret = [r["reward_mean"] for r in rows if "reward_mean" in r]
+                if len(length) >= 2 * window and len(ret) >= 2 * window:
+                    first, last = np.mean(length[:window]), np.mean(length[-window:])
+                    print(f"{task_dir.name} {method_dir.name} {seed_dir.name}: episode length {first:.1f} -> "
+                          f"{last:.1f} ({last / first:.2f}x), return {np.mean(ret[:window]):.2f} -> "
+                          f"{np.mean(ret[-window:]):.2f}, {rows[-1]['env_steps']:,} env steps, "
+                          f"{rows[-1]['time_s']:.0f} s")  # fmt: skip
+        if any(runs.values()):
+            written.append(training_curves({k: v for k, v in runs.items() if v}, out / f"{task_dir.name}_curves.png"))
+    return written

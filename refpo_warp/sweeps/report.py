@@ -28,7 +28,7 @@ from refpo_warp.sweeps.figures import (
     ratio_spikes,
     reward_curve_grid,
     seed_mean,
-    series,  # fmt: skip
+    series,
 )
 from refpo_warp.sweeps.spec import fingerprint
 from refpo_warp.sweeps.tables import (
@@ -43,10 +43,11 @@ from refpo_warp.sweeps.tables import (
     main_markdown,
     method_rows,
     run_metrics,
-    task_markdown,  # fmt: skip
+    task_markdown,
     task_rows,
     to_csv,
 )
+from refpo_warp.utils.atomic_files import write_text
 
 REPORT_DIR = "report"
 
@@ -155,9 +156,7 @@ def _choice(given: list[str] | None, spec: dict, key: str, default: list[str], v
 
 
 def _write(path: Path, text: str) -> Path:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    write_text(path, text)
     return path
 
 

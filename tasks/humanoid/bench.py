@@ -1,6 +1,6 @@
 """Env-stepping throughput of the humanoid tracking env: ``python tools/bench.py humanoid [--num-envs N] ...``.
 
-Ours: timed with ``refpo_warp.benchmarking.env_steps_per_second``: uniform random actions in [-1, 1] drawn ahead of
+Ours: timed with ``refpo_warp.utils.timing.env_steps_per_second``: uniform random actions in [-1, 1] drawn ahead of
 time, after warm-up steps (the first step compiles kernels and captures the step graph). One env step is the whole
 captured step: PD targets from the actions, the physics substeps (MuJoCo Warp), reference sampling, reward /
 termination / episode metrics, new episodes for finished envs and the observations. Defaults: 64 envs on CPU, 4096

@@ -23,7 +23,7 @@ from refpo_warp.tasks.humanoid.reward_terms import TERMS, reward_params
 from refpo_warp.tasks.humanoid.tracking_kernels import (
     advance_time_kernel,
     apply_actions_kernel,
-    evaluate_step_kernel,
+    reward_and_termination_kernel,
     start_episodes_kernel,
     write_reference_state_kernel,
 )
@@ -101,7 +101,7 @@ class HumanoidTrackingEnv(WarpVecEnv):
         self.motion.sample(self.clip_id, self.ref_time, self.ref)
         r = self.ref
         wp.launch(
-            evaluate_step_kernel,
+            reward_and_termination_kernel,
             dim=n,
             inputs=[s.body_q, s.body_qd, s.body_com, s.joint_q, s.joint_qd, s.joint_target, self.kp, self.kd,
                     EFFORT_LIMIT, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, self.eval_body, self.clip_id,

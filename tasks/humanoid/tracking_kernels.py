@@ -102,7 +102,7 @@ def start_episodes_kernel(
 
 
 @wp.kernel
-def evaluate_step_kernel(
+def reward_and_termination_kernel(
     body_q: wp.array2d(dtype=wp.transform),
     body_qd: wp.array2d(dtype=wp.spatial_vector),
     body_com: wp.array(dtype=wp.vec3),
