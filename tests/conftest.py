@@ -1,4 +1,10 @@
-"""Shared test set-up: CPU by default, small thread counts, a `gpu` marker that skips without CUDA."""
+"""Shared test set-up: CPU by default, one torch thread, a ``gpu`` marker that skips without CUDA, and the order of a
+run: the slow tests first, longest first, by the minutes their ``slow`` marker declares.
+
+Markers (pyproject.toml): ``slow(minutes=M)`` a bounded learning check or a long subprocess case, with its measured
+wall time in CI; ``gpu`` needs CUDA; ``rsl_rl`` touches rsl_rl's API (CI runs these again on the lowest supported
+rsl-rl-lib).
+"""
 
 import pytest
 import torch
@@ -15,37 +21,27 @@ def cuda_available() -> bool:
     return init_warp().get_cuda_device_count() > 0
 
 
-# The longest tests (minutes each on a 2-core CPU, as CI's `--durations` measured them): under xdist they start first,
-# one per worker, and everything else fills in around them. The first two compile different Warp kernels (the
-# humanoid's and Newton's, GridWorld's): started together, two humanoid checks would both compile Newton's kernels
-# (about a minute each on a cold cache); the second one starts once the first has filled the cache.
-LONGEST = ("test_humanoid_episodes_get_longer[refpo]", "test_refpo_solves_gridworld_with_one_and_ten_flow_steps",
-           "test_method_raises_its_cartpole_return[flow_grpo-10]", "test_method_raises_its_cartpole_return[reinflow-4]",
-           "test_humanoid_episodes_get_longer[ppo]",
-           "test_refpo_balances_the_cartpole_with_ten_and_one_flow_steps",
-           "test_method_raises_its_cartpole_return[refpo_aw-10]", "test_ppo_balances_the_cartpole",
-           "test_train_and_evaluate_humanoid_root")
-
-
 def pytest_configure(config):
     # xdist hands each worker 2 tests at first and then 1 at a time (instead of long runs of consecutive tests), so
-    # the order below decides which long test each worker starts with.
+    # the order below decides which long tests each worker starts with.
     if config.pluginmanager.hasplugin("xdist") and getattr(config.option, "maxschedchunk", 0) is None:
         config.option.maxschedchunk = 1
 
 
+def minutes(item) -> float:
+    """The wall time a slow test declares (``@pytest.mark.slow(minutes=M)``; 0 for a quick test)."""
+    marker = item.get_closest_marker("slow")
+    return float(marker.kwargs.get("minutes", 0.5)) if marker is not None else 0.0
+
+
 def slow_first(items: list) -> list:
-    """Slow tests before quick ones; the LONGEST at even positions (0, 2, ...), each followed by another slow test,
-    so that with 2 tests per worker at the start, worker k begins with the k-th longest."""
-    longest = sorted((i for i in items if i.name in LONGEST), key=lambda i: LONGEST.index(i.name))
-    slow = [i for i in items if "slow" in i.keywords and i not in longest]
-    quick = [i for i in items if "slow" not in i.keywords and i not in longest]
-    ordered = []
-    for item in longest:
-        ordered.append(item)
-        if slow:
-            ordered.append(slow.pop(0))
-    return ordered + slow + quick
+    """Slow tests longest first, then the quick ones. Two workers start with two tests each (items 0-1 and 2-3):
+    the longest and the third longest go to the first worker, the second and the fourth to the second."""
+    slow = sorted((i for i in items if minutes(i) > 0), key=minutes, reverse=True)
+    quick = [i for i in items if minutes(i) == 0]
+    if len(slow) >= 3:
+        slow[1], slow[2] = slow[2], slow[1]
+    return slow + quick
 
 
 def pytest_collection_modifyitems(config, items):

@@ -10,6 +10,8 @@ from torch import nn
 from refpo_warp.models import FlowActor
 from refpo_warp.models.velocity_field import SinusoidalEmbedding
 
+pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
+
 
 def make_actor(obs_dim=3, act_dim=2, **kwargs):
     obs = TensorDict({"policy": torch.zeros(4, obs_dim)}, batch_size=[4])

@@ -13,6 +13,7 @@ from gymnasium.wrappers.vector import DictInfoToList, DtypeObservation, Normaliz
 
 from refpo_warp import make_env
 from refpo_warp.envs.gym_adapter import GymVectorEnv
+from refpo_warp.utils.paths import REPO_ROOT
 
 SAME, NEXT = AutoresetMode.SAME_STEP, AutoresetMode.NEXT_STEP
 C = 12.0  # GridWorld 25x25: obs = (cell - 12) / 12
@@ -176,9 +177,8 @@ def test_bad_arguments_are_named():
 def test_gymnasium_example_improves_the_return():
     """tools/example_gymnasium.py (PPO on the gymnasium API only) learns GridWorld within a few seconds."""
     import importlib.util
-    from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "tools" / "example_gymnasium.py"
+    path = REPO_ROOT / "tools" / "example_gymnasium.py"
     spec = importlib.util.spec_from_file_location("example_gymnasium", path)
     example = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(example)

@@ -4,16 +4,19 @@
 import copy
 import re
 import warnings
-from pathlib import Path
 
+import pytest
 import torch
 from rsl_rl.runners import OnPolicyRunner
 
 from refpo_warp import make_env
 from refpo_warp.algorithms import ReFPO
 from refpo_warp.models import FlowActor
+from refpo_warp.utils.paths import REPO_ROOT
 
-DOC = Path(__file__).resolve().parents[1] / "docs" / "rsl_rl_users.md"
+pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
+
+DOC = REPO_ROOT / "docs" / "rsl_rl_users.md"
 
 
 def documented_train_cfg() -> dict:

@@ -16,8 +16,9 @@ from refpo_warp.sweeps.figures import seed_mean
 from refpo_warp.sweeps.report import write_report
 from refpo_warp.sweeps.spec import fingerprint
 from refpo_warp.sweeps.tables import aggregate, fmt_number, run_metrics
+from refpo_warp.utils.paths import REPO_ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO_ROOT
 
 
 def flow_eval(n10, n1, straight=None, explosion=None, jac=None, multi=10):

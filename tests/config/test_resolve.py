@@ -2,15 +2,15 @@
 
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 from refpo_warp.config.dotted import merge, parse_overrides
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.paths import REPO_ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO_ROOT
 
 
 def test_layers_task_over_algo_over_default():

@@ -11,6 +11,8 @@ from rsl_rl.runners import OnPolicyRunner
 from refpo_warp import make_env
 from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, RSL_RL_VERSION
 
+pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
+
 NUM_ENVS, STEPS = 8, 16
 
 

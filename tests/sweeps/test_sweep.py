@@ -15,8 +15,9 @@ from refpo_warp.config.resolve import resolve_config
 from refpo_warp.sweeps.run import run_sweep
 from refpo_warp.sweeps.spec import cli_value, fingerprint, load_sweep, validate
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.paths import REPO_ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO_ROOT
 TINY = {"max_iterations": 2, "num_envs": 4, "runner.num_steps_per_env": 8, "eval.num_envs": 4,
         "eval.flow_steps": [10, 1], "eval.interval": 1, "eval.interval_num_envs": 4}  # fmt: skip
 

@@ -13,7 +13,9 @@ from pathlib import Path
 
 import torch
 
-REPO = Path(__file__).resolve().parents[1]
+from refpo_warp.utils.paths import REPO_ROOT
+
+REPO = REPO_ROOT
 # A run that takes seconds: GridWorld, 4 envs x 8 steps, tiny networks.
 TINY = ["task=gridworld", "device=cpu", "num_envs=4", "runner.num_steps_per_env=8", "actor.hidden_dims=[16]",
         "critic.hidden_dims=[16]", "algorithm.num_mc_samples=2", "algorithm.num_learning_epochs=1",

@@ -12,6 +12,8 @@ from refpo_warp.runner.checkpoints import latest_checkpoint
 from refpo_warp.training import train
 from refpo_warp.utils.errors import ConfigError, NonFiniteLossError
 
+pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
+
 QUICK = ["task=gridworld", "algo=refpo", "num_envs=8", "runner.num_steps_per_env=32", "max_iterations=3",
          "algorithm.num_mc_samples=4", "algorithm.num_learning_epochs=2", "runner.save_interval=1",
          "eval.num_envs=16", "eval.flow_steps=[1, 2]", "device=cpu"]  # fmt: skip

@@ -12,9 +12,12 @@ import torch
 
 from refpo_warp.runner.distributed import RankInfo, rank_device
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.paths import REPO_ROOT
 from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP
 
-ROOT = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
+
+ROOT = REPO_ROOT
 TINY = ["task=gridworld", "algo=refpo", "device=cpu", "seed=3", "num_envs=8", "runner.num_steps_per_env=16",
         "max_iterations=3", "algorithm.num_mc_samples=4", "algorithm.num_learning_epochs=2",
         "algorithm.num_mini_batches=2", "actor.hidden_dims=[32, 32]", "critic.hidden_dims=[32, 32]",
@@ -40,7 +43,7 @@ def max_abs_difference(a: dict, b: dict) -> float:
 @pytest.fixture(scope="module")
 def two_rank_runs(tmp_path_factory):
     out = tmp_path_factory.mktemp("ranks")
-    torchrun(ROOT / "tests" / "multi_gpu_worker.py", [str(out)] + TINY + ["algorithm.schedule=adaptive"])
+    torchrun(Path(__file__).with_name("multi_gpu_worker.py"), [str(out)] + TINY + ["algorithm.schedule=adaptive"])
     return {(mode, r): torch.load(out / f"{mode}_rank{r}.pt") for mode in ("reduced", "unreduced") for r in (0, 1)}
 
 

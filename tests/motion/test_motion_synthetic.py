@@ -5,7 +5,6 @@ what the tool generates, and it loads."""
 from __future__ import annotations
 
 import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,8 +15,9 @@ from refpo_warp.motion.amass import read_amass
 from refpo_warp.motion.clip import FOOT_INDICES
 from refpo_warp.motion.skeleton import BODY_NAMES, FOOT_SOLE_DEPTH
 from refpo_warp.motion.synthetic import DEFAULT_CLIP_SPECS, generate_amass, generate_motion, random_clip_specs
+from refpo_warp.utils.paths import REPO_ROOT
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = REPO_ROOT
 SHIPPED = REPO / "tasks" / "humanoid" / "data" / "synthetic"
 HEAD, PELVIS = BODY_NAMES.index("Head"), 0
 

@@ -15,6 +15,8 @@ from refpo_warp.algorithms.refpo import sample_tau
 from refpo_warp.models import FlowActor
 from refpo_warp.utils.errors import NonFiniteLossError
 
+pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
+
 N, T, OBS, ACT = 6, 3, 4, 2
 
 
