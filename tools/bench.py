@@ -13,7 +13,7 @@ import importlib
 import importlib.util
 import sys
 
-OTHERS = {"latency": "refpo_warp.benchmarks.latency", "algorithms": "refpo_warp.benchmarks.update_time"}  # not a task family
+OTHERS = {"latency": "refpo_warp.benchmarks.latency", "algorithms": "refpo_warp.benchmarks.update_time"}  # no family
 
 
 def benchmarked_families() -> list[str]:

@@ -1,6 +1,6 @@
 """Gaussian PPO: rsl_rl's PPO objective on the shared update loop (so it gets the same options as the flow methods).
 
-With the default options an update is rsl_rl's ``PPO.update`` step for step (tests/test_ppo.py checks the
+With the default options an update is rsl_rl's ``PPO.update`` step for step (tests/algorithms/test_ppo.py checks the
 parameters match). The shared options add what the paper's baselines use: Brax-style reward scaling (DMC, x10),
 the soft bound loss on the mean action and joint gradient clipping (Puffer-PHC humanoid), per-pass reshuffling.
 """

@@ -1,4 +1,5 @@
-"""Where a run's option got its value: ``python tools/train.py task=gridworld algo=fpo --explain algorithm.reflow_coef``.
+"""Where a run's option got its value:
+``python tools/train.py task=gridworld algo=fpo --explain algorithm.reflow_coef``.
 
 For each key: the resolved value, the layer that set it (a file and section, the command line, a constructor's or an
 env cfg's default, or the task id) and what the earlier layers had set. A section (``--explain algorithm``) lists
@@ -57,7 +58,8 @@ def effective_config(cfg: dict) -> dict:
 
     out = dict(cfg)
     for section in CLASS_SECTIONS:
-        defaults = {n: d for n, (d, _) in class_defaults(cfg[section]["class_name"]).items() if n not in POSITIONAL[section]}
+        found = class_defaults(cfg[section]["class_name"])
+        defaults = {n: d for n, (d, _) in found.items() if n not in POSITIONAL[section]}
         out[section] = {**defaults, **cfg[section]}
     spec = get_task(cfg["task"])
     out["env"] = {**spec.cfg_class.defaults(), **spec.cfg_overrides, **cfg["env"]}

@@ -138,7 +138,8 @@ def specific_layers(task: str, algo: str, device_type: str) -> list[Layer]:
               for path, p in profiles]  # fmt: skip
     for name, path, data in algo_files(algo):
         layers.append(Layer(shown(path), _without_profiles(data)))
-        layers += [Layer(f"{shown(file)} by_algo.{name}", (d.get("by_algo") or {}).get(name) or {}) for file, d in files]
-        layers += [Layer(f"{shown(file)} by_device.{device_type}.by_algo.{name}", (p.get("by_algo") or {}).get(name) or {})
-                   for file, p in profiles]  # fmt: skip
+        layers += [Layer(f"{shown(file)} by_algo.{name}", (d.get("by_algo") or {}).get(name) or {})
+                   for file, d in files]  # fmt: skip
+        layers += [Layer(f"{shown(file)} by_device.{device_type}.by_algo.{name}",
+                         (p.get("by_algo") or {}).get(name) or {}) for file, p in profiles]  # fmt: skip
     return [layer for layer in layers if layer.values]

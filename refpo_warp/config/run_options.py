@@ -1,7 +1,7 @@
 """Option rules of the run options in ``configs/default.yaml`` (everything outside the class and env sections),
 and the checks that involve several options. See ``refpo_warp.utils.option_rules`` for the rule types.
 
-A new key in ``default.yaml`` gets its rule here (``tests/test_option_rules.py`` fails for a key without one).
+A new key in ``default.yaml`` gets its rule here (``tests/utils/test_option_rules.py`` fails for a key without one).
 """
 
 from __future__ import annotations

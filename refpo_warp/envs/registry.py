@@ -1,8 +1,8 @@
 """Task registry: task ids map to a ``TaskSpec`` (env cfg dataclass, lazily imported env class, config file).
 
 Task families are the subpackages of the task root package (``tasks``); each declares its tasks as a ``TASKS`` list
-of ``refpo_warp.envs.task_spec.TaskSpec`` next to its code. The registry finds the families (nothing lists them by hand),
-imports each once and reads its list; the families never import the registry. Listing tasks and resolving configs
+of ``refpo_warp.envs.task_spec.TaskSpec`` next to its code. The registry finds the families (nothing lists them by
+hand), imports each once and reads its list; the families never import the registry. Listing tasks and resolving configs
 never import a simulator: the env module is imported only when ``make_env`` builds that task. Code outside the task
 root adds tasks with ``register_task``.
 """

@@ -31,7 +31,8 @@ class TaskSpec:
     """Its training config (YAML layers over ``configs/default.yaml``); None: ``configs/task/<task_id>.yaml``."""
 
     def __post_init__(self) -> None:
-        self.cfg_class.check_keys(self.cfg_overrides, f"env option of {self.cfg_class.__name__} (task '{self.task_id}')")
+        what = f"env option of {self.cfg_class.__name__} (task '{self.task_id}')"
+        self.cfg_class.check_keys(self.cfg_overrides, what)
 
     def env_class(self) -> type:
         module_path, name = self.entry_point.split(":")

@@ -97,7 +97,8 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         "protocol": ({"initial_noise": cfg["eval"]["initial_noise"], "perturbation": bool(cfg["eval"]["perturbation"])}
                      if flow else {"mean_action": True}),  # fmt: skip
         "results": results,
-        "diagnostics": {**training_diagnostics(run_dir), **flow_diagnostics(runner.alg, actor, visited)} if flow else {},
+        "diagnostics": ({**training_diagnostics(run_dir), **flow_diagnostics(runner.alg, actor, visited)}
+                        if flow else {}),
     }
     out["figures"] = [str(p) for p in run_figures(run_dir, actor, cfg)]
     kept = write_eval_json(out, run_dir)

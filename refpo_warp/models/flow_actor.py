@@ -74,7 +74,7 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
         obs_clip: Clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); None: no clamp.
     """
 
-    option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.utils.option_rules)
+    option_rules = {  # valid values, checked by the config resolver and this constructor (utils/option_rules.py)
         "hidden_dims": HIDDEN_DIMS,
         "activation": OneOf(ACTIVATIONS),
         "obs_normalization": Flag(),

@@ -75,7 +75,7 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         action_clip: Clamp of the final action (table (d) action range [-1, 1]).
     """
 
-    option_rules = {  # valid values, checked by the config resolver and this constructor (refpo_warp.utils.option_rules)
+    option_rules = {  # valid values, checked by the config resolver and this constructor (utils/option_rules.py)
         "hidden_dims": HIDDEN_DIMS,
         "activation": OneOf(ACTIVATIONS),
         "obs_normalization": Flag(),

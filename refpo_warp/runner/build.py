@@ -1,7 +1,7 @@
 """Build what a run trains with from a resolved config: rsl_rl's train_cfg, the env and our ``Runner``.
 
-Shared by training (``refpo_warp.training``), evaluation of saved runs (``refpo_warp.evaluation.evaluate_run``) and the benchmarks;
-it imports neither of them.
+Shared by training (``refpo_warp.training``), evaluation (``refpo_warp.evaluation``) and the benchmarks; it imports
+none of them.
 """
 
 from __future__ import annotations

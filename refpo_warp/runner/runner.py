@@ -11,8 +11,8 @@
   ``verbose``;
 - a NaN/inf loss stops training before the next checkpoint, so the last checkpoint on disk stays good;
 - ``learn_chunk``: a run learns in chunks (rsl_rl's ``learn`` each), so that the caller can evaluate between them
-  (``refpo_warp.training.train_run``); one TensorBoard writer and checkpoints only at ``save_interval`` and at the run's end,
-  as for a single ``learn``; ``end_chunk`` adds the caller's numbers to the chunk's last progress row;
+  (``refpo_warp.training.train_run``); one TensorBoard writer and checkpoints only at ``save_interval`` and at the
+  run's end, as for a single ``learn``; ``end_chunk`` adds the caller's numbers to the chunk's last progress row;
 - env steps count every env step: a policy step of an action-chunk env (``env_steps_per_step``) is several;
 - multi-process training under torchrun on CUDA (NCCL) and on a CPU (gloo); rsl_rl itself only starts NCCL.
 """

@@ -14,8 +14,8 @@ How to declare the options of a class (algorithm, actor/critic model, env cfg da
         def __init__(self, ..., num_samples: int = 8, mode: str = "fast", clip: float | None = None, **kw): ...
 
 Env cfg dataclasses declare ``option_rules: ClassVar[dict] = {...}`` after their fields; ``EnvCfg.__post_init__``
-checks them. Run options (``configs/default.yaml``) have theirs in ``refpo_warp/config/run_options.py``; classes we do not
-own (rsl_rl's) get theirs through ``register_rules``.
+checks them. Run options (``configs/default.yaml``) have theirs in ``refpo_warp/config/run_options.py``; classes we do
+not own (rsl_rl's) get theirs through ``register_rules``.
 
 The same rules serve:
 - the config resolver (``refpo_warp.config.resolve``), which checks every option when a run's config is resolved, before
@@ -26,7 +26,7 @@ The same rules serve:
   spaces; e.g. hidden sizes). Without ``fixed``, actor and critic options are fixed and all others may change
   (``fixed=False`` frees an actor option such as the number of flow steps).
 
-Subclasses inherit their bases' rules and may replace them. ``tests/test_option_rules.py`` fails for any option
+Subclasses inherit their bases' rules and may replace them. ``tests/utils/test_option_rules.py`` fails for any option
 without a rule, so a new option cannot be forgotten.
 """
 

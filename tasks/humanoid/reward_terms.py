@@ -3,8 +3,8 @@
 ``r = w_pos exp(-k_pos mean dp^2) + w_rot exp(-k_rot mean angle^2) + w_vel exp(-k_vel mean dv^2)
 + w_angvel exp(-k_angvel mean dw^2) - power_coef sum_dof |tau * qdot|``; means over the 24 bodies and, for vectors,
 over x/y/z. Defaults (the reference's): weights 0.5 / 0.3 / 0.1 / 0.1, scales 100 / 10 / 0.1 / 0.1, power 0.0005.
-The terms are computed in one kernel with the termination checks (``tracking_kernels.reward_and_termination_kernel``); each
-step's weighted terms add up to the reward; the base env sums them over each episode, logged as
+The terms are computed in one kernel with the termination checks (``tracking_kernels.reward_and_termination_kernel``);
+each step's weighted terms add up to the reward; the base env sums them over each episode, logged as
 ``Episode_Reward/<term>``.
 """
 

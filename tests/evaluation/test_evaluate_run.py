@@ -1,4 +1,5 @@
-"""What an evaluation keeps: one name per metric in eval.json, and the previous eval.json when tools/eval.py replaces it."""
+"""What an evaluation keeps: one name per metric in eval.json, and the previous eval.json when tools/eval.py replaces
+it."""
 
 import json
 import re

@@ -1,8 +1,8 @@
-"""Run by tests/test_multi_gpu.py under torchrun (not a test itself): one short ReFPO run per rank through
+"""Run by tests/runner/test_multi_gpu.py under torchrun (not a test itself): one short ReFPO run per rank through
 ``refpo_warp.runner.build.build_runner``, twice: with rsl_rl's gradient all-reduce and with it switched off. Each rank
 saves its final actor/critic state, learning rate, device and env seed to ``OUT_DIR/<mode>_rank<r>.pt``.
 
-    torchrun --standalone --nproc_per_node=2 tests/multi_gpu_worker.py OUT_DIR key=value ...
+    torchrun --standalone --nproc_per_node=2 tests/runner/multi_gpu_worker.py OUT_DIR key=value ...
 """
 
 import sys

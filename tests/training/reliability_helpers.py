@@ -1,4 +1,5 @@
-"""Helpers of tests/test_reliability.py: run the tools as a user would (subprocesses), hash files, craft bad files."""
+"""Helpers of tests/training/test_reliability*.py: run the tools as a user would (subprocesses), hash files, craft bad
+files."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Option rules (refpo_warp.utils.option_rules): every option has one, the resolver and the constructors apply the same one."""
+"""Option rules (refpo_warp.utils.option_rules): every option has one, the resolver and the constructors apply the same
+one."""
 
 import dataclasses
 import inspect

@@ -1,5 +1,5 @@
-"""What differs between the supported rsl-rl-lib versions (refpo_warp/utils/rsl_rl_versions.py), checked on the installed
-one: CI runs this file on 5.0.1 (Isaac Lab's pin) and on the newest 5.x."""
+"""What differs between the supported rsl-rl-lib versions (refpo_warp/utils/rsl_rl_versions.py), checked on the
+installed one: CI runs this file on 5.0.1 (Isaac Lab's pin) and on the newest 5.x."""
 
 import copy
 import warnings
