@@ -1,8 +1,9 @@
 #!/usr/bin/env python
-"""The module layers as a picture: python tools/draw_layers.py [out=docs/figures/architecture_layers.png]
+"""The layers as a picture: python tools/draw_layers.py [out=docs/figures/architecture_layers.png]
 
-One band per layer of ``refpo_warp/utils/layering.py`` (top: cli), with its modules; an arrow from a band to a lower one
-carries the number of imports between them, measured from the code (lazy imports included). No arrow goes up.
+One band per layer of ``refpo_warp/utils/layering.py`` (top: cli), with its folders and their module counts; an arrow
+from a band to a lower one carries the number of imports between them, measured from the code (lazy imports
+included). No arrow goes up.
 """
 
 import sys
@@ -19,44 +20,34 @@ def main(argv: list[str]) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from refpo_warp.utils.atomic_files import atomic_write
+    from refpo_warp.utils.atomic_files import save_figure
     from refpo_warp.utils.layering import LAYERS, first_party_modules, import_graph, layer_of, upward_imports
 
     graph = import_graph(first_party_modules())
     edges = Counter((layer_of(m), layer_of(t)) for m, ts in graph.items() for t in ts
                     if layer_of(m) and layer_of(t) and layer_of(m) != layer_of(t))  # fmt: skip
-    names = {layer: sorted({(m.split(".")[1] if m.startswith("refpo_warp.") else "tasks/<family>/" + m.split(".")[-1])
-                            for m in graph if layer_of(m) == layer and m.count(".") <= 2})  # fmt: skip
-             for layer in LAYERS}
-    names["core"] = [n for n in names["core"] if not n.startswith("tasks/")] + ["tasks/<family>/ (env code)"]
-    names["app"] = [n for n in names["app"] if not n.startswith("tasks/")] + ["tasks/<family>/{bench,report}"]
+    counts = Counter(m.split(".")[1] for m in graph if layer_of(m))
+    shown: dict[str, str] = {}
     layers = list(LAYERS)
-    fig, ax = plt.subplots(figsize=(11, 7.5))
-    height, gap = 1.0, 0.55
+    fig, ax = plt.subplots(figsize=(11, 5.6))
+    height, gap = 0.8, 0.45
     y = {layer: (len(layers) - 1 - i) * (height + gap) for i, layer in enumerate(layers)}
     for layer in layers:
-        ax.add_patch(plt.Rectangle((0, y[layer]), 9.6, height, facecolor="#e8eef7", edgecolor="#345"))
+        ax.add_patch(plt.Rectangle((0, y[layer]), 11.6, height, facecolor="#e8eef7", edgecolor="#345"))
         ax.text(0.12, y[layer] + height / 2, layer, fontsize=13, weight="bold", va="center")
-        text = ", ".join(names[layer])
-        lines, line = [], ""
-        for word in text.split(" "):
-            if len(line) + len(word) > 76:
-                lines.append(line)
-                line = ""
-            line += word + " "
-        lines.append(line)
-        ax.text(1.05, y[layer] + height / 2, "\n".join(lines), fontsize=8.5, va="center", family="monospace")
+        text = "   ".join(f"{shown.get(f, f + '/')} {counts[f]}" for f in LAYERS[layer])
+        ax.text(1.3, y[layer] + height / 2, text, fontsize=9.5, va="center", family="monospace")
     for k, ((a, b), count) in enumerate(sorted(edges.items(), key=lambda e: (layers.index(e[0][0]), e[0][1]))):
-        x = 9.9 + 0.42 * k
+        x = 11.9 + 0.42 * k
         ax.annotate("", xy=(x, y[b] + height), xytext=(x, y[a]), arrowprops={"arrowstyle": "->", "color": "#345"})
         ax.text(x + 0.04, (y[a] + y[b] + height) / 2, str(count), fontsize=7.5, rotation=90, va="center")
-    ax.set_xlim(-0.1, 10.0 + 0.42 * len(edges))
+    ax.set_xlim(-0.1, 12.0 + 0.42 * len(edges))
     ax.set_ylim(-0.2, y[layers[0]] + height + 0.2)
     ax.axis("off")
     upward = len(upward_imports(graph))
-    ax.set_title(f"Module layers: imports only go down (arrows: import count between layers; upward: {upward})")
-    with atomic_write(out) as f:
-        fig.savefig(f, format="png", dpi=110, bbox_inches="tight")
+    ax.set_title(f"Layers of refpo_warp (folder/ and its module count; tasks/ installs as refpo_warp.tasks); arrows: imports between layers, downward only (upward: "
+                 f"{upward})", fontsize=10)  # fmt: skip
+    save_figure(fig, out, dpi=110, bbox_inches="tight")
     plt.close(fig)
     print(out)
     return 0

@@ -132,3 +132,35 @@ def test_the_new_task_and_algorithm_train_one_iteration(line_task):
     with pytest.raises(Exception, match="reflow_cap"):  # the option's rule is checked at config time
         train(["task=line", "device=cpu", f"run_dir={line_task / 'bad'}",
                f"algorithm.class_name={__name__}:CappedReflowReFPO", "algorithm.reflow_cap=-1"])  # fmt: skip
+
+
+ALGO_FILE = """# ReFPO with its Reflow term capped per action (refpo_warp/algorithms/capped_reflow.py)
+base: refpo
+algorithm: {class_name: refpo_warp.algorithms:CappedReflowReFPO}
+"""
+
+
+def test_an_algo_file_derived_from_refpo_takes_every_tasks_refpo_settings(tmp_path):
+    """The page's algo file in a copy of configs/ (REFPO_WARP_CONFIGS), explained by tools/train.py in a fresh process;
+    the class is this module's, under the name the page gives it."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    from refpo_warp.utils.paths import CONFIG_DIR, REPO_ROOT
+
+    configs = tmp_path / "configs"
+    shutil.copytree(CONFIG_DIR, configs)
+    (configs / "algo" / "capped_reflow.yaml").write_text(ALGO_FILE.replace("refpo_warp.algorithms:", f"{__name__}:"))
+    env = {**os.environ, "REFPO_WARP_CONFIGS": str(configs),
+           "PYTHONPATH": os.pathsep.join([os.path.dirname(__file__), os.environ.get("PYTHONPATH", "")])}  # fmt: skip
+    proc = subprocess.run([sys.executable, "tools/train.py", "task=gridworld", "algo=capped_reflow", "--explain",
+                           "algorithm.reflow_cap,algorithm.reflow_coef,algorithm.num_mc_samples"],
+                          cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    assert f"algorithm.reflow_cap = 1.0\n  set by  the default of {__name__}.CappedReflowReFPO" in out
+    assert "algorithm.reflow_coef = 0.1\n  set by  configs/task/gridworld.yaml by_algo.refpo" in out.replace(
+        str(configs) + "/", "configs/")  # fmt: skip
+    assert "algorithm.num_mc_samples = 50" in out
