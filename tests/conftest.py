@@ -56,3 +56,15 @@ def pytest_collection_modifyitems(config, items):
 @pytest.fixture
 def tmp_run_dir(tmp_path):
     return tmp_path / "run"
+
+
+# A 3-iteration GridWorld ReFPO run of a few seconds with checkpoints at iterations 0 and 2 (the last): for the tests of
+# what training and evaluation print and write.
+QUICK_RUN = ["task=gridworld", "algo=refpo", "num_envs=8", "runner.num_steps_per_env=16", "max_iterations=3",
+             "algorithm.num_mc_samples=4", "algorithm.num_learning_epochs=1", "runner.save_interval=2",
+             "eval.num_envs=8", "eval.flow_steps=[1, 2]", "eval.interval=0", "device=cpu"]  # fmt: skip
+
+
+@pytest.fixture
+def quick_run() -> list[str]:
+    return list(QUICK_RUN)

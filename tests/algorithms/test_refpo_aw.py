@@ -4,6 +4,7 @@ advantage is positive, blind to negative-advantage samples, and the trajectory v
 import pytest
 import torch
 import torch.nn.functional as F
+from rollouts import random_rollout  # tests/algorithms/rollouts.py
 from rsl_rl.models import MLPModel
 from rsl_rl.storage import RolloutStorage
 from tensordict import TensorDict
@@ -64,13 +65,7 @@ def build(cls, **kwargs):
 
 def rollout(alg, advantages):
     torch.manual_seed(3)
-    gen = torch.Generator().manual_seed(1)
-    with torch.inference_mode():
-        for _ in range(T):
-            obs = TensorDict({"policy": torch.randn(N, OBS, generator=gen)}, batch_size=[N])
-            alg.act(obs)
-            alg.process_env_step(obs, torch.randn(N, generator=gen), torch.zeros(N, dtype=torch.bool), {})
-        alg.compute_returns(obs)
+    random_rollout(alg, T, N, OBS)
     alg.storage.advantages = advantages.reshape(T, N, 1).clone()
 
 

@@ -5,6 +5,7 @@ import math
 
 import pytest
 import torch
+from rollouts import random_rollout  # tests/algorithms/rollouts.py
 from rsl_rl.models import MLPModel
 from rsl_rl.storage import RolloutStorage
 from tensordict import TensorDict
@@ -108,13 +109,7 @@ def make_reinflow(**kwargs):
 
 
 def fill_storage(alg, seed=1):
-    gen = torch.Generator().manual_seed(seed)
-    with torch.inference_mode():
-        for _ in range(T):
-            obs = TensorDict({"policy": torch.randn(N, OBS, generator=gen)}, batch_size=[N])
-            alg.act(obs)
-            alg.process_env_step(obs, torch.randn(N, generator=gen), torch.zeros(N, dtype=torch.bool), {})
-        alg.compute_returns(obs)
+    random_rollout(alg, T, N, OBS, seed)
 
 
 def test_ratio_is_one_at_the_first_minibatch():

@@ -14,14 +14,11 @@ from refpo_warp.utils.paths import REPO_ROOT as ROOT
 
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
 
-QUICK = ["task=gridworld", "algo=refpo", "num_envs=8", "runner.num_steps_per_env=16", "max_iterations=3",
-         "algorithm.num_mc_samples=4", "algorithm.num_learning_epochs=1", "runner.save_interval=2",
-         "eval.num_envs=8", "eval.flow_steps=[1, 2]", "eval.interval=0", "device=cpu"]  # fmt: skip
 RSL_RL_CHATTER = ("Actor Model:", "Critic Model:", "Resolved observation sets", "Storing git diff",
                   "Could not find git repository")  # fmt: skip
 
-def test_one_name_per_metric_in_eval_json(tmp_run_dir):
-    results = train(QUICK + [f"run_dir={tmp_run_dir}"])
+def test_one_name_per_metric_in_eval_json(tmp_run_dir, quick_run):
+    results = train(quick_run + [f"run_dir={tmp_run_dir}"])
     for summary in results["results"].values():
         # success_mean (= success_rate) and reached_top_mean (= top_share x success_rate) are not repeated
         assert set(summary) == {"episodes", "unfinished", "return_mean", "return_std", "length_mean", "success_rate",
@@ -29,8 +26,8 @@ def test_one_name_per_metric_in_eval_json(tmp_run_dir):
         assert abs(summary["top_share"] + summary["bottom_share"] - 1.0) < 1e-9 or summary["success_rate"] == 0.0
 
 
-def test_eval_keeps_the_previous_eval_json_and_says_so(tmp_run_dir):
-    train(QUICK + [f"run_dir={tmp_run_dir}"])
+def test_eval_keeps_the_previous_eval_json_and_says_so(tmp_run_dir, quick_run):
+    train(quick_run + [f"run_dir={tmp_run_dir}"])
     first = (tmp_run_dir / "eval.json").read_text()
     proc = subprocess.run([sys.executable, str(ROOT / "tools" / "eval.py"), f"run_dir={tmp_run_dir}",
                            "eval.flow_steps=[1]"], capture_output=True, text=True, timeout=300)  # fmt: skip

@@ -10,24 +10,21 @@ from refpo_warp.training import train
 
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
 
-QUICK = ["task=gridworld", "algo=refpo", "num_envs=8", "runner.num_steps_per_env=16", "max_iterations=3",
-         "algorithm.num_mc_samples=4", "algorithm.num_learning_epochs=1", "runner.save_interval=2",
-         "eval.num_envs=8", "eval.flow_steps=[1, 2]", "eval.interval=0", "device=cpu"]  # fmt: skip
 RSL_RL_CHATTER = ("Actor Model:", "Critic Model:", "Resolved observation sets", "Storing git diff",
                   "Could not find git repository")  # fmt: skip
 
-def test_rsl_rl_messages_only_with_verbose(tmp_path, capsys):
-    train(QUICK + [f"run_dir={tmp_path / 'quiet'}", "eval.at_end=false"])
+def test_rsl_rl_messages_only_with_verbose(tmp_path, capsys, quick_run):
+    train(quick_run + [f"run_dir={tmp_path / 'quiet'}", "eval.at_end=false"])
     quiet = capsys.readouterr().out
     assert not [m for m in RSL_RL_CHATTER if m in quiet], quiet
-    train(QUICK + [f"run_dir={tmp_path / 'verbose'}", "eval.at_end=false", "verbose=true"])
+    train(quick_run + [f"run_dir={tmp_path / 'verbose'}", "eval.at_end=false", "verbose=true"])
     verbose = capsys.readouterr().out
     assert "Actor Model: FlowActor" in verbose and "Resolved observation sets" in verbose
     assert "Storing git diff" in verbose or "Could not find git repository" in verbose  # in a checkout or not
 
 
-def test_iterations_count_from_zero_everywhere_and_the_run_ends_with_its_summary(tmp_run_dir, capsys):
-    results = train(QUICK + [f"run_dir={tmp_run_dir}"])
+def test_iterations_count_from_zero_everywhere_and_the_run_ends_with_its_summary(tmp_run_dir, capsys, quick_run):
+    results = train(quick_run + [f"run_dir={tmp_run_dir}"])
     out = capsys.readouterr().out
     shown = [int(m) for m in re.findall(r"^\[it (\d+)/2\]", out, flags=re.M)]
     rows = [json.loads(line) for line in (tmp_run_dir / "progress.jsonl").read_text().splitlines()]
