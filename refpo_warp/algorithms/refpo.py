@@ -12,10 +12,19 @@ averaged over pairs; ``log_ratio_clip`` clamps each pair's log-ratio L_old,k - L
 "mean" log-ratio, then lies in [-c, c] as well). The CFM loss (its output mode and scale) is the actor's
 (``refpo_warp.models.flow_actor``), so the ratio and the Reflow term always use the same numbers.
 
+Reflow pairs (``reflow_pairs``): ``independent`` (the paper's, the default) computes the Reflow term on the ratio's
+own pairs; ``coupled`` (ours, ``docs/algorithms.md``) pairs each action a with the initial noise eps_0 its rollout
+sample was integrated from (before any post-sample perturbation, which the stored action includes) and regresses
+v(x_tau, tau) onto a - eps_0 at x_tau = (1 - tau) eps_0 + tau a, at the stored tau_k: the rectified flow's Reflow,
+which straightens the sampler's own paths. The ratio keeps its independent pairs either way. The coefficient lambda
+is fixed or adapted to the one-step consistency (``reflow_schedule``, ``refpo_warp/algorithms/reflow_schedule.py``).
+
 Diagnostics (``Flow/...``, paper §4.2 and Appendix C): ``explosion_rate`` is the fraction of actions whose
 log-ratio mean_k (L_old,k - L_new,k) exceeds ``explosion_threshold`` in magnitude (the paper's "Explosion" /
 "Ratio Expl."), ``explosion_rate_pair`` the same per (tau, eps) pair; ``straightness_error`` the mean of
-|v - (a - eps)|^2 on the stored pairs; ``ratio_mean``, ``ratio_max``, ``clip_fraction``, ``approx_kl``.
+|v - (a - eps)|^2 on the stored pairs; ``ratio_mean``, ``ratio_max``, ``clip_fraction``, ``approx_kl``; per update,
+on ``one_step_states`` states of the rollout, ``one_step_error``, ``policy_spread`` and ``one_step_ratio``
+(``refpo_warp/models/flow_diagnostics.py``, in the env's action space) and the ``reflow_coef`` used.
 """
 
 from __future__ import annotations
@@ -27,11 +36,16 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm, soft_bound_loss
+from refpo_warp.algorithms.reflow_schedule import REFLOW_SCHEDULES, ReflowSchedule, coefficient_range
 from refpo_warp.models.flow_actor import OUTPUT_MODES, cfm_loss
-from refpo_warp.utils.option_rules import Int, OneOf, Real
+from refpo_warp.models.flow_diagnostics import one_step_consistency
+from refpo_warp.utils.option_rules import Check, Int, OneOf, Real
+from refpo_warp.utils.rsl_rl_versions import uncompiled
 
 TAU_SAMPLING = ("uniform", "discrete", "logit_normal")
 RATIO_MODES = ("mean", "per_sample")
+REFLOW_PAIRS = ("independent", "coupled")
+DIAGNOSTIC_SEED_OFFSET = 7919  # the diagnostics' own random stream: they never move the training's
 
 
 def sample_tau(shape: tuple[int, ...], mode: str, num_flow_steps: int, logit_mean: float, logit_std: float,
@@ -63,6 +77,11 @@ class ReFPO(OnPolicyAlgorithm):
         ratio_mode: ``"mean"`` (average the K losses before the exp) or ``"per_sample"``.
         log_ratio_clip: Clamp for the log-ratio (None: no clamp).
         explosion_threshold: |log-ratio| above which an action (or pair) counts towards the Explosion Rate.
+        reflow_pairs: ``"independent"`` (the paper's) or ``"coupled"`` (the rollout's (eps_0, a); module docstring).
+        reflow_schedule: ``"fixed"`` lambda (the paper's) or ``"adaptive"`` (``reflow_schedule.py``).
+        one_step_target: The one-step ratio the adaptive schedule steers towards.
+        reflow_coef_range: [min, max] of the adaptive lambda.
+        one_step_states: Rollout states of the per-update one-step diagnostic (0: off; the adaptive schedule needs it).
     """
 
     option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
@@ -75,6 +94,11 @@ class ReFPO(OnPolicyAlgorithm):
         "ratio_mode": OneOf(RATIO_MODES),
         "log_ratio_clip": Real(0, 100, lo_open=True, optional=True),
         "explosion_threshold": Real(0, None, lo_open=True),
+        "reflow_pairs": OneOf(REFLOW_PAIRS),
+        "reflow_schedule": OneOf(REFLOW_SCHEDULES),
+        "one_step_target": Real(0, None, lo_open=True),
+        "reflow_coef_range": Check(coefficient_range, "[min, max] with 0 <= min <= max"),
+        "one_step_states": Int(0, 1_000_000),
     }
 
     def __init__(
@@ -91,6 +115,11 @@ class ReFPO(OnPolicyAlgorithm):
         ratio_mode: str = "mean",
         log_ratio_clip: float | None = None,
         explosion_threshold: float = 3.0,
+        reflow_pairs: str = "independent",
+        reflow_schedule: str = "fixed",
+        one_step_target: float = 0.25,
+        reflow_coef_range: tuple[float, float] = (0.01, 0.2),
+        one_step_states: int = 256,
         clip_param: float = 0.05,
         learning_rate: float = 3e-4,
         schedule: str = "fixed",
@@ -123,6 +152,22 @@ class ReFPO(OnPolicyAlgorithm):
         self.ratio_mode = ratio_mode
         self.log_ratio_clip = None if log_ratio_clip is None else float(log_ratio_clip)
         self.explosion_threshold = float(explosion_threshold)
+        self.reflow_pairs = reflow_pairs
+        self.reflow_schedule = ReflowSchedule(reflow_schedule, one_step_target, reflow_coef_range)
+        self.reflow_coef = self.reflow_schedule.start(self.reflow_coef)
+        self.one_step_states = int(one_step_states)
+        if reflow_schedule == "adaptive" and not self.one_step_states:
+            raise ValueError("reflow_schedule='adaptive' needs the one-step diagnostic: set one_step_states > 0")
+        self.action_transform: str | None = None  # the env's (construct_algorithm): the diagnostic's action space
+        self.diagnostic_generator = torch.Generator().manual_seed(torch.initial_seed() + DIAGNOSTIC_SEED_OFFSET)
+        self.one_step: dict[str, float] = {}
+
+    @classmethod
+    def construct_algorithm(cls, obs: TensorDict, env, cfg: dict, device: str) -> ReFPO:
+        """rsl_rl's construction; the one-step diagnostic measures actions as the env applies them."""
+        alg = super().construct_algorithm(obs, env, cfg, device)
+        alg.action_transform = getattr(getattr(env, "cfg", None), "action_transform", None)
+        return alg
 
     # ---------------------------------------------------------------------------------------------- rollout
     def sample_pairs(self, batch: int, device) -> tuple[torch.Tensor, torch.Tensor]:
@@ -137,6 +182,8 @@ class ReFPO(OnPolicyAlgorithm):
         n = actions.shape[0]
         tau, eps = self.sample_pairs(n, actions.device)
         self.store.write(self.storage.step, tau=tau, eps=eps)
+        if self.reflow_pairs == "coupled":  # the x_0 this action was integrated from
+            self.store.write(self.storage.step, eps0=uncompiled(self, "actor")._last_noise)
         t = self.transition
         t.actions = actions
         t.values = self.critic(obs).detach()
@@ -168,11 +215,33 @@ class ReFPO(OnPolicyAlgorithm):
         return torch.max(unclipped, clipped).mean()
 
     def reflow_loss(self, new_loss: torch.Tensor, batch: Minibatch) -> torch.Tensor:
-        """The Reflow term: the CFM loss of the current parameters on the stored pairs, un-weighted."""
+        """The Reflow term: the CFM loss of the current parameters on the Reflow pairs, un-weighted."""
         return new_loss.mean()
+
+    def reflow_pair_losses(self, batch: Minibatch, tau: torch.Tensor, eps: torch.Tensor, new_loss: torch.Tensor):
+        """CFM losses (B, K) of the Reflow pairs: the ratio's (independent), or the rollout's (eps_0, a) at each
+        tau_k (coupled)."""
+        if self.reflow_pairs == "independent":
+            return new_loss
+        eps0 = batch.field("eps0").unsqueeze(1).expand_as(eps)
+        return self.cfm_losses(batch.observations, batch.actions, tau, eps0)[0]
+
+    def measure_one_step(self) -> None:
+        """The one-step diagnostic on ``one_step_states`` states of this rollout (its own random stream), then the
+        coefficient of the coming update."""
+        if not self.one_step_states:
+            return
+        obs = self.storage.observations.flatten(0, 1)
+        gen = self.diagnostic_generator
+        rows = torch.randperm(obs.shape[0], generator=gen)[: self.one_step_states].to(obs.device)
+        actor = uncompiled(self, "actor")
+        self.one_step = one_step_consistency(actor, obs[rows], actor.num_flow_steps, self.action_transform,
+                                             generator=gen)  # fmt: skip
+        self.reflow_coef = self.reflow_schedule.step(self.reflow_coef, self.one_step["one_step_ratio"])
 
     def before_update(self, chunk: int = 65536) -> None:
         """Store the old CFM losses under the current (= rollout) parameters, before any gradient step."""
+        self.measure_one_step()
         obs = self.storage.observations.flatten(0, 1)
         actions = self.storage.actions.flatten(0, 1)
         tau, eps = self.store.flat("tau"), self.store.flat("eps")
@@ -187,7 +256,7 @@ class ReFPO(OnPolicyAlgorithm):
         log_rho = self.log_ratio(old_loss, new_loss)
         ratio = torch.exp(log_rho)
         surrogate = self.surrogate_loss(ratio, batch.advantages)
-        reflow = self.reflow_loss(new_loss, batch)
+        reflow = self.reflow_loss(self.reflow_pair_losses(batch, tau, eps, new_loss), batch)
         loss = surrogate + self.reflow_coef * reflow
         stats = {"surrogate": surrogate, "reflow": reflow}
         if self.bound_coef > 0:
@@ -213,3 +282,24 @@ class ReFPO(OnPolicyAlgorithm):
 
     def kl_estimate(self, stats: dict[str, torch.Tensor]) -> torch.Tensor | None:
         return stats.get("Flow/approx_kl")
+
+    def update(self) -> dict[str, float]:
+        out = super().update()
+        out.update({f"Flow/{k}": v for k, v in self.one_step.items()})
+        out["Flow/reflow_coef"] = self.reflow_coef
+        return out
+
+    # ---------------------------------------------------------------------------------------------- checkpoints
+    def save(self) -> dict:
+        saved = super().save()
+        saved["reflow_coef"] = self.reflow_coef  # the adaptive schedule's state, and its random stream
+        saved["diagnostic_rng"] = self.diagnostic_generator.get_state()
+        return saved
+
+    def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
+        out = super().load(loaded_dict, load_cfg, strict)
+        if "reflow_coef" in loaded_dict and self.reflow_schedule.mode == "adaptive":
+            self.reflow_coef = float(loaded_dict["reflow_coef"])
+        if isinstance(loaded_dict.get("diagnostic_rng"), torch.Tensor):
+            self.diagnostic_generator.set_state(loaded_dict["diagnostic_rng"])
+        return out

@@ -14,6 +14,8 @@ from __future__ import annotations
 import importlib
 from functools import partial
 
+import torch
+
 from refpo_warp.envs.registry import get_task, make_env, make_env_cfg
 from refpo_warp.evaluation.episodes import run_episodes, summarize
 from refpo_warp.utils.device import resolve_device
@@ -89,8 +91,9 @@ def tau_sampler(alg):
                    logit_mean=alg.tau_logit_mean, logit_std=alg.tau_logit_std, device="cpu")  # fmt: skip
 
 
-def flow_diagnostics(alg, actor, observations) -> dict:
-    """Straightness Error and Jacobian statistics on on-policy observations (for actors that define them)."""
+def flow_diagnostics(alg, actor, observations, action_transform: str | None, seed: int) -> dict:
+    """Straightness Error, one-step consistency (in the env's action space, from a random stream of its own seeded
+    by ``seed``) and Jacobian statistics on on-policy observations, for the actors that define them."""
     from refpo_warp.models import flow_diagnostics as fd
 
     out: dict = {}
@@ -99,5 +102,9 @@ def flow_diagnostics(alg, actor, observations) -> dict:
     if hasattr(actor, "cfm_terms"):
         out["straightness_error_eval"] = fd.straightness_error(actor, observations, tau_sampler(alg))
     if hasattr(actor, "velocity") and hasattr(actor.velocity, "project_obs"):
+        generator = torch.Generator().manual_seed(seed)
+        one_step = fd.one_step_consistency(actor, observations, actor.num_flow_steps, action_transform,
+                                           generator=generator)  # fmt: skip
+        out.update({f"{k}_eval": v for k, v in one_step.items()})
         out.update(fd.jacobian_statistics(actor, observations, num_steps=actor.num_flow_steps))
     return out

@@ -3,8 +3,10 @@
 
 ``eval.json`` diagnostics of flow policies: the training-time means over the run of the per-update values logged in
 ``progress.jsonl`` (``straightness_error``, ``explosion_rate`` = the paper's "Explosion" / "Ratio Expl.",
-``explosion_rate_pair``, ``clip_fraction``; ``ratio_max`` is the run's maximum), and, on observations visited by the
-evaluated policy, ``straightness_error_eval`` and the Jacobian statistics (``refpo_warp/models/flow_diagnostics.py``).
+``explosion_rate_pair``, ``clip_fraction``, ``one_step_error``, ``one_step_ratio``; ``ratio_max`` is the run's
+maximum), and, on observations visited by the evaluated policy, ``straightness_error_eval``, the one-step consistency
+(``one_step_error_eval``, ``policy_spread_eval``, ``one_step_ratio_eval``) and the Jacobian statistics
+(``refpo_warp/models/flow_diagnostics.py``).
 An existing ``eval.json`` is kept as ``eval.prev.json`` before the new one is written (both writes atomic).
 """
 
@@ -28,7 +30,8 @@ from refpo_warp.utils.atomic_files import write_json, write_text
 from refpo_warp.utils.errors import ConfigError
 
 DIAGNOSTIC_OBSERVATIONS = 1024  # on-policy observations kept from the evaluation for the flow diagnostics
-TRAINING_MEANS = ("straightness_error", "explosion_rate", "explosion_rate_pair", "clip_fraction")
+TRAINING_MEANS = ("straightness_error", "explosion_rate", "explosion_rate_pair", "clip_fraction", "one_step_error",
+                  "one_step_ratio")
 EVAL_FILE, PREVIOUS_EVAL_FILE = "eval.json", "eval.prev.json"
 
 
@@ -97,7 +100,8 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         "protocol": ({"initial_noise": cfg["eval"]["initial_noise"], "perturbation": bool(cfg["eval"]["perturbation"])}
                      if flow else {"mean_action": True}),  # fmt: skip
         "results": results,
-        "diagnostics": ({**training_diagnostics(run_dir), **flow_diagnostics(runner.alg, actor, visited)}
+        "diagnostics": ({**training_diagnostics(run_dir),
+                         **flow_diagnostics(runner.alg, actor, visited, env.cfg.action_transform, cfg["seed"])}
                         if flow else {}),
     }
     out["figures"] = [str(p) for p in run_figures(run_dir, actor, cfg)]

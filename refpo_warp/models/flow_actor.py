@@ -137,6 +137,7 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
         if perturbation and self.action_noise_std > 0:
             actions = actions + self.action_noise_std * torch.randn_like(actions)
         self._last_actions = actions.detach()
+        self._last_noise = noise.detach()  # x_0 of each action: the coupled Reflow pairs it with the action
         return actions
 
     def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False,

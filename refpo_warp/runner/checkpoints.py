@@ -20,6 +20,7 @@ from typing import Any
 import torch
 
 from refpo_warp.utils.errors import CheckpointError
+from refpo_warp.utils.rsl_rl_versions import uncompiled
 
 CHECKPOINT_PATTERN = re.compile(r"^model_(\d+)\.pt$")
 REQUIRED_KEYS = ("actor_state_dict", "critic_state_dict", "optimizer_state_dict", "iter")
@@ -95,7 +96,7 @@ def check_fits(path: str | Path, data: dict, alg, task: str | None = None, algo:
     for name, expected in (("task", task), ("algo", algo)):
         if expected is not None and meta.get(name) is not None and meta[name] != expected:
             raise CheckpointError(f"{path}: written by a run with {name}={meta[name]}; this run has {name}={expected}")
-    for key, model in (("actor_state_dict", _raw(alg, "actor")), ("critic_state_dict", _raw(alg, "critic"))):
+    for key, model in (("actor_state_dict", uncompiled(alg, "actor")), ("critic_state_dict", uncompiled(alg, "critic"))):
         have = {k: tuple(v.shape) for k, v in model.state_dict().items()}
         got = {k: tuple(v.shape) for k, v in data[key].items()}
         problems = [f"'{k}' missing" for k in have if k not in got]
@@ -108,12 +109,6 @@ def check_fits(path: str | Path, data: dict, alg, task: str | None = None, algo:
                 f"{path}: does not fit this run's {key.split('_')[0]} network: {'; '.join(problems[:3])}{more}. "
                 f"Was it written by another task or network size?"
             )
-
-
-def _raw(alg, name: str):
-    """The uncompiled model (rsl_rl >= 5.5 keeps it as ``_raw_<name>``; older versions have only ``<name>``)."""
-    raw = getattr(alg, f"_raw_{name}", None)
-    return raw if raw is not None else getattr(alg, name)
 
 
 def apply_checkpoint(runner, path: str | Path, data: dict, load_cfg: dict | None = None, strict: bool = True) -> None:

@@ -5,7 +5,9 @@ Per run (``eval.json``, the project's shared format):
   a Gaussian policy's ``results["mean_action"].return_mean``;
 - 1-step reward: ``results["N=1"].return_mean``;
 - Straightness: ``diagnostics.straightness_error``; Explosion and Ratio Expl.: ``diagnostics.explosion_rate``
-  (per action, the paper's number); Jac. Expl., Mean Jac. Norm, Jac. Norm P95: ``diagnostics.jacobian_*``.
+  (per action, the paper's number); Jac. Expl., Mean Jac. Norm, Jac. Norm P95: ``diagnostics.jacobian_*``;
+- 1-step Err. (ours): ``diagnostics.one_step_error_eval``, E|T(a_1) - T(a_N)|^2 with shared noise on the final
+  policy's evaluation states, and 1-step Ratio its ratio to the policy's spread (``one_step_ratio_eval``).
 A number a run does not have (e.g. PPO's diagnostics) is left out and prints as ``--``.
 
 Aggregation (``AGGREGATION`` says it in the reports): the method table pools all finished (task, seed) runs of a
@@ -29,6 +31,8 @@ METRIC_TITLES = {
     "return_1": "1-step Reward",
     "straightness": "Straightness",
     "explosion": "Explosion",
+    "one_step": "1-step Err.",
+    "one_step_ratio": "1-step Ratio",
     "jac_expl": "Jac. Expl.",
     "ratio_expl": "Ratio Expl.",
     "jac_norm_mean": "Mean Jac. Norm",
@@ -37,12 +41,14 @@ METRIC_TITLES = {
 DIAGNOSTIC_KEYS = {
     "straightness": "straightness_error",
     "explosion": "explosion_rate",
+    "one_step": "one_step_error_eval",
+    "one_step_ratio": "one_step_ratio_eval",
     "jac_expl": "jacobian_explosion_rate",
     "ratio_expl": "explosion_rate",
     "jac_norm_mean": "jacobian_norm_mean",
     "jac_norm_p95": "jacobian_norm_p95",
 }
-MAIN_METRICS = ("return_multi", "return_1", "straightness", "explosion")
+MAIN_METRICS = ("return_multi", "return_1", "straightness", "explosion", "one_step", "one_step_ratio")
 APPENDIX_C_METRICS = ("jac_expl", "ratio_expl", "jac_norm_mean", "jac_norm_p95")
 AGGREGATION = (
     "Each method cell pools the method's finished (task, seed) runs: mean over them ± population standard deviation "
@@ -56,7 +62,9 @@ SOURCES_MAIN = (
     "Sources per run (`eval.json`): 10-step Reward = `results[\"N=<largest N>\"].return_mean` (Gaussian policies: "
     "`results[\"mean_action\"]`; `(N=4)` marks a multi-step N other than 10), 1-step Reward = "
     "`results[\"N=1\"].return_mean`, Straightness = `diagnostics.straightness_error`, Explosion = "
-    "`diagnostics.explosion_rate`."
+    "`diagnostics.explosion_rate`; 1-step Err. (ours, not in the paper) = `diagnostics.one_step_error_eval`, the "
+    "mean squared gap between the 1-step and the N-step action from the same noise in the env's action space on the "
+    "final policy's states, and 1-step Ratio = that gap over the policy's spread (`one_step_ratio_eval`)."
 )
 SOURCES_APPENDIX_C = (
     "Means over the same runs as above (std in `appendix_c.csv`). Sources: `diagnostics.jacobian_explosion_rate`, "
@@ -191,7 +199,7 @@ def main_markdown(rows: list[dict]) -> str:
         s = row["stats"]
         body.append([row["name"], _runs_cell(row["records"]),
                      fmt_stat(s["return_multi"]) + (_multi_note(row["records"]) if s["return_multi"].n else ""),
-                     fmt_stat(s["return_1"]), fmt_stat(s["straightness"], False), fmt_stat(s["explosion"], False)])
+                     fmt_stat(s["return_1"])] + [fmt_stat(s[m], False) for m in MAIN_METRICS[2:]])
     return markdown_table(header, body)
 
 

@@ -16,6 +16,8 @@ Found by diffing the installed 5.0.1 (Isaac Lab's pin) and 5.5.1 packages:
   ``distribution_cfg``); callers hand it copies.
 - The logger takes a ``{"class_name": ...}`` writer dict from 5.4 on; 5.0.x knows only the strings
   ``"tensorboard"``, ``"wandb"`` and ``"neptune"``.
+- From 5.5 on, PPO keeps the uncompiled actor and critic as ``_raw_actor`` / ``_raw_critic`` beside the (possibly
+  ``torch.compile``d) ``actor`` / ``critic``; older versions have only those (``uncompiled``).
 
 The runner (``_configure_multi_gpu``, ``learn``, ``save``/``load``), the rollout storage and the model protocol
 that refpo_warp relies on are the same across the range.
@@ -71,3 +73,9 @@ def split_learn_std(distribution_cfg: dict | None) -> tuple[dict | None, bool]:
         return distribution_cfg, True
     cfg = dict(distribution_cfg)
     return cfg, bool(cfg.pop("learn_std"))
+
+
+def uncompiled(alg, name: str):
+    """The algorithm's model ``name`` (``actor`` or ``critic``) without ``torch.compile``'s wrapper (see above)."""
+    raw = getattr(alg, f"_raw_{name}", None)
+    return raw if raw is not None else getattr(alg, name)
