@@ -65,7 +65,14 @@ def _explain(command: str, args: list[str], keys: list[str]) -> None:
     print(explain(resolve(flat), keys or None), flush=True)
 
 
-COMMANDS = {"train": _train, "eval": _eval}
+def _play(args: list[str]) -> None:
+    from refpo_warp.cli.play import play
+
+    for path in play(args):
+        print(f"{path}  ({path.stat().st_size / 1024:.0f} KiB)", flush=True)
+
+
+COMMANDS = {"train": _train, "eval": _eval, "play": _play}
 
 
 def _explain_keys(args: list[str]) -> tuple[list[str], list[str] | None]:

@@ -3,7 +3,8 @@
 Exit codes: 0 done; 1 unexpected error (the message, and the file holding the full traceback); 2 invalid command
 line or config (bad option value, unknown key, a resume that would change the run, a run dir that cannot be used);
 3 training stopped on a non-finite loss; 4 an input file is missing, damaged or refused (checkpoint, motion file,
-saved config, progress log); 5 the system refused (disk full, permission denied, out of memory); 130 interrupted.
+saved config, progress log); 5 the system refused (disk full, permission denied, out of memory, no OpenGL platform
+for rendering); 130 interrupted.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import traceback
 from collections.abc import Callable
 from pathlib import Path
 
-from refpo_warp.utils.errors import ConfigError, DataFileError, NonFiniteLossError
+from refpo_warp.utils.errors import ConfigError, DataFileError, NonFiniteLossError, SystemRefusedError
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_USAGE, EXIT_NONFINITE, EXIT_BAD_FILE, EXIT_SYSTEM = 0, 1, 2, 3, 4, 5
 EXIT_INTERRUPTED = 130
@@ -38,6 +39,8 @@ def run_guarded(fn: Callable[[], object]) -> int:
         kept = f" (newest: {latest})" if latest else ""
         message = f"interrupted; checkpoints written so far are intact{kept}; resume=true continues"
         return _fail(message, EXIT_INTERRUPTED)
+    except SystemRefusedError as err:
+        return _fail(f"error: {err}", EXIT_SYSTEM)
     except MemoryError:
         return _fail("error: out of memory; lower num_envs, runner.num_steps_per_env or the network sizes", EXIT_SYSTEM)
     except OSError as err:

@@ -16,7 +16,7 @@ from typing import Any
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, unknown
 
-__all__ = ["get_task", "list_tasks", "make_env", "make_env_cfg", "register_task", "task_families"]
+__all__ = ["family_module", "get_task", "list_tasks", "make_env", "make_env_cfg", "register_task", "task_families"]
 
 TASK_ROOT = "refpo_warp.tasks"  # the package whose subpackages are the task families (the repository's tasks/)
 
@@ -60,6 +60,18 @@ def get_task(task_id: str) -> TaskSpec:
     if task_id not in _TASKS:
         raise unknown("task", task_id, _TASKS)
     return _TASKS[task_id]
+
+
+def family_module(task_id: str, name: str):
+    """The optional module ``name`` of the task's family (``refpo_warp.tasks.<family>.<name>``, e.g. ``evaluation`` or
+    ``render``), or None where the family has none."""
+    family = get_task(task_id).entry_point.split(":")[0].rsplit(".", 1)[0]
+    try:
+        return importlib.import_module(f"{family}.{name}")
+    except ModuleNotFoundError as err:
+        if err.name != f"{family}.{name}":
+            raise
+        return None
 
 
 def make_env_cfg(task_id: str, **overrides: Any):

@@ -11,12 +11,11 @@ Gaussian actor once, with its mean action. A task family may add ``refpo_warp/ta
 
 from __future__ import annotations
 
-import importlib
 from functools import partial
 
 import torch
 
-from refpo_warp.envs.registry import get_task, make_env, make_env_cfg
+from refpo_warp.envs.registry import family_module, get_task, make_env, make_env_cfg
 from refpo_warp.evaluation.episodes import run_episodes, summarize
 from refpo_warp.utils.device import resolve_device
 
@@ -29,13 +28,7 @@ def is_flow(actor) -> bool:
 
 def family_evaluation(task: str):
     """The task family's optional evaluation module (``refpo_warp.tasks.<family>.evaluation``) or None."""
-    family = get_task(task).entry_point.split(":")[0].rsplit(".", 1)[0]
-    try:
-        return importlib.import_module(f"{family}.evaluation")
-    except ModuleNotFoundError as err:
-        if err.name != f"{family}.evaluation":
-            raise
-        return None
+    return family_module(task, "evaluation")
 
 
 def make_policy(actor, flow_steps: int | None, initial_noise: str = "random", perturbation: bool = False):

@@ -1,7 +1,8 @@
 """Error types and the 'did you mean' helper shared by configs, the task registry and data loaders.
 
 Every foreseeable failure is one of these types; ``refpo_warp.cli.guard`` maps each to a message and an exit code
-(``docs/cli.md``): ``ConfigError`` 2, ``NonFiniteLossError`` 3, ``DataFileError`` (and its subclasses) 4.
+(``docs/cli.md``): ``ConfigError`` 2, ``NonFiniteLossError`` 3, ``DataFileError`` (and its subclasses) 4,
+``SystemRefusedError`` 5.
 """
 
 from __future__ import annotations
@@ -22,6 +23,10 @@ class NonFiniteLossError(FloatingPointError):
 
 class DataFileError(ValueError):
     """An input file (checkpoint, motion, saved config, progress log) is unreadable or invalid; names the file."""
+
+
+class SystemRefusedError(RuntimeError):
+    """The machine lacks what a command needs (e.g. an OpenGL platform for rendering); the message says what."""
 
 
 class MotionDataError(DataFileError):

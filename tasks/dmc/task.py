@@ -45,6 +45,10 @@ class DmcTask:
     substeps: ClassVar[int]  # physics steps per control step (Playground ctrl_dt / sim_dt)
     num_obs: ClassVar[int]
     num_actions: ClassVar[int]
+    render_camera: ClassVar[str] = "fixed"  # refpo_warp/render: "fixed", "track" (track_body) or a camera of the file
+    track_body: ClassVar[str | None] = None
+    render_view: ClassVar[tuple[float, float]] = (-20.0, 90.0)  # camera elevation, azimuth (deg): the x-z plane
+    render_distance: ClassVar[float | None] = None  # of the camera; None: from the size of the model's geoms
 
     def __init__(self, sim: MuJoCoWorlds, cfg, rng) -> None:
         self.sim = sim
@@ -93,3 +97,8 @@ class DmcTask:
     def observe(self, obs, reset_mask) -> None:
         """Write the observation of every env; ``reset_mask`` marks envs whose state was just re-initialised."""
         raise NotImplementedError
+
+    def render_mocap(self, i: int) -> np.ndarray | None:
+        """Env i's mocap body positions (nmocap, 3) for its frames, where the task keeps per-env state that the file
+        shows as a mocap body (a target); None: the file's."""
+        return None

@@ -62,6 +62,7 @@ def cheetah_obs(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=flo
 
 
 class CheetahRun(DmcTask):
+    render_camera, track_body = "track", "torso"
     model_file = "cheetah.xml"
     substeps = 1  # ctrl_dt = sim_dt = 0.01
     num_obs = 17

@@ -37,6 +37,7 @@ def point_mass_obs(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=
 
 
 class PointMass(DmcTask):
+    render_view, render_distance = (-90.0, 90.0), 1.1  # planar in x-y: the whole arena seen from above
     model_file = "point_mass.xml"
     substeps = 1  # ctrl_dt = sim_dt = 0.02
     num_obs = 4

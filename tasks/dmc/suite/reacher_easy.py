@@ -8,6 +8,7 @@ position radius * (sin, cos). The target is a mocap body in the file; each env k
 
 from __future__ import annotations
 
+import numpy as np
 import warp as wp
 
 from refpo_warp.tasks.dmc.rewards import GAUSSIAN, tolerance
@@ -80,6 +81,7 @@ def reacher_obs(
 
 
 class ReacherEasy(DmcTask):
+    render_view, render_distance = (-90.0, 90.0), 1.1  # planar in x-y: the whole arena seen from above
     model_file = "reacher_easy.xml"
     substeps = 4  # ctrl_dt 0.02, sim_dt 0.005
     num_obs = 6
@@ -103,3 +105,6 @@ class ReacherEasy(DmcTask):
     def observe(self, obs, reset_mask) -> None:
         v = self.views
         self.launch(reacher_obs, [v.joint_q, v.joint_qd, v.body_q, self.target, self.finger, obs])
+
+    def render_mocap(self, i: int) -> np.ndarray:
+        return np.array([[*self.target.numpy()[i], 0.01]], dtype=np.float64)  # the target body at its height

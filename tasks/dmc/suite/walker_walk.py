@@ -63,6 +63,7 @@ def walker_obs(
 
 
 class WalkerWalk(DmcTask):
+    render_camera, track_body = "track", "torso"
     model_file = "walker.xml"
     substeps = 10  # ctrl_dt 0.025, sim_dt 0.0025
     num_obs = 24

@@ -1,0 +1,133 @@
+"""Recording what a policy does: episodes of the task's env drawn frame by frame (``refpo_warp/render``, the family's
+``render.py``), one panel per flow-step count N side by side from the same initial states, several envs tiled in each
+panel, each env's return so far written on it; saved as MP4 and/or GIF under ``<run dir>/videos/``.
+
+The caller's random streams are left as they were (a recording during training changes nothing in the run): the
+envs are seeded by ``VideoOptions.seed`` and every panel samples its noise from the same reseeded stream.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from refpo_warp.envs.registry import family_module, make_env
+from refpo_warp.render.frames import overlay, tile
+from refpo_warp.render.options import VideoOptions
+from refpo_warp.render.video import write_video
+from refpo_warp.utils.errors import ConfigError
+
+MAX_FPS = 30.0
+VIDEO_DIR = "videos"
+
+
+@contextlib.contextmanager
+def preserved_random_state() -> Iterator[None]:
+    """Leave torch's and numpy's global random streams as they were before the block."""
+    torch_state, numpy_state = torch.get_rng_state(), np.random.get_state()
+    try:
+        yield
+    finally:
+        torch.set_rng_state(torch_state)
+        np.random.set_state(numpy_state)
+
+
+def frame_source(task: str, env, options: VideoOptions):
+    """The task family's frames of ``env`` (its ``render.py``); a clear error for a family that has none."""
+    module = family_module(task, "render")
+    if module is None:
+        raise ConfigError(f"task {task!r} has no frames to record: its family has no render.py")
+    inner = getattr(env, "env", env)  # an action-chunk wrapper's env
+    return module.frame_source(inner, options.width, options.height, camera=options.camera, shadows=options.shadows,
+                               reference=options.reference)  # fmt: skip
+
+
+def record_panel(task: str, env_options: dict, device: str, make_policy: Callable, label: str, options: VideoOptions,
+                 seed: int) -> tuple[list[np.ndarray], float]:  # fmt: skip
+    """(frames, frames per second) of one panel: ``options.num_envs`` envs tiled, from their first reset until each ended its first
+    episode (or ``options.length`` env steps), every k-th env step drawn (k from the real-time rate and the fps)."""
+    env = make_env(task, num_envs=options.num_envs, device=device, seed=seed, **env_options)
+    policy = make_policy(env)
+    source = frame_source(task, env, options)
+    try:
+        step_hz = source.control_hz / getattr(env, "env_steps_per_step", 1)
+        every = max(1, math.ceil(step_hz / (options.fps or MAX_FPS)))
+        limit = options.length or int(env.max_episode_length)
+        n = env.num_envs
+        returns = torch.zeros(n)
+        finished = torch.zeros(n, dtype=torch.bool)
+        last: list[np.ndarray | None] = [None] * n
+        frames = []
+        torch.manual_seed(seed)
+        obs = env.reset()
+        for step in range(limit):
+            if step % every == 0:
+                for i in range(n):
+                    if not finished[i]:
+                        image, lines = source.frame(i)
+                        last[i] = overlay(image, [f"{label}  return {float(returns[i]):.1f}", *lines])
+                frames.append(tile([f for f in last if f is not None]))
+            with torch.inference_mode():
+                obs, rewards, dones, _ = env.step(policy(obs))
+            returns += torch.where(finished, 0.0, rewards.cpu())
+            finished |= dones.cpu()
+            if options.length is None and bool(finished.all()):
+                break
+        for i in range(n):  # the last frame of each env shows its final return
+            if last[i] is not None:
+                lines = [f"{label}  return {float(returns[i]):.1f}"]
+                last[i] = overlay(last[i], lines)
+        frames.append(tile([f for f in last if f is not None]))
+        return frames, step_hz / every
+    finally:
+        source.close()
+
+
+def side_by_side(panels: list[list[np.ndarray]]) -> list[np.ndarray]:
+    """One frame per time step with the panels next to each other; a panel that ended holds its last frame."""
+    length = max(len(p) for p in panels)
+    return [tile([p[min(t, len(p) - 1)] for p in panels], columns=len(panels)) for t in range(length)]
+
+
+def record(task: str, env_options: dict, device: str, policies: dict[str, Callable], options: VideoOptions,
+           out_dir: Path, name: str, seed: int) -> list[Path]:  # fmt: skip
+    """Record one panel per policy (label -> a function of the env giving the obs -> actions function), side by
+    side; returns the files written."""
+    with preserved_random_state():
+        recorded = [record_panel(task, env_options, device, policy, label, options, seed)
+                    for label, policy in policies.items()]  # fmt: skip
+    frames = side_by_side([panel for panel, _ in recorded])
+    fps = recorded[0][1]
+    name = options.name or name
+    return [write_video(frames, Path(out_dir) / f"{name}.{fmt}", fps) for fmt in options.formats()]
+
+
+def policy_panels(cfg: dict, actor, options: VideoOptions) -> tuple[dict[str, Callable], str]:
+    """The panels of a run's policy under its evaluation protocol (label -> env -> policy) and a name tag: one per flow-step
+    count N (``options.flow_steps``, else the first of ``eval.flow_steps``), or the Gaussian's mean action."""
+    from refpo_warp.evaluation.evaluate_policy import is_flow, make_policy
+
+    if not is_flow(actor):
+        return {"mean action": lambda env: make_policy(actor, None)}, "mean"
+    steps = options.flow_steps or [cfg["eval"]["flow_steps"][0]]
+    protocol = cfg["eval"]["initial_noise"], cfg["eval"]["perturbation"]
+    panels = {f"N={n}": (lambda env, n=n: make_policy(actor, n, *protocol)) for n in steps}
+    return panels, "N" + "-".join(map(str, steps))
+
+
+def agent_policy(agent: str, seed: int) -> Callable:
+    """A policy without a run, to look at a task: zero actions, or uniform ones in [-1, 1] from its own stream."""
+    generator = torch.Generator().manual_seed(seed)
+
+    def make(env) -> Callable:
+        shape = (env.num_envs, env.num_actions)
+        if agent == "zero":
+            return lambda obs: torch.zeros(shape, device=env.device)
+        return lambda obs: (torch.rand(shape, generator=generator) * 2 - 1).to(env.device)
+
+    return make
