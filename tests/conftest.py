@@ -6,8 +6,12 @@ wall time in CI; ``gpu`` needs CUDA; ``rsl_rl`` touches rsl_rl's API (CI runs th
 rsl-rl-lib).
 """
 
-import pytest
-import torch
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering; MuJoCo reads it once, when first imported
+
+import pytest  # noqa: E402
+import torch  # noqa: E402
 
 torch.set_num_threads(1)  # tiny ops: intra-op threads only add overhead (and CI has 2 cores)
 

@@ -3,7 +3,8 @@
                    or: python tools/play.py task=<task id> agent=zero|random [env options] [out=DIR] [...]
 
 Writes <run dir>/videos/<name>.mp4 (format=gif or both for a GIF) and prints its path. flow_steps=[1,10] shows the
-1-step and the 10-step policy side by side from the same initial states. Options: refpo_warp/cli/play.py, docs/videos.md.
+1-step and the 10-step policy side by side from the same initial states. Options: refpo_warp/cli/play.py and
+docs/videos.md.
 """
 
 import sys

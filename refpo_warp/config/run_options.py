@@ -87,8 +87,8 @@ RUN_RULES = {
     "eval.interval_num_envs": Int(1, MAX_ENVS),
 }
 # Keys checked elsewhere: task and algo (by name, against the registry and configs/algo), the sections env, actor,
-# critic, algorithm (against their classes' rules) and eval.env (against the task's env cfg).
-NOT_RULED = ("task", "algo", "env", "actor", "critic", "algorithm", "eval.env")
+# critic, algorithm (against their classes' rules), eval.env (against the task's env cfg) and video (VideoOptions).
+NOT_RULED = ("task", "algo", "env", "actor", "critic", "algorithm", "eval.env", "video")
 
 
 def check_combinations(cfg: dict) -> None:

@@ -3,7 +3,7 @@
 
 - ``actor``, ``critic``, ``algorithm``: against the constructor of the class their ``class_name`` selects and that
   class's rules;
-- ``env`` and ``eval.env``: against the task's env cfg dataclass and its rules;
+- ``env`` and ``eval.env``: against the task's env cfg dataclass and its rules; ``video`` against ``VideoOptions``;
 - every other key: against ``configs/default.yaml`` and the rules in ``refpo_warp/config/run_options.py``.
 
 An unknown key is an error that names the closest valid one; a refused value names the key and the valid range or
@@ -44,6 +44,14 @@ def env_section(task: str, values: dict, prefix: str = "env.") -> dict:
     return check_options(rules_for(cfg_class), values, prefix)
 
 
+def video_section(values: dict) -> dict:
+    """Video options: fields of ``VideoOptions``, each checked by its rules (the given keys only)."""
+    from refpo_warp.render.options import VideoOptions
+
+    VideoOptions.from_dict(values)
+    return check_options(VideoOptions.option_rules, values, "video.")
+
+
 def run_options(cfg: dict, schema: dict, prefix: str = "") -> None:
     """Check (and normalise in place) every key of ``cfg`` against ``schema`` (default.yaml) and its run rule."""
     for key, value in cfg.items():
@@ -72,9 +80,10 @@ def validate(cfg: dict, defaults: dict) -> dict:
     for section in CLASS_SECTIONS:
         cfg[section] = class_section(section, cfg.get(section) or {})
     cfg["env"] = env_section(cfg["task"], cfg.get("env") or {})
+    cfg["video"] = video_section(cfg.get("video") or {})
     if isinstance(cfg.get("eval"), dict):
         cfg["eval"]["env"] = env_section(cfg["task"], cfg["eval"].get("env") or {}, "eval.env.")
-    plain = {k: v for k, v in cfg.items() if k not in CLASS_SECTIONS + ("env",)}
-    run_options(plain, {k: v for k, v in defaults.items() if k not in CLASS_SECTIONS + ("env",)})
+    plain = {k: v for k, v in cfg.items() if k not in CLASS_SECTIONS + ("env", "video")}
+    run_options(plain, {k: v for k, v in defaults.items() if k not in CLASS_SECTIONS + ("env", "video")})
     cfg.update(plain)
     return cfg

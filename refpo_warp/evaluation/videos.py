@@ -49,8 +49,9 @@ def frame_source(task: str, env, options: VideoOptions):
 
 def record_panel(task: str, env_options: dict, device: str, make_policy: Callable, label: str, options: VideoOptions,
                  seed: int) -> tuple[list[np.ndarray], float]:  # fmt: skip
-    """(frames, frames per second) of one panel: ``options.num_envs`` envs tiled, from their first reset until each ended its first
-    episode (or ``options.length`` env steps), every k-th env step drawn (k from the real-time rate and the fps)."""
+    """(frames, frames per second) of one panel: ``options.num_envs`` envs tiled, from their first reset until each
+    ended its first episode (or ``options.length`` env steps), every k-th env step drawn (k from the real-time rate
+    and the fps)."""
     env = make_env(task, num_envs=options.num_envs, device=device, seed=seed, **env_options)
     policy = make_policy(env)
     source = frame_source(task, env, options)
@@ -108,8 +109,8 @@ def record(task: str, env_options: dict, device: str, policies: dict[str, Callab
 
 
 def policy_panels(cfg: dict, actor, options: VideoOptions) -> tuple[dict[str, Callable], str]:
-    """The panels of a run's policy under its evaluation protocol (label -> env -> policy) and a name tag: one per flow-step
-    count N (``options.flow_steps``, else the first of ``eval.flow_steps``), or the Gaussian's mean action."""
+    """The panels of a run's policy under its evaluation protocol (label -> env -> policy) and a name tag: one per
+    flow-step count N (``options.flow_steps``, else the first of ``eval.flow_steps``), or the Gaussian's mean action."""
     from refpo_warp.evaluation.evaluate_policy import is_flow, make_policy
 
     if not is_flow(actor):
@@ -131,3 +132,23 @@ def agent_policy(agent: str, seed: int) -> Callable:
         return lambda obs: (torch.rand(shape, generator=generator) * 2 - 1).to(env.device)
 
     return make
+
+
+def run_video(cfg: dict, runner, run_dir: Path, name: str) -> list[Path]:
+    """Record the runner's current policy under the run's evaluation protocol into ``<run dir>/videos/<name>.*``
+    (the ``video`` options of the run's config)."""
+    options = VideoOptions.from_dict(cfg["video"])
+    actor = runner.alg.get_policy()
+    was_training = actor.training
+    actor.eval()
+    try:
+        panels, _ = policy_panels(cfg, actor, options)
+        seed = cfg["seed"] if options.seed is None else options.seed
+        return record(cfg["task"], {**cfg["env"], **cfg["eval"]["env"]}, runner.device, panels, options,
+                      Path(run_dir) / VIDEO_DIR, name, seed)  # fmt: skip
+    finally:
+        actor.train(was_training)
+
+
+def wants_video(cfg: dict) -> bool:
+    return bool(cfg["video"].get("at_end") or cfg["video"].get("interval"))

@@ -1,8 +1,8 @@
 """The OpenGL platform of MuJoCo's offscreen renderer, chosen before MuJoCo is imported (it reads ``MUJOCO_GL`` once).
 
 Headless by default: ``egl`` (Mesa's or a GPU driver's libEGL), else ``osmesa`` (software, ``apt-get install
-libosmesa6``); ``MUJOCO_GL=glfw`` needs a display. A platform is probed in a short subprocess (creating a 64 x 64
-context), since a failed choice cannot be undone inside a process that imported MuJoCo. When none works, one message
+libosmesa6``); ``MUJOCO_GL=glfw`` needs a display. A platform is probed in a short subprocess (rendering an 8 x 8
+frame), since a failed choice cannot be undone inside a process that imported MuJoCo. When none works, one message
 names the choices and what to install.
 """
 
@@ -18,7 +18,8 @@ HEADLESS = ("egl", "osmesa")
 CHOICES = ("egl", "osmesa", "glfw")
 INSTALL = {"egl": "Mesa's libEGL (apt-get install libegl1 libgl1) or a GPU driver",
            "osmesa": "apt-get install libosmesa6", "glfw": "a display (DISPLAY set) and the glfw library"}  # fmt: skip
-_PROBE = "import mujoco; c = mujoco.GLContext(64, 64); c.make_current(); c.free()"
+_PROBE = ("import mujoco; m = mujoco.MjModel.from_xml_string('<mujoco/>'); r = mujoco.Renderer(m, 8, 8); "
+          "r.update_scene(mujoco.MjData(m)); r.render(); r.close()")  # fmt: skip
 
 
 def probe(platform: str) -> str | None:

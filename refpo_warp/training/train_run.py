@@ -25,6 +25,8 @@ from refpo_warp.config.saved import RUN_CONFIG, load_run_config
 from refpo_warp.config.yaml_files import dump_config, load_yaml
 from refpo_warp.evaluation.evaluate_run import evaluate_run
 from refpo_warp.evaluation.periodic import periodic_evaluator
+from refpo_warp.evaluation.videos import run_video, wants_video
+from refpo_warp.render.gl import select_gl_platform
 from refpo_warp.runner.build import build_runner, env_steps_per_iteration, num_iterations, seed_everything
 from refpo_warp.runner.checkpoints import checkpoint_progress, latest_checkpoint, load_latest
 from refpo_warp.runner.distributed import process_rank
@@ -80,6 +82,8 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
         locked = rank.is_main and run_dir.is_dir()
         if locked:
             stack.enter_context(run_lock(run_dir))
+        if wants_video(cfg) and rank.is_main:
+            select_gl_platform()  # before the envs import MuJoCo
         seed_everything(cfg["seed"] + rank.rank)
         env, runner = build_runner(cfg, run_dir)
         start = 0
@@ -142,6 +146,8 @@ def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
         cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
     interval = int(cfg["eval"]["interval"])
     evaluate = periodic_evaluator(cfg, runner) if interval > 0 and rank.is_main else None  # rank 0 evaluates
+    if evaluate is not None and cfg["video"].get("interval"):
+        evaluate = with_videos(evaluate, cfg, runner, run_dir, interval)
     if total > start:
         try:
             _learn_in_chunks(runner, start, total, interval, evaluate, cfg["runner"]["init_at_random_ep_len"])
@@ -156,6 +162,8 @@ def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
     if cfg["eval"]["at_end"] and rank.is_main:
         results = evaluate_run(run_dir, cfg=cfg, runner=runner)
         log_final_evaluation(runner, results)
+    if cfg["video"].get("at_end") and rank.is_main:
+        results["videos"] = [str(p) for p in run_video(cfg, runner, run_dir, "final")]
     if rank.is_main:
         print(training_summary(cfg, runner, run_dir, results), flush=True)
     if notice:
@@ -172,6 +180,20 @@ def training_summary(cfg: dict, runner, run_dir: Path, results: dict) -> str:
     spent = [("trained", f"iterations 0..{last}, {int(logger.tot_timesteps):,} env steps, {logger.tot_time:.0f} s")]
     title = f"Trained {cfg['task']} / {cfg['algo']} (seed {cfg['seed']})"
     return summary_block(title, run_outputs(run_dir, checkpoint, results), spent + headline_numbers(results))
+
+
+def with_videos(evaluate, cfg: dict, runner, run_dir: Path, interval: int):
+    """The periodic evaluator, also recording a video (``videos/it<iteration>``) at every ``video.interval``-th
+    evaluation; the recording leaves the training's random streams as they were."""
+    every = int(cfg["video"]["interval"])
+
+    def evaluate_and_record(it: int, is_last: bool) -> dict[str, float]:
+        out = evaluate(it, is_last)
+        if out and ((it + 1) // interval) % every == 0 and not is_last:
+            run_video(cfg, runner, run_dir, f"it{it}")
+        return out
+
+    return evaluate_and_record
 
 
 def _learn_in_chunks(runner, start: int, total: int, interval: int, evaluate, init_at_random_ep_len: bool) -> None:

@@ -73,6 +73,7 @@ def run_outputs(run_dir: Path, checkpoint, results: dict | None) -> list[tuple[s
         ("eval.json", present("eval.json") if results else None),
         ("previous eval", present("eval.prev.json") if results else None),
         ("figures", figure_list((results or {}).get("figures", []))),
+        ("videos", figure_list((results or {}).get("videos", []))),
     ]
 
 

@@ -1,0 +1,55 @@
+"""tools/play.py as a user runs it: a video of a random agent, one step beside ten for a trained run, and one clear
+message with its exit code for a bad option or a machine without an OpenGL platform."""
+
+import math
+import os
+import subprocess
+import sys
+
+from refpo_warp.render.video import read_video
+from refpo_warp.training import train
+from refpo_warp.utils.paths import REPO_ROOT
+
+SMALL = ["width=64", "height=48"]
+
+
+def play(*args, env=None):
+    return subprocess.run([sys.executable, "tools/play.py", *map(str, args)], cwd=REPO_ROOT, capture_output=True,
+                          text=True, timeout=300, env=env)  # fmt: skip
+
+
+def test_a_random_agents_video_in_both_formats(tmp_path):
+    proc = play("task=dmc_cartpole_balance", "agent=random", "length=9", "format=both", f"out={tmp_path}", *SMALL)
+    assert proc.returncode == 0, proc.stderr
+    every = math.ceil(100 / 30)  # cartpole steps at 100 Hz, a video at most 30 frames per second
+    frames = math.ceil(9 / every) + 1  # the drawn steps and the final frame
+    assert read_video(tmp_path / "dmc_cartpole_balance_random.mp4").shape == (frames, 48, 64, 3)
+    assert read_video(tmp_path / "dmc_cartpole_balance_random.gif").shape == (frames, 48, 64, 3)
+    assert str(tmp_path / "dmc_cartpole_balance_random.mp4") in proc.stdout
+
+
+def test_one_step_beside_ten_from_a_trained_run(tmp_path):
+    run_dir = tmp_path / "run"
+    train(["task=gridworld", "algo=refpo", "device=cpu", "max_iterations=1", "num_envs=8", "runner.num_steps_per_env=8",
+           "algorithm.num_mc_samples=2", "eval.at_end=false", "eval.interval=0", f"run_dir={run_dir}"])  # fmt: skip
+    proc = play(f"run_dir={run_dir}", "flow_steps=[1, 10]", "num_envs=2", "length=5", *SMALL)
+    assert proc.returncode == 0, proc.stderr
+    (video,) = (run_dir / "videos").glob("*.mp4")
+    assert video.name == "model_0_N1-10.mp4"
+    frames = read_video(video)
+    assert frames.shape[1:] == (48, 2 * 2 * 64, 3)  # two panels side by side, two envs tiled in each
+
+
+def test_bad_options_and_a_missing_gl_platform_get_one_message_and_an_exit_code(tmp_path):
+    proc = play("task=dmc_cartpole_balance", "agent=random", "camera=overhead", "length=2", f"out={tmp_path}", *SMALL)
+    assert proc.returncode == 2 and "camera='overhead' is invalid; expected one of 'track', 'fixed'" in proc.stderr
+    proc = play("task=dmc_cartpole_balance", "agent=walk", f"out={tmp_path}")
+    assert proc.returncode == 2 and "agent='walk' is invalid; expected one of zero, random" in proc.stderr
+    proc = play("task=dmc_cartpole_balance", "agent=zero", "widht=64", f"out={tmp_path}")
+    assert proc.returncode == 2 and "Did you mean 'width'" in proc.stderr
+    env = {k: v for k, v in os.environ.items() if k != "DISPLAY"} | {"MUJOCO_GL": "glx"}
+    proc = play("task=dmc_cartpole_balance", "agent=zero", "length=2", f"out={tmp_path}", *SMALL, env=env)
+    assert proc.returncode == 5 and "no OpenGL platform" in proc.stderr and "MUJOCO_GL=egl needs" in proc.stderr
+    for p in (proc,):
+        assert "Traceback" not in p.stderr
+    assert not list(tmp_path.glob("*.mp4"))
