@@ -1,19 +1,20 @@
 #!/usr/bin/env python
-"""Benchmarks: python tools/bench.py <gridworld|dmc|humanoid|all|latency|algorithms> [options of that benchmark]
+"""Benchmarks: python tools/bench.py <gridworld|dmc|humanoid|all|latency|algorithms|render> [options of that benchmark]
 
 Each task family with a benchmark has it in tasks/<family>/bench.py (found there, not listed here);
 `python tools/bench.py dmc --help` shows its options. `all` runs every family's benchmark. `latency`
 (refpo_warp/benchmarks/latency.py) times action generation at N = 10 vs N = 1 for
 chosen tasks and algorithms; `--json PATH` writes the rows for `tools/report.py` (the latency figure).
 `algorithms` (refpo_warp/benchmarks/update_time.py) times the update of every algorithm on one batch size, as ratios to
-FPO.
+FPO. `render` (refpo_warp/benchmarks/rendering.py): frames per second of each family's frames and the cost of a video.
 """
 
 import importlib
 import importlib.util
 import sys
 
-OTHERS = {"latency": "refpo_warp.benchmarks.latency", "algorithms": "refpo_warp.benchmarks.update_time"}  # no family
+OTHERS = {"latency": "refpo_warp.benchmarks.latency", "algorithms": "refpo_warp.benchmarks.update_time",
+          "render": "refpo_warp.benchmarks.rendering"}  # not one family's
 
 
 def benchmarked_families() -> list[str]:
