@@ -52,8 +52,9 @@ def spectral_norms(velocity: Callable, obs_feat: torch.Tensor, x: torch.Tensor, 
     spectral, frobenius = [], []
     for i in range(0, x.shape[0], JACOBIAN_CHUNK):  # exact per row, so chunking changes no number
         jac = jacobian(obs_feat[i : i + JACOBIAN_CHUNK], x[i : i + JACOBIAN_CHUNK], tau[i : i + JACOBIAN_CHUNK])
-        spectral.append(torch.linalg.matrix_norm(jac, ord=2))
-        frobenius.append(torch.linalg.matrix_norm(jac, ord="fro"))
+        # jac carries a graph to the network's parameters: keep only the norms' values, so each chunk's graph goes
+        spectral.append(torch.linalg.matrix_norm(jac, ord=2).detach())
+        frobenius.append(torch.linalg.matrix_norm(jac, ord="fro").detach())
     return torch.cat(spectral), torch.cat(frobenius)
 
 
