@@ -39,9 +39,18 @@ def _env_default(cfg: dict, section: str, name: str) -> tuple[Any, str] | None:
     return defaults[name], f"the default of {spec.cfg_class.__module__}.{spec.cfg_class.__qualname__}"
 
 
+def _video_default(name: str) -> tuple[Any, str] | None:
+    from refpo_warp.render.options import VideoOptions
+
+    defaults = {k: f.default for k, f in VideoOptions.__dataclass_fields__.items()}
+    return (defaults[name], "the default of refpo_warp.render.options.VideoOptions") if name in defaults else None
+
+
 def _fallback(cfg: dict, key: str) -> tuple[Any, str] | None:
-    """The value a key has when no layer sets it (a constructor's or an env cfg's default)."""
+    """The value a key has when no layer sets it (a constructor's, an env cfg's or the video options' default)."""
     section, _, name = key.partition(".")
+    if section == "video" and name and "." not in name:
+        return _video_default(name)
     if section in CLASS_SECTIONS and name and "." not in name:
         return _class_default(cfg, section, name)
     if section == "env" and name and "." not in name:
@@ -74,7 +83,10 @@ def all_keys(cfg: dict) -> list[str]:
     from refpo_warp.envs.registry import get_task
 
     keys += [f"env.{n}" for n in get_task(cfg["task"]).cfg_class.defaults()]
-    return list(dict.fromkeys(k for k in keys if not k.endswith(".") and k not in ("env", "eval.env")))
+    from refpo_warp.render.options import VideoOptions
+
+    keys += [f"video.{n}" for n in VideoOptions.__dataclass_fields__]
+    return list(dict.fromkeys(k for k in keys if not k.endswith(".") and k not in ("env", "eval.env", "video")))
 
 
 def _value(cfg: dict, key: str) -> tuple[bool, Any]:
