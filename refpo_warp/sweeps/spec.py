@@ -32,7 +32,6 @@ from typing import Any
 import yaml
 
 from refpo_warp.config.dotted import LEAF_KEYS, parse_overrides
-from refpo_warp.config.resolve import resolve_config
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.paths import CONFIG_DIR
@@ -246,6 +245,8 @@ def load_sweep(source: str, args: list[str] | None = None) -> Sweep:
     its variants), ``device=``, ``out=`` (the sweep dir). Every other ``key=value`` is a run option for every run
     (list values expand the grid as in the file).
     """
+    from refpo_warp.config.resolve import resolve_config  # here: a Ray worker imports this module without torch
+
     path = sweep_file(source)
     spec = load_yaml(path)
     where = str(path)
@@ -313,6 +314,8 @@ def validate(sweep: Sweep) -> dict[str, str]:
     All failures are collected and raised together, naming the runs, so a typo fails before anything starts.
     Seeds differ only in the plain ``seed`` key, so each (task, method) is resolved once and its seeds share it.
     """
+    from refpo_warp.config.resolve import resolve_config
+
     dtype = device_type(sweep.device)
     prints: dict[str, str] = {}
     errors: dict[str, list[str]] = {}

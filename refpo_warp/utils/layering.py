@@ -18,7 +18,7 @@ LAYERS = {
     "cli": ["cli"],
     "app": ["training", "evaluation", "sweeps", "benchmarks"],
     "run": ["config", "runner"],
-    "core": ["algorithms", "models", "envs", "sim", "motion", "tasks"],
+    "core": ["algorithms", "models", "envs", "sim", "motion", "render", "tasks"],
     "base": ["utils"],
 }
 LAYER_RANK = {layer: rank for rank, layer in enumerate(reversed(LAYERS))}
