@@ -5,7 +5,7 @@ import pytest
 from refpo_warp.training import train
 
 
-@pytest.mark.slow
+@pytest.mark.slow(minutes=3)
 def test_refpo_solves_gridworld_with_one_and_ten_flow_steps(tmp_run_dir):
     results = train(["task=gridworld", "algo=refpo", "seed=1", "device=cpu", f"run_dir={tmp_run_dir}",
                      "eval.flow_steps=[1, 10]"])  # fmt: skip
