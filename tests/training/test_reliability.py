@@ -65,7 +65,8 @@ BAD_OPTIONS = [
     ("algorithm.num_mini_batches=0", ["algorithm.num_mini_batches=0"]),
     ("algorithm.num_mini_batches=1000", ["algorithm.num_mini_batches=1000", "num_envs=4"]),
     ("algorithm.learning_rate=-1", ["algorithm.learning_rate=-1", "(0, 1]"]),
-    ("algorithm.learning_rate=nan", ["algorithm.learning_rate=nan", "not a finite number"]),
+    ("algorithm.learning_rate=nan", ["algorithm.learning_rate='nan'", "expected a number in (0, 1]"]),  # a word in YAML
+    ("algorithm.learning_rate=.nan", ["algorithm.learning_rate=nan", "not a finite number"]),  # YAML's NaN
     ("algorithm.gamma=1.5", ["algorithm.gamma=1.5", "[0, 1]"]),
     ("algorithm.clip_param=0", ["algorithm.clip_param=0"]),
     ("algorithm.tau_sampling=gaussian", ["algorithm.tau_sampling='gaussian'", "'uniform', 'discrete'"]),
@@ -79,7 +80,7 @@ BAD_OPTIONS = [
     ("device=tpu", ["device='tpu'", "cuda:N"]),
     ("runner.logger=foo", ["runner.logger='foo'", "tensorboard"]),
     ("nmu_envs=4", ["nmu_envs", "Did you mean 'num_envs'"]),
-    ("seed=abc", ["'seed'", "'abc'"]),
+    ("seed=abc", ["seed='abc'", "expected an integer"]),
     ("notakeyvalue", ["notakeyvalue", "key=value"]),
 ]
 
