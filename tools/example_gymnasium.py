@@ -4,7 +4,7 @@
     python tools/example_gymnasium.py                        # GridWorld, 64 envs, 30-step episodes: ~7 s on one CPU core
     python tools/example_gymnasium.py --iterations 100 --num-envs 256
 
-The env is ``refpo_warp.envs.gym_adapter.GymVectorEnv`` (same-step autoreset) wrapped in gymnasium's
+The env is ``refpo_warp.envs.gym_adapter.GymVectorEnv`` (with same-step autoreset) wrapped in gymnasium's
 ``RecordEpisodeStatistics``; the agent uses ``reset``/``step``, the spaces, ``infos["final_obs"]`` (to bootstrap the
 value of time-outs from the observation that ended the episode, not from the next episode's first one) and
 ``infos["episode"]``. Nothing here is refpo_warp-specific beyond building the env.
@@ -17,6 +17,7 @@ import sys
 
 import numpy as np
 import torch
+from gymnasium.vector import AutoresetMode
 from gymnasium.wrappers.vector import RecordEpisodeStatistics
 from torch import nn
 
@@ -74,8 +75,8 @@ def train(task: str = "gridworld", num_envs: int = 64, steps: int = 32, iteratio
           quiet: bool = False) -> list[float]:  # fmt: skip
     """Run PPO; returns the mean episode return of each iteration (NaN where no episode ended)."""
     torch.manual_seed(seed)
-    env = RecordEpisodeStatistics(GymVectorEnv(make_env(task, num_envs=num_envs, device="cpu", seed=seed,
-                                                        max_episode_length=max_episode_length)))  # fmt: skip
+    warp_env = make_env(task, num_envs=num_envs, device="cpu", seed=seed, max_episode_length=max_episode_length)
+    env = RecordEpisodeStatistics(GymVectorEnv(warp_env, autoreset_mode=AutoresetMode.SAME_STEP))  # final_obs
     agent = Agent(env.single_observation_space.shape[0], env.single_action_space.shape[0])
     optimizer = torch.optim.Adam(agent.parameters(), lr=lr)
     low, high = env.single_action_space.low, env.single_action_space.high

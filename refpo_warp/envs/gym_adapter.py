@@ -1,15 +1,16 @@
 """A refpo_warp environment behind gymnasium 1.x's vector-env API (numpy in, numpy out).
 
-The Warp env resets finished envs inside its step, which is gymnasium's ``SAME_STEP`` autoreset (the default
-here): a step that ends an episode returns the next episode's first observation, with the last observation of the
-finished one in ``infos["final_obs"]`` and that step's info (the episode metrics) in ``infos["final_info"]``.
+The autoreset mode is gymnasium's default, ``NEXT_STEP`` (that of its own vector envs), so gymnasium's observation
+wrappers (``NormalizeObservation``, ``DtypeObservation``, every ``VectorObservationWrapper``), which accept only
+``NEXT_STEP`` or ``DISABLED``, wrap the adapter as they are. A step that ends an episode returns its last
+observation, and the next step resets that env (its action is ignored; reward 0, not terminated or truncated) and
+returns the new episode's first observation. The Warp env resets finished envs inside its step, and has by then
+stepped the start it had already drawn, so it is reset once more: each finished episode costs one wasted env step.
 
-gymnasium 1.x's observation wrappers (``NormalizeObservation``, ``DtypeObservation``, every
-``VectorObservationWrapper``) accept only ``NEXT_STEP`` autoreset; ``RecordEpisodeStatistics`` and the reward
-wrappers take either. With ``autoreset_mode=AutoresetMode.NEXT_STEP`` a step that ends an episode returns its
-last observation, and the next step resets that env (its action is ignored; reward 0, not terminated or
-truncated) and returns the new episode's first observation. The Warp env has by then stepped the start it had
-already drawn, so it is reset once more: each finished episode costs one wasted env step.
+``autoreset_mode=AutoresetMode.SAME_STEP`` is the Warp env's own behaviour, without the wasted step: a step that
+ends an episode returns the next episode's first observation, with the last observation of the finished one in
+``infos["final_obs"]`` and that step's info (the episode metrics) in ``infos["final_info"]``.
+``RecordEpisodeStatistics`` and the reward wrappers take either mode.
 
 Every call returns new arrays (never views of the env's buffers, which later steps overwrite), and every info key
 comes with gymnasium's ``_key`` mask of the envs it is valid for.
@@ -22,7 +23,7 @@ import numpy as np
 import torch
 from gymnasium.vector import AutoresetMode
 
-AUTORESET_MODES = (AutoresetMode.SAME_STEP, AutoresetMode.NEXT_STEP)
+AUTORESET_MODES = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP)  # the first is the default
 
 
 def _numpy(tensor: torch.Tensor) -> np.ndarray:
@@ -36,12 +37,13 @@ class GymVectorEnv(gym.vector.VectorEnv):
     Args:
         env: The Warp env (its class must record final observations, ``supports_final_observations``).
         obs_group: The observation group returned as the observation.
-        autoreset_mode: ``AutoresetMode.SAME_STEP`` (the env's own behaviour) or ``AutoresetMode.NEXT_STEP``.
+        autoreset_mode: ``AutoresetMode.NEXT_STEP`` (gymnasium's default) or ``AutoresetMode.SAME_STEP`` (the env's
+            own behaviour, one env step less per episode; gymnasium's observation wrappers refuse it).
         action_bound: Bound of the action Box; None: 1 where the env clips actions to [-1, 1], unbounded where it
             squashes them with tanh (``env.action_transform``).
     """
 
-    def __init__(self, env, obs_group: str = "policy", autoreset_mode: AutoresetMode = AutoresetMode.SAME_STEP,
+    def __init__(self, env, obs_group: str = "policy", autoreset_mode: AutoresetMode = AutoresetMode.NEXT_STEP,
                  action_bound: float | None = None) -> None:  # fmt: skip
         if autoreset_mode not in AUTORESET_MODES:
             raise ValueError(f"autoreset_mode must be one of {[m.name for m in AUTORESET_MODES]}, got {autoreset_mode}")

@@ -1,6 +1,7 @@
-"""gymnasium vector adapter on real Warp envs: both autoreset modes against hand-worked GridWorld steps, final
-observations against an env that did not reset (DMC cartpole), fresh arrays, `_key` masks, and gymnasium's own
-wrappers (RecordEpisodeStatistics, NormalizeObservation, DtypeObservation, DictInfoToList)."""
+"""gymnasium vector adapter on real Warp envs: gymnasium's default autoreset mode (NEXT_STEP) and the env's own
+(SAME_STEP) against hand-worked GridWorld steps, final observations against an env that did not reset (DMC
+cartpole), fresh arrays, `_key` masks, and gymnasium's own wrappers (RecordEpisodeStatistics, NormalizeObservation,
+DtypeObservation, DictInfoToList)."""
 
 from itertools import combinations
 
@@ -85,7 +86,7 @@ def test_final_observation_equals_the_state_an_unreset_env_reaches():
     that an identically seeded env with long episodes returns at step 3 (same physics, same actions)."""
     short = make_env("dmc_cartpole_balance", num_envs=4, device="cpu", seed=3, max_episode_length=3)
     long = make_env("dmc_cartpole_balance", num_envs=4, device="cpu", seed=3)
-    vec = GymVectorEnv(short)
+    vec = GymVectorEnv(short, autoreset_mode=SAME)
     actions = np.random.default_rng(0).uniform(-1, 1, size=(6, 4, 1)).astype(np.float32)
     for t in range(6):
         obs, rew, term, trunc, infos = vec.step(actions[t])
@@ -148,14 +149,25 @@ def test_observation_wrappers_need_next_step_autoreset():
     for wrapper in (NormalizeObservation, lambda e: DtypeObservation(e, np.float64)):
         with pytest.raises(ValueError, match="NEXT_STEP"):
             wrapper(grid(SAME)[1])
-    # ... and work on NEXT_STEP, where every observation, final ones included, is a returned observation.
-    env = DtypeObservation(NormalizeObservation(grid(NEXT, max_episode_length=3)[1]), np.float64)
+    # ... and work on NEXT_STEP, the default, where every observation, final ones included, is a returned observation.
+    warp_env = make_env("gridworld", num_envs=8, device="cpu", seed=4, max_episode_length=3)
+    env = DtypeObservation(NormalizeObservation(GymVectorEnv(warp_env)), np.float64)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     for _ in range(10):
         obs, *_ = env.step(rng.uniform(-1, 1, size=(8, 2)).astype(np.float32))
     assert obs.dtype == np.float64 and np.isfinite(obs).all()
     assert env.env.obs_rms.count == pytest.approx(8 * 11, abs=1)  # reset + 10 steps of 8 envs (+ its 1e-4 prior)
+
+
+def test_the_default_autoreset_mode_is_gymnasiums():
+    """gymnasium's own vector envs default to NEXT_STEP; so does the adapter (SAME_STEP stays an option)."""
+    import gymnasium as gym
+
+    reference = gym.vector.SyncVectorEnv([lambda: gym.make("CartPole-v1")])
+    vec = GymVectorEnv(make_env("gridworld", num_envs=2, device="cpu"))
+    assert vec.autoreset_mode == reference.metadata["autoreset_mode"] == NEXT
+    assert vec.metadata["autoreset_mode"] == NEXT
 
 
 def test_action_space_follows_the_env_action_transform():
