@@ -46,7 +46,7 @@ def cpu_rate(env, steps: int, seed: int = 0) -> float:
 def kernel_profile(env, steps: int) -> dict[str, list]:
     """{kernel: [launches, seconds, threads]} over ``steps`` eager steps (graph replay turned off)."""
     import warp as wp
-    import warp._src.context as context
+    from warp._src import context
 
     stats = collections.defaultdict(lambda: [0, 0.0, 0])
     original = context.launch
