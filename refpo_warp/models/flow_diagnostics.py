@@ -55,6 +55,7 @@ def spectral_norms(velocity: Callable, obs_feat: torch.Tensor, x: torch.Tensor, 
         # jac carries a graph to the network's parameters: keep only the norms' values, so each chunk's graph goes
         spectral.append(torch.linalg.matrix_norm(jac, ord=2).detach())
         frobenius.append(torch.linalg.matrix_norm(jac, ord="fro").detach())
+        del jac  # before the next chunk's, so that one chunk's memory at most is live
     return torch.cat(spectral), torch.cat(frobenius)
 
 
