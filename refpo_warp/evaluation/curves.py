@@ -107,10 +107,19 @@ def training_curves(runs: dict[str, list], path: Path) -> Path:
     return path
 
 
+class _ReadableLogLocator(ticker.LogLocator):
+    """Ticks at 1, 2, 5 x 10^k over at most 2.5 decades, else at powers of ten alone (at most 7 of them)."""
+
+    def tick_values(self, vmin, vmax):
+        decades = abs(np.log10(vmax) - np.log10(vmin)) if vmin > 0 and vmax > 0 else 0.0
+        self.set_params(subs=(1.0, 2.0, 5.0) if decades <= 2.5 else (1.0,), numticks=7)
+        return super().tick_values(vmin, vmax)
+
+
 def readable_log_axis(ax) -> None:
-    """Log scale with ticks at 1, 2, 5 x 10^k printed as plain numbers (not 10^k superscripts)."""
+    """Log scale with a few ticks printed as plain numbers (not 10^k superscripts), chosen when the axis is drawn."""
     ax.set_yscale("log")
-    ax.yaxis.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax.yaxis.set_major_locator(_ReadableLogLocator(base=10))
     ax.yaxis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
     ax.yaxis.set_minor_formatter(ticker.NullFormatter())
 
