@@ -45,8 +45,8 @@ def main(argv: list[str]) -> int:
     ax.set_ylim(-0.2, y[layers[0]] + height + 0.2)
     ax.axis("off")
     upward = len(upward_imports(graph))
-    ax.set_title(f"Layers of refpo_warp (folder/ and its module count; tasks/ installs as refpo_warp.tasks); arrows: imports between layers, downward only (upward: "
-                 f"{upward})", fontsize=10)  # fmt: skip
+    ax.set_title("Layers of refpo_warp (folder/ and its module count; tasks/ installs as refpo_warp.tasks); "
+                 f"arrows: imports between layers, downward only (upward: {upward})", fontsize=10)  # fmt: skip
     save_figure(fig, out, dpi=110, bbox_inches="tight")
     plt.close(fig)
     print(out)

@@ -27,6 +27,7 @@ class FlowSampler(nn.Module):
         if self.num_steps < 1:
             raise ValueError(f"num_flow_steps must be >= 1, got {self.num_steps}")
         self.obs_dim = actor.obs_dim
+        self.input_size = actor.obs_dim  # the name rsl_rl's exporters give it (mjlab's tracking export reads it)
         self.action_dim = actor.action_dim
         self.noise_input = bool(noise_input)
 

@@ -21,6 +21,15 @@ from refpo_warp.utils.console import quiet_stdout
 from refpo_warp.utils.errors import NonFiniteLossError
 
 
+def split_statistics(loss_dict: dict) -> tuple[dict, dict[str, float]]:
+    """``(losses, statistics)`` of an algorithm's ``update()`` dict: a key named with a prefix (``Flow/ratio_max``) is
+    a statistic, a TensorBoard tag of its own; the rest are losses, rsl_rl's ``Loss/<key>``. The one home of this
+    rule (the project's runner and the mjlab integration's both log by it)."""
+    statistics_ = {key: float(value) for key, value in loss_dict.items() if "/" in key}
+    losses = {key: value for key, value in loss_dict.items() if "/" not in key}
+    return losses, statistics_
+
+
 def _episode_means(ep_extras: list[dict]) -> dict[str, float]:
     """Per-key means of the env's logged episode values over one iteration (what rsl_rl logs under Episode/)."""
     values: dict[str, list[torch.Tensor]] = {}
@@ -72,9 +81,7 @@ class ProgressLogger(Logger):
         if self.writer is None:
             return
         episode = _episode_means(self.ep_extras)
-        # Statistics named with a prefix (Flow/...) are TensorBoard tags of their own; the rest are rsl_rl's Loss/.
-        tagged = {k: float(v) for k, v in loss_dict.items() if "/" in k}
-        losses = {k: v for k, v in loss_dict.items() if "/" not in k}
+        losses, tagged = split_statistics(loss_dict)  # Flow/... are TensorBoard tags of their own
         sink = contextlib.nullcontext() if self.log_full else contextlib.redirect_stdout(io.StringIO())
         with sink:
             super().log(it, start_it, total_it, collect_time, learn_time, losses, **kwargs)

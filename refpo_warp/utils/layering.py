@@ -16,12 +16,15 @@ PACKAGE = "refpo_warp"
 # Top to bottom: the folders (first name below refpo_warp) of each layer. refpo_warp.tasks is the repository's tasks/.
 LAYERS = {
     "cli": ["cli"],
-    "app": ["training", "evaluation", "sweeps", "benchmarks"],
+    "app": ["training", "evaluation", "sweeps", "benchmarks", "integrations"],
     "run": ["config", "runner"],
     "core": ["algorithms", "models", "envs", "sim", "motion", "render", "tasks"],
     "base": ["utils"],
 }
 LAYER_RANK = {layer: rank for rank, layer in enumerate(reversed(LAYERS))}
+# Packages that glue the project to another framework import it at the top and are loaded by it (an entry point):
+# they import alone only where that framework is installed (package prefix -> the module it needs).
+NEEDS_FRAMEWORK = {"refpo_warp.integrations.mjlab": "mjlab"}
 FOLDER_LAYER = {folder: layer for layer, folders in LAYERS.items() for folder in folders}
 
 
@@ -58,6 +61,14 @@ def import_graph(modules: dict[str, Path]) -> dict[str, set[str]]:
             targets |= {t for t in map(owner, found) if t and t != name and not name.startswith(f"{t}.")}
         graph[name] = targets
     return graph
+
+
+def framework_needed(module: str) -> str | None:
+    """The framework a first-party module needs in order to import (``NEEDS_FRAMEWORK``), or None."""
+    for prefix, framework in NEEDS_FRAMEWORK.items():
+        if module == prefix or module.startswith(prefix + "."):
+            return framework
+    return None
 
 
 def layer_of(module: str) -> str | None:

@@ -176,6 +176,7 @@ def test_onnx_export_runs_on_obs_alone_and_matches_torch(trained_like_actor, tmp
     td = TensorDict({"policy": obs}, batch_size=[8])
     for steps in (1, 4):
         module = actor.as_onnx(num_flow_steps=steps).eval()
+        assert module.input_size == 5  # rsl_rl's exporters' name for it; mjlab's tracking export sizes its input so
         export_onnx(module, tmp_path / f"policy_{steps}.onnx")
         session = ort.InferenceSession(str(tmp_path / f"policy_{steps}.onnx"))
         assert [i.name for i in session.get_inputs()] == ["obs"]
