@@ -3,9 +3,11 @@
 Each algorithm is built from its config for the task (its own actor, pairs/chain and losses), collects one rollout
 of ``envs x steps`` transitions and times ``update()`` (median of ``--repeats`` fresh rollouts, 5 by default) with
 the same number of passes and minibatches for all, so the ratio to FPO is the per-transition cost of each method's
-update. A second
-ratio scales each time to the paper's settings per env step (DMC tables (a)-(d): 16 passes for PPO/FPO/ReFPO, 8 for
-Flow-GRPO and ReinFlow, and ReinFlow's transitions are chunks of 4 env steps).
+update. A second ratio scales each time to the paper's settings per env step (DMC tables (a)-(d): 16 passes for
+PPO/FPO/ReFPO, 8 for Flow-GRPO and ReinFlow, and ReinFlow's transitions are chunks of 4 env steps).
+
+``--algos`` also takes ReFPO's options as variants (``VARIANTS``: coupled Reflow pairs, the adaptive coefficient),
+built as the algo plus their overrides, as ``configs/sweep/cpu_reflow_pairs.yaml`` runs them.
 """
 
 from __future__ import annotations
@@ -22,7 +24,11 @@ from refpo_warp.utils.timing import print_table, synchronize
 
 ORDER = ("fpo", "refpo", "refpo_aw", "flow_grpo", "reinflow", "ppo")  # table order; other algos follow, sorted
 NAMES = {"fpo": "FPO", "refpo": "ReFPO", "refpo_aw": "ReFPO (adv.-weighted)", "flow_grpo": "Flow-GRPO",
-         "reinflow": "ReinFlow", "ppo": "PPO"}  # fmt: skip
+         "reinflow": "ReinFlow", "ppo": "PPO", "refpo_coupled": "ReFPO, coupled pairs",
+         "refpo_adaptive": "ReFPO, adaptive λ"}  # fmt: skip
+VARIANTS = {"refpo_coupled": ("refpo", ["algorithm.reflow_pairs=coupled"]),
+            "refpo_adaptive": ("refpo", ["algorithm.reflow_schedule=adaptive"])}  # fmt: skip
+"""name -> (algo, overrides): options of an algorithm timed as a row of their own (only when asked: --algos)."""
 PAPER_PASSES = {"fpo": 16, "refpo": 16, "refpo_aw": 16, "flow_grpo": 8, "reinflow": 8, "ppo": 16}
 """Passes per batch in the paper's DMC tables; an algorithm not in them is scaled with ``--passes``."""
 
@@ -39,9 +45,10 @@ def build(algo: str, task: str, device: str, envs: int, steps: int, minibatches:
     from refpo_warp.config.resolve import resolve_config
     from refpo_warp.runner.build import build_runner
 
+    algo, overrides = VARIANTS.get(algo, (algo, []))
     cfg = resolve_config([f"task={task}", f"algo={algo}", f"device={device}", f"num_envs={envs}",
                           f"runner.num_steps_per_env={steps}", f"algorithm.num_mini_batches={minibatches}",
-                          f"algorithm.num_learning_epochs={passes}", "eval.interval=0"])  # fmt: skip
+                          f"algorithm.num_learning_epochs={passes}", "eval.interval=0", *overrides])  # fmt: skip
     with contextlib.redirect_stdout(io.StringIO()):  # rsl_rl prints the model structure
         env, runner = build_runner(cfg, None)
     return env, runner.alg, cfg
@@ -77,7 +84,7 @@ def main(argv: list[str]) -> None:
     parser.add_argument("--minibatches", type=int, default=8)
     parser.add_argument("--passes", type=int, default=2)
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--algos", nargs="+", default=algorithms(), choices=algorithms())
+    parser.add_argument("--algos", nargs="+", default=algorithms(), choices=[*algorithms(), *VARIANTS])
     parser.add_argument("--device", default="auto")
     args = parser.parse_args(argv)
     device = resolve_device(args.device)
@@ -92,7 +99,8 @@ def main(argv: list[str]) -> None:
         env, alg, cfg = build(algo, args.task, device, args.envs, args.steps, args.minibatches, args.passes)
         seconds[algo] = update_time(alg, env, device, args.repeats)
         chunks[algo] = cfg["env"].get("action_chunk", 1)
-    per_env_step = {a: seconds[a] / args.passes * PAPER_PASSES.get(a, args.passes) / chunks[a] for a in seconds}
+    passes = {a: PAPER_PASSES.get(VARIANTS.get(a, (a,))[0], args.passes) for a in seconds}
+    per_env_step = {a: seconds[a] / args.passes * passes[a] / chunks[a] for a in seconds}
     rows = [{"algorithm": NAMES.get(a, a), "update (s)": f"{seconds[a]:.3f}",
              "ratio to FPO": f"{seconds[a] / seconds['fpo']:.2f}",
              "paper passes, per env step, ratio to FPO": f"{per_env_step[a] / per_env_step['fpo']:.2f}"}
