@@ -1,6 +1,7 @@
 #!/usr/bin/env python
 """What ReFPO's one-step sampler does: python tools/one_step_analysis.py SWEEP_DIR [out=DIR] [task=ID] [seed=K]
                      [states=256] [noises=16] [every=1] [intervene=ITERATION] [intervene_iterations=5] [device=cpu]
+                     [curves_only=false]
 
 Reads a tools/sweep.py dir whose runs logged the one-step diagnostic and kept checkpoints (configs/sweep/
 cpu_reflow_pairs.yaml) and writes into out= (default SWEEP_DIR/one_step):
@@ -19,8 +20,12 @@ cpu_reflow_pairs.yaml) and writes into out= (default SWEEP_DIR/one_step):
   pairs), the same first rollout for all; the one-step error on fixed states, the velocity error by tau on the
   sampler's paths and the returns after them, <task>_intervention_seed<k>.png;
 - one_step.json with every number behind the figures.
+
+curves_only=true redraws the training figures alone (seconds, as more runs of the sweep finish) and updates their
+numbers in an existing one_step.json, keeping its probes and intervention.
 """
 
+import json
 import sys
 from pathlib import Path
 
@@ -32,7 +37,7 @@ from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.utils.errors import ConfigError, DataFileError, unknown
 
 OPTIONS = {"out": None, "task": "dmc_point_mass", "seed": 1, "states": 256, "noises": 16, "every": 1, "device": "cpu",
-           "intervene": None, "intervene_iterations": 5}  # fmt: skip
+           "intervene": None, "intervene_iterations": 5, "curves_only": False}  # fmt: skip
 PANELS = [("eval/return_N10", "N = 10 return", False), ("eval/return_N1", "N = 1 return", False),
           ("Flow/one_step_error", "one-step error", True), ("Flow/one_step_ratio", "one-step ratio", True),
           ("Flow/reflow_coef", "Reflow coefficient λ", False)]  # fmt: skip
@@ -351,6 +356,24 @@ def probe_figures(task: str, seed: int, probes: dict[str, dict], out: Path) -> l
     return paths
 
 
+def rounded(value, digits: int = 4):
+    """``value`` with every float rounded to ``digits`` significant digits (the JSON behind the figures, kept small)."""
+    if isinstance(value, float):
+        return float(f"{value:.{digits}g}")
+    if isinstance(value, dict):
+        return {key: rounded(item, digits) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [rounded(item, digits) for item in value]
+    return value
+
+
+def write_numbers(numbers: dict, path: Path) -> None:
+    """The numbers behind the figures, rounded and compact (the point_mass paths are most of them)."""
+    from refpo_warp.utils.atomic_files import write_text
+
+    write_text(path, json.dumps(rounded(numbers), separators=(",", ":")))
+
+
 def main(argv: list[str]) -> int:
     if not argv or argv[0] in ("-h", "--help"):
         print(__doc__)
@@ -368,12 +391,20 @@ def main(argv: list[str]) -> int:
         for key in ("seed", "states", "noises", "every", "intervene_iterations"):
             if not isinstance(options[key], int) or options[key] < (0 if key == "seed" else 1):
                 raise ConfigError(f"{key}={options[key]!r} is invalid; expected a positive integer")
+        if not isinstance(options["curves_only"], bool):
+            raise ConfigError(f"curves_only={options['curves_only']!r} is invalid; expected true or false")
         out = Path(options["out"] or sweep / "one_step")
         out.mkdir(parents=True, exist_ok=True)
         runs = method_runs(sweep)
         if options["task"] not in runs:
             raise unknown("task", options["task"], list(runs))
         numbers = {"training": training_figures(runs, out), "probes": {}}
+        if options["curves_only"]:
+            previous = out / "one_step.json"
+            kept = json.loads(previous.read_text()) if previous.is_file() else {}
+            write_numbers({**kept, "training": numbers["training"]}, previous)
+            print(previous)
+            return
         task, seed = options["task"], options["seed"]
         for label, seeds in sorted(runs[task].items()):
             if seed in seeds:
@@ -388,9 +419,7 @@ def main(argv: list[str]) -> int:
             results = intervene(base, int(options["intervene"]), int(options["intervene_iterations"]), options)
             numbers["intervention"] = {"iteration": int(options["intervene"]), **results}
             print(intervention_figure(task, seed, int(options["intervene"]), results, out))
-        from refpo_warp.utils.atomic_files import write_json
-
-        write_json(numbers, out / "one_step.json")
+        write_numbers(numbers, out / "one_step.json")
         print(out / "one_step.json")
 
     return run_guarded(analyse)
