@@ -110,6 +110,7 @@ class RayLauncher(Launcher):
         self.gpus, self.cpus = run_resources(sweep, options)
         self.ray = ray = import_ray()
         self.sweep, self.prefix, self.echo = sweep, tuple(shlex.split(launcher)), echo
+        self.interrupted, self._sigint = False, None
         self.cuda = self.gpus > 0
         self.owned = not ray.is_initialized()  # an already connected driver (a test, a notebook) stays connected
         if self.owned:
@@ -131,6 +132,13 @@ class RayLauncher(Launcher):
         self.where = (f"on Ray ({len(self.nodes)} node(s), room for {total} run(s) at {self.gpus:g} GPU and "
                       f"{self.cpus:g} CPU each)")  # fmt: skip
         self.train = ray.remote(train_run)
+        if threading.current_thread() is threading.main_thread():
+            # Ctrl-C is taken in wait(), between Ray calls: a KeyboardInterrupt raised inside one of Ray's own calls
+            # could leave the driver stuck there instead of stopping the runs.
+            self._sigint = signal.signal(signal.SIGINT, self._on_sigint)
+
+    def _on_sigint(self, signum, frame) -> None:
+        self.interrupted = True
 
     # ------------------------------------------------------------------------------------------------ the cluster
     def _connect(self, address: str | None) -> None:
@@ -227,9 +235,13 @@ class RayLauncher(Launcher):
 
     def wait(self, jobs: list[Job], timeout: float) -> list[tuple[Job, Outcome]]:
         ray = self.ray
+        if self.interrupted:
+            raise KeyboardInterrupt
         self._watch_nodes()
         by_ref = {job.handle: job for job in jobs}
         ready, _ = ray.wait(list(by_ref), num_returns=len(by_ref), timeout=timeout)
+        if self.interrupted:
+            raise KeyboardInterrupt
         ended = []
         for ref in ready:
             job = by_ref[ref]
@@ -264,5 +276,8 @@ class RayLauncher(Launcher):
             ray.wait(left, num_returns=len(left), timeout=10)
 
     def close(self) -> None:
+        if self._sigint is not None:
+            signal.signal(signal.SIGINT, self._sigint)
+            self._sigint = None
         if self.owned and self.ray.is_initialized():
             self.ray.shutdown()
