@@ -267,9 +267,11 @@ class RayLauncher(Launcher):
         refs = [job.handle for job in jobs]
         if not refs:
             return
-        for ref in refs:
-            ray.cancel(ref, force=False)  # queued: never starts; running: KeyboardInterrupt in the task (ray_node)
-        _, left = ray.wait(refs, num_returns=len(refs), timeout=STOP_GRACE_S + 10)
+        left, deadline = refs, time.monotonic() + STOP_GRACE_S + 10
+        while left and time.monotonic() < deadline:
+            for ref in left:  # queued: never starts; running: KeyboardInterrupt in the task (ray_node)
+                ray.cancel(ref, force=False)  # again every few seconds: a busy worker may miss the first
+            _, left = ray.wait(left, num_returns=len(left), timeout=3)
         for ref in left:  # a task that did not end: kill its worker, and the training process with it
             ray.cancel(ref, force=True)
         if left:
