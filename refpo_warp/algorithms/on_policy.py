@@ -16,6 +16,10 @@ Options shared by every algorithm (besides rsl_rl's PPO arguments):
         exponential decay; rate 0 keeps it constant).
     bound_coef, bound: Soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on the policy's predicted action
         (Puffer-PHC, coefficient 10, bound 0.9 of the action range); 0 turns it off.
+    ema_decay, ema_warmup: An exponential moving average of the actor's weights (FPO++), updated once per update and
+        restarted from the live weights after ``ema_warmup`` updates (``refpo_warp.models.ema``); evaluation and export
+        (``get_policy``) use it, rollouts the live actor; checkpoints hold both and a resume trains on from the live
+        weights. None: off.
 
 Logged statistics: keys with a ``/`` (e.g. ``Flow/ratio_max``) are logged under that name, others as ``Loss/<key>``;
 a key ending in ``_max`` is the maximum over the update's minibatches, every other key the mean.
@@ -33,9 +37,10 @@ from torch import nn
 
 from refpo_warp.algorithms import rsl_rl_rules  # noqa: F401  (the rules of rsl_rl's PPO arguments, inherited here)
 from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_indices
+from refpo_warp.models.ema import ActorEMA
 from refpo_warp.utils.errors import NonFiniteLossError
-from refpo_warp.utils.option_rules import Flag, Real, checks_options
-from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, split_newer_ppo_args
+from refpo_warp.utils.option_rules import Flag, Int, Real, checks_options
+from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, split_newer_ppo_args, uncompiled
 
 
 @dataclass
@@ -82,6 +87,8 @@ class OnPolicyAlgorithm(RslPPO):
         "lr_decay_floor": Real(0, 1),
         "bound_coef": Real(0, 1e6),
         "bound": Real(0, None),
+        "ema_decay": Real(0, 1, lo_open=True, hi_open=True, optional=True),
+        "ema_warmup": Int(0, 10**9),
     }
 
     def __init__(
@@ -97,6 +104,8 @@ class OnPolicyAlgorithm(RslPPO):
         lr_decay_floor: float = 0.2,
         bound_coef: float = 0.0,
         bound: float = 0.9,
+        ema_decay: float | None = None,
+        ema_warmup: int = 500,
         **ppo_kwargs,
     ) -> None:
         for name in ("rnd_cfg", "symmetry_cfg"):
@@ -122,6 +131,7 @@ class OnPolicyAlgorithm(RslPPO):
         self.base_learning_rate = float(self.learning_rate)
         self.num_updates = 0
         self.store = TransitionStore(storage.num_transitions_per_env, storage.num_envs, self.device)
+        self.ema = ActorEMA(uncompiled(self, "actor"), ema_decay, ema_warmup) if ema_decay else None
 
     # ------------------------------------------------------------------------------------------------ rollout
     def process_env_step(
@@ -203,6 +213,8 @@ class OnPolicyAlgorithm(RslPPO):
             self.critic.update_normalization(obs)
         self.storage.clear()
         self.num_updates += 1
+        if self.ema is not None:
+            self.ema.update(uncompiled(self, "actor"), self.num_updates)
         if self.lr_decay_rate > 0:
             decay = max(math.exp(-self.lr_decay_rate * self.num_updates), self.lr_decay_floor)
             self._set_learning_rate(self.base_learning_rate * decay)
@@ -241,13 +253,24 @@ class OnPolicyAlgorithm(RslPPO):
             lr = lr_tensor.item()
         self._set_learning_rate(lr)
 
-    # ------------------------------------------------------------------------------------------------ checkpoints
+    # ------------------------------------------------------------------------------------------------ policy, checkpoints
+    def get_policy(self) -> nn.Module:
+        """The policy evaluation, inference and export use: the EMA actor when ``ema_decay`` is set."""
+        return self.ema.model if self.ema is not None else uncompiled(self, "actor")
+
     def save(self) -> dict:
-        saved = super().save()
+        saved = super().save()  # actor_state_dict: the live weights, which a resume trains on from
         saved["num_updates"] = self.num_updates
+        if self.ema is not None:
+            saved["ema_actor_state_dict"] = self.ema.state_dict()
         return saved
 
     def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
         out = super().load(loaded_dict, load_cfg, strict)
         self.num_updates = int(loaded_dict.get("num_updates", 0))
+        if self.ema is not None:
+            if "ema_actor_state_dict" in loaded_dict:
+                self.ema.load_state_dict(loaded_dict["ema_actor_state_dict"])
+            else:  # a checkpoint of a run without the EMA: start the average at its weights
+                self.ema.reset(uncompiled(self, "actor"))
         return out

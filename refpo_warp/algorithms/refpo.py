@@ -7,7 +7,8 @@ computes L_new,k on the same pairs and
     rho   = exp(mean_k L_old,k - mean_k L_new,k)                      (ratio_mode="mean", the reference default)
     L     = -min(rho A, clip(rho, 1 - e, 1 + e) A) + c_v L_value + reflow_coef * mean_k L_new,k [+ bound loss]
 
-``reflow_coef = 0`` is FPO. With ``ratio_mode="per_sample"`` each pair has its own ratio and the surrogate is
+``reflow_coef = 0`` is FPO. ``trust_region`` replaces PPO's clip by SPO's penalty or FPO++'s asymmetric mix
+(``refpo_warp.algorithms.trust_region``). With ``ratio_mode="per_sample"`` each pair has its own ratio and the surrogate is
 averaged over pairs; ``log_ratio_clip`` clamps each pair's log-ratio L_old,k - L_new,k to [-c, c] (their mean, the
 "mean" log-ratio, then lies in [-c, c] as well). The CFM loss (its output mode and scale) is the actor's
 (``refpo_warp.models.flow_actor``), so the ratio and the Reflow term always use the same numbers.
@@ -37,12 +38,14 @@ from torch import nn
 
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm, soft_bound_loss
 from refpo_warp.algorithms.reflow_schedule import REFLOW_SCHEDULES, ReflowSchedule, coefficient_range
+from refpo_warp.algorithms.trust_region import TRUST_REGIONS, surrogate
 from refpo_warp.models.flow_actor import OUTPUT_MODES, cfm_loss
 from refpo_warp.models.flow_diagnostics import one_step_consistency
 from refpo_warp.utils.option_rules import Check, Int, OneOf, Real
 from refpo_warp.utils.rsl_rl_versions import uncompiled
 
-TAU_SAMPLING = ("uniform", "discrete", "logit_normal")
+TAU_SAMPLING = ("uniform", "discrete", "logit_normal", "uniform_inset")
+TAU_INSET = 0.005  # "uniform_inset" keeps flow times this far from both ends (FPO++)
 RATIO_MODES = ("mean", "per_sample")
 REFLOW_PAIRS = ("independent", "coupled")
 DIAGNOSTIC_SEED_OFFSET = 7919  # the diagnostics' own random stream: they never move the training's
@@ -50,11 +53,13 @@ DIAGNOSTIC_SEED_OFFSET = 7919  # the diagnostics' own random stream: they never 
 
 def sample_tau(shape: tuple[int, ...], mode: str, num_flow_steps: int, logit_mean: float, logit_std: float,
                device) -> torch.Tensor:  # fmt: skip
-    """Flow times for the CFM pairs: U[0, 1); the sampler's Euler grid {0, 1/N, ..., (N-1)/N}; or logit-normal,
+    """Flow times for the CFM pairs: U[0, 1); the sampler's Euler grid {0, 1/N, ..., (N-1)/N}; logit-normal,
     tau = 1 / (1 + exp(logit_std * n + logit_mean)), n ~ N(0, 1), clipped to [1e-4, 1] (Puffer-PHC; with its
-    mean -1.2 and std 1.2 the median is 0.77, towards the action end)."""
+    mean -1.2 and std 1.2 the median is 0.77, towards the action end); or U[0.005, 0.995] (FPO++)."""
     if mode == "uniform":
         return torch.rand(shape, device=device)
+    if mode == "uniform_inset":
+        return TAU_INSET + (1.0 - 2.0 * TAU_INSET) * torch.rand(shape, device=device)
     if mode == "discrete":
         return torch.randint(0, num_flow_steps, shape, device=device).float() / num_flow_steps
     if mode == "logit_normal":
@@ -82,6 +87,7 @@ class ReFPO(OnPolicyAlgorithm):
         one_step_target: The one-step ratio the adaptive schedule steers towards.
         reflow_coef_range: [min, max] of the adaptive lambda.
         one_step_states: Rollout states of the per-update one-step diagnostic (0: off; the adaptive schedule needs it).
+        trust_region: ``"ppo"`` clip (the paper's), ``"spo"`` penalty or FPO++'s ``"aspo"`` (``trust_region.py``).
     """
 
     option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
@@ -99,6 +105,7 @@ class ReFPO(OnPolicyAlgorithm):
         "one_step_target": Real(0, None, lo_open=True),
         "reflow_coef_range": Check(coefficient_range, "[min, max] with 0 <= min <= max"),
         "one_step_states": Int(0, 1_000_000),
+        "trust_region": OneOf(TRUST_REGIONS),
     }
 
     def __init__(
@@ -120,6 +127,7 @@ class ReFPO(OnPolicyAlgorithm):
         one_step_target: float = 0.25,
         reflow_coef_range: tuple[float, float] = (0.01, 0.2),
         one_step_states: int = 256,
+        trust_region: str = "ppo",
         clip_param: float = 0.05,
         learning_rate: float = 3e-4,
         schedule: str = "fixed",
@@ -156,6 +164,7 @@ class ReFPO(OnPolicyAlgorithm):
         self.reflow_schedule = ReflowSchedule(reflow_schedule, one_step_target, reflow_coef_range)
         self.reflow_coef = self.reflow_schedule.start(self.reflow_coef)
         self.one_step_states = int(one_step_states)
+        self.trust_region = trust_region
         if reflow_schedule == "adaptive" and not self.one_step_states:
             raise ValueError("reflow_schedule='adaptive' needs the one-step diagnostic: set one_step_states > 0")
         self.action_transform: str | None = None  # the env's (construct_algorithm): the diagnostic's action space
@@ -198,21 +207,25 @@ class ReFPO(OnPolicyAlgorithm):
         terms = self.actor.cfm_terms(obs, actions, tau, eps)
         return cfm_loss(terms, tau, self.output_mode, self.actor.loss_scale), terms
 
-    def log_ratio(self, old_loss: torch.Tensor, new_loss: torch.Tensor) -> torch.Tensor:
-        """log rho: (B,) for ratio_mode "mean", (B, K) for "per_sample"."""
+    def pair_log_ratios(self, old_loss: torch.Tensor, new_loss: torch.Tensor,
+                        advantages: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
+        """L_old,k - L_new,k per pair (B, K), clamped by ``log_ratio_clip`` (``advantages``: for subclasses' caps)."""
         diff = old_loss - new_loss
         if self.log_ratio_clip is not None:
             diff = diff.clamp(-self.log_ratio_clip, self.log_ratio_clip)
+        return diff
+
+    def log_ratio(self, old_loss: torch.Tensor, new_loss: torch.Tensor,
+                  advantages: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
+        """log rho: (B,) for ratio_mode "mean", (B, K) for "per_sample"."""
+        diff = self.pair_log_ratios(old_loss, new_loss, advantages)
         if self.ratio_mode == "per_sample":
             return diff
         return diff.mean(dim=-1)  # a mean of values in [-c, c] is in [-c, c]: no second clamp needed
 
     def surrogate_loss(self, ratio: torch.Tensor, advantages: torch.Tensor) -> torch.Tensor:
-        """PPO's clipped surrogate (to minimise); advantages broadcast over per-sample ratios."""
-        adv = advantages.reshape(-1, *([1] * (ratio.dim() - 1)))
-        unclipped = -adv * ratio
-        clipped = -adv * ratio.clamp(1.0 - self.clip_param, 1.0 + self.clip_param)
-        return torch.max(unclipped, clipped).mean()
+        """The trust region's surrogate (to minimise); advantages broadcast over per-sample ratios."""
+        return surrogate(ratio, advantages, self.clip_param, self.trust_region)
 
     def reflow_loss(self, new_loss: torch.Tensor, batch: Minibatch) -> torch.Tensor:
         """The Reflow term: the CFM loss of the current parameters on the Reflow pairs, un-weighted."""
@@ -253,7 +266,7 @@ class ReFPO(OnPolicyAlgorithm):
     def policy_loss(self, batch: Minibatch) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
         tau, eps, old_loss = batch.field("tau"), batch.field("eps"), batch.field("old_loss")
         new_loss, terms = self.cfm_losses(batch.observations, batch.actions, tau, eps)
-        log_rho = self.log_ratio(old_loss, new_loss)
+        log_rho = self.log_ratio(old_loss, new_loss, batch.advantages)
         ratio = torch.exp(log_rho)
         surrogate = self.surrogate_loss(ratio, batch.advantages)
         reflow = self.reflow_loss(self.reflow_pair_losses(batch, tau, eps, new_loss), batch)

@@ -1,0 +1,45 @@
+"""An exponential moving average of an actor's weights: the policy that evaluation and export use (FPO++).
+
+Once per update, ``theta_ema <- decay * theta_ema + (1 - decay) * theta``; at the update numbered ``warmup`` the
+average restarts from the live weights, so the early, fast-changing weights leave it at once. Only parameters are
+averaged: buffers (the observation normaliser's statistics) are copied from the live actor, as FPO++ keeps one
+normaliser for both. Rollouts never use the average.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import torch
+from torch import nn
+
+
+class ActorEMA:
+    """The averaged copy of ``actor`` (``model``) and its update rule (see the module docstring)."""
+
+    def __init__(self, actor: nn.Module, decay: float, warmup: int) -> None:
+        self.decay = float(decay)
+        self.warmup = int(warmup)
+        self.model = copy.deepcopy(actor).eval().requires_grad_(False)
+
+    @torch.no_grad()
+    def reset(self, actor: nn.Module) -> None:
+        self.model.load_state_dict(actor.state_dict())
+
+    @torch.no_grad()
+    def update(self, actor: nn.Module, num_updates: int) -> None:
+        """After update number ``num_updates`` (counted from 1) of ``actor``."""
+        if num_updates == self.warmup:
+            self.reset(actor)
+            return
+        ema = [p for p in self.model.parameters()]
+        live = [p.detach() for p in actor.parameters()]
+        torch._foreach_lerp_(ema, live, 1.0 - self.decay)
+        for mine, theirs in zip(self.model.buffers(), actor.buffers()):
+            mine.copy_(theirs)
+
+    def state_dict(self) -> dict:
+        return self.model.state_dict()
+
+    def load_state_dict(self, state: dict) -> None:
+        self.model.load_state_dict(state)
