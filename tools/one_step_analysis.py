@@ -206,7 +206,7 @@ def evaluate_returns(actor, cfg: dict, device: str) -> dict[str, float]:
     for n in (actor.num_flow_steps, 1):
         env = make_env(cfg["task"], num_envs=32, device=device, seed=cfg["seed"] + EVAL_SEED_OFFSET,
                        **{**cfg["env"], **cfg["eval"]["env"]})  # fmt: skip
-        policy = make_policy(actor, n, cfg["eval"]["initial_noise"], cfg["eval"]["perturbation"])
+        policy = make_policy(actor, n, cfg["eval"]["initial_noise"][0], cfg["eval"]["perturbation"])
         out[f"N={n}"] = float(run_episodes(policy, env)["return"].mean())
     return out
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import importlib.util
 from typing import Any
 
-from refpo_warp.models.sampled_policy import INITIAL_NOISE_RULE, NUM_FLOW_STEPS
+from refpo_warp.models.sampled_policy import NOISE_PROTOCOLS_RULE, NUM_FLOW_STEPS
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Text
 
@@ -80,7 +80,7 @@ RUN_RULES = {
     "eval.flow_steps": FLOW_STEPS,
     "eval.num_envs": Int(1, MAX_ENVS, optional=True),
     "eval.max_steps": Int(1, 10**8, optional=True),
-    "eval.initial_noise": INITIAL_NOISE_RULE,
+    "eval.initial_noise": NOISE_PROTOCOLS_RULE,
     "eval.perturbation": Flag(),
     "eval.interval": Int(0, 10**8, optional=True),
     "eval.interval_flow_steps": FLOW_STEPS,

@@ -1,8 +1,9 @@
 """Evaluate a policy on a vectorised env: returns and task metrics per evaluation setting, and the flow diagnostics
 on the observations it visited.
 
-Flow policies are evaluated at every N of a list of flow-step counts (1-step vs multi-step returns) under the protocol
-``eval.initial_noise`` (random | zero) and ``eval.perturbation`` (the rollout's post-sample noise on | off); a
+Flow policies are evaluated at every N of a list of flow-step counts (1-step vs multi-step returns) under each
+protocol of ``eval.initial_noise`` (random and / or zero initial noise x_0; ``setting_name``: ``N=10`` for random, the
+paper's headline, ``N=10/zero`` for zero) and ``eval.perturbation`` (the rollout's post-sample noise on | off); a
 Gaussian actor once, with its mean action. A task family may add ``refpo_warp/tasks/<family>/evaluation.py`` with
 ``summarize(episodes)`` (its own numbers, e.g. GridWorld's top/bottom goal shares), ``REPLACES`` (the generic
 ``<metric>_mean`` entries its numbers stand for, dropped so every metric has one name in ``eval.json``) and
@@ -31,6 +32,19 @@ def family_evaluation(task: str):
     return family_module(task, "evaluation")
 
 
+def setting_name(flow_steps: int, initial_noise: str = "random") -> str:
+    """The key of one evaluation setting in ``eval.json``: ``N=10`` (random initial noise) or ``N=10/zero``."""
+    return f"N={flow_steps}" if initial_noise == "random" else f"N={flow_steps}/{initial_noise}"
+
+
+def curve_key(setting: str) -> str:
+    """The progress-log key of a setting's periodic return: ``eval/return_N10``, ``eval/return_N10_zero``,
+    ``eval/return`` (mean action)."""
+    if not setting.startswith("N="):
+        return "eval/return"
+    return "eval/return_N" + setting[2:].replace("/", "_")
+
+
 def make_policy(actor, flow_steps: int | None, initial_noise: str = "random", perturbation: bool = False):
     """obs -> actions for evaluation: a flow integrated with ``flow_steps`` Euler steps, or a Gaussian's mean."""
     if not is_flow(actor):
@@ -54,15 +68,27 @@ def make_eval_env(cfg: dict, interval: bool = False):
                     seed=cfg["seed"] + EVAL_SEED_OFFSET, **{**cfg["env"], **cfg["eval"]["env"]})  # fmt: skip
 
 
-def evaluate_actor(cfg: dict, actor, env, flow_steps: list[int], record_obs: int = 0) -> tuple[dict, object]:
-    """Summaries per evaluation setting (``{"N=10": {...}, "N=1": {...}}`` for flows, ``{"mean_action": {...}}``
-    otherwise) and up to ``record_obs`` observations visited in the first setting (None if none were asked for)."""
+def make_eval_envs(cfg: dict, interval: bool = False) -> dict:
+    """One evaluation env per ``eval.initial_noise`` protocol, all from the same seed, so that a protocol's numbers
+    (and the random stream that training shares with its periodic evaluation) do not depend on which other protocols
+    are evaluated beside it."""
+    return {noise: make_eval_env(cfg, interval) for noise in cfg["eval"]["initial_noise"]}
+
+
+def evaluate_actor(cfg: dict, actor, envs, flow_steps: list[int], record_obs: int = 0) -> tuple[dict, object]:
+    """Summaries per evaluation setting (``{"N=10": {...}, "N=1": {...}, "N=10/zero": ...}`` for flows,
+    ``{"mean_action": {...}}`` otherwise) and up to ``record_obs`` observations visited in the first setting (None if
+    none were asked for). ``envs``: one env per protocol (``make_eval_envs``), or one env for all of them."""
     hooks = family_evaluation(cfg["task"])
-    settings = [(f"N={n}", n) for n in flow_steps] if is_flow(actor) else [("mean_action", None)]
+    protocols = cfg["eval"]["initial_noise"]
+    envs = envs if isinstance(envs, dict) else dict.fromkeys(protocols, envs)
+    settings = [("mean_action", None, protocols[0])]
+    if is_flow(actor):
+        settings = [(setting_name(n, noise), n, noise) for noise in protocols for n in flow_steps]
     results, visited = {}, None
-    for name, n in settings:
-        policy = make_policy(actor, n, cfg["eval"]["initial_noise"], cfg["eval"]["perturbation"])
-        episodes = run_episodes(policy, env, max_steps=cfg["eval"]["max_steps"],
+    for name, n, noise in settings:
+        policy = make_policy(actor, n, noise, cfg["eval"]["perturbation"])
+        episodes = run_episodes(policy, envs[noise], max_steps=cfg["eval"]["max_steps"],
                                 record_obs=record_obs if visited is None else 0)  # fmt: skip
         visited = episodes.pop("observations", visited)
         summary = summarize(episodes)

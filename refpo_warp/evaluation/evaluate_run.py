@@ -1,7 +1,9 @@
 """Evaluate a run: its policy (in memory at the end of training, or a checkpoint) by ``evaluate_policy``, written to
 ``<run dir>/eval.json`` with the run's figures.
 
-``eval.json`` diagnostics of flow policies: the training-time means over the run of the per-update values logged in
+``eval.json`` holds the results per evaluation setting, the run's health (``refpo_warp.evaluation.run_health``: the
+peak of each periodic evaluation curve, the final value and the drop between them, a cliff flagged) and, for flow
+policies, diagnostics: the training-time means over the run of the per-update values logged in
 ``progress.jsonl`` (``straightness_error``, ``explosion_rate`` = the paper's "Explosion" / "Ratio Expl.",
 ``explosion_rate_pair``, ``clip_fraction``, ``one_step_error``, ``one_step_ratio``; ``ratio_max`` is the run's
 maximum), and, on observations visited by the evaluated policy, ``straightness_error_eval``, the one-step consistency
@@ -16,12 +18,13 @@ from pathlib import Path
 
 from refpo_warp.config.saved import load_run_config
 from refpo_warp.evaluation import curves
+from refpo_warp.evaluation.run_health import run_health
 from refpo_warp.evaluation.evaluate_policy import (
     evaluate_actor,
     family_evaluation,
     flow_diagnostics,
     is_flow,
-    make_eval_env,
+    make_eval_envs,
 )
 from refpo_warp.runner.build import build_runner, env_steps_per_iteration
 from refpo_warp.runner.checkpoints import latest_checkpoint, load_latest
@@ -77,7 +80,8 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         cfg = load_run_config(run_dir, overrides or {})
     if runner is None and checkpoint is None and latest_checkpoint(run_dir) is None:
         raise ConfigError(f"run_dir={run_dir} holds no checkpoint (model_<iteration>.pt) to evaluate")
-    env = make_eval_env(cfg)
+    envs = make_eval_envs(cfg)
+    env = next(iter(envs.values()))
     if runner is None:
         _, runner = build_runner(cfg, None, env=env)
         if checkpoint is not None:
@@ -86,7 +90,7 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
             load_latest(runner, run_dir, cfg["task"], cfg["algo"])
     actor = runner.get_inference_policy(device=runner.device)
     flow = is_flow(actor)
-    results, visited = evaluate_actor(cfg, actor, env, cfg["eval"]["flow_steps"],
+    results, visited = evaluate_actor(cfg, actor, envs, cfg["eval"]["flow_steps"],
                                       record_obs=DIAGNOSTIC_OBSERVATIONS if flow else 0)  # fmt: skip
     iteration = runner.current_learning_iteration
     out = {
@@ -97,9 +101,11 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         # the runner's count (every rank's env steps, as progress.jsonl); derived for checkpoints of other writers
         "env_steps": int(runner.logger.tot_timesteps) or (iteration + 1) * env_steps_per_iteration(cfg),
         "eval_envs": env.num_envs,
+        "train_time_s": float(runner.logger.tot_time),
         "protocol": ({"initial_noise": cfg["eval"]["initial_noise"], "perturbation": bool(cfg["eval"]["perturbation"])}
                      if flow else {"mean_action": True}),  # fmt: skip
         "results": results,
+        "health": run_health(read_rows(run_dir)) if progress_path(run_dir).exists() else {},
         "diagnostics": ({**training_diagnostics(run_dir),
                          **flow_diagnostics(runner.alg, actor, visited, env.cfg.action_transform, cfg["seed"])}
                         if flow else {}),

@@ -1,10 +1,10 @@
 """Evaluation during training, between the runner's chunks (``refpo_warp/training/train_run.py``): every
-``eval.interval`` iterations the returns at ``eval.interval_flow_steps`` (``eval/return_N<n>``, or ``eval/return``
-for a Gaussian actor) and, for flows, the Jacobian statistics (``Flow/jacobian_*``) on the visited observations."""
+``eval.interval`` iterations the returns at ``eval.interval_flow_steps`` under each ``eval.initial_noise`` protocol
+(``eval/return_N<n>``, ``eval/return_N<n>_zero``, or ``eval/return`` for a Gaussian actor) and, for flows, the Jacobian statistics (``Flow/jacobian_*``) on the visited observations."""
 
 from __future__ import annotations
 
-from refpo_warp.evaluation.evaluate_policy import evaluate_actor, is_flow, make_eval_env
+from refpo_warp.evaluation.evaluate_policy import curve_key, evaluate_actor, is_flow, make_eval_envs
 from refpo_warp.models.flow_diagnostics import jacobian_statistics
 
 RECORDED_OBSERVATIONS = 256  # visited observations kept for the Jacobian statistics
@@ -12,7 +12,7 @@ RECORDED_OBSERVATIONS = 256  # visited observations kept for the Jacobian statis
 
 def periodic_evaluator(cfg: dict, runner):
     """``evaluate(iteration, is_last) -> {name: value}`` for the iterations an evaluation is due at ({} otherwise)."""
-    env = make_eval_env(cfg, interval=True)
+    envs = make_eval_envs(cfg, interval=True)
     interval = int(cfg["eval"]["interval"])
 
     def evaluate(it: int, is_last: bool) -> dict[str, float]:
@@ -22,10 +22,9 @@ def periodic_evaluator(cfg: dict, runner):
         was_training = actor.training
         actor.eval()
         flow = is_flow(actor)
-        results, visited = evaluate_actor(cfg, actor, env, cfg["eval"]["interval_flow_steps"],
+        results, visited = evaluate_actor(cfg, actor, envs, cfg["eval"]["interval_flow_steps"],
                                           record_obs=RECORDED_OBSERVATIONS if flow else 0)  # fmt: skip
-        out = {f"eval/return_N{name[2:]}" if name.startswith("N=") else "eval/return": s.get("return_mean", float("nan"))
-               for name, s in results.items()}  # fmt: skip
+        out = {curve_key(name): s.get("return_mean", float("nan")) for name, s in results.items()}
         if flow and visited is not None and hasattr(actor, "velocity"):
             stats = jacobian_statistics(actor, visited, num_steps=actor.num_flow_steps)
             out.update({f"Flow/{k}": v for k, v in stats.items() if isinstance(v, float)})

@@ -110,15 +110,18 @@ def record(task: str, env_options: dict, device: str, policies: dict[str, Callab
 
 def policy_panels(cfg: dict, actor, options: VideoOptions) -> tuple[dict[str, Callable], str]:
     """The panels of a run's policy under its evaluation protocol (label -> env -> policy) and a name tag: one per
-    flow-step count N (``options.flow_steps``, else the first of ``eval.flow_steps``), or the Gaussian's mean action."""
-    from refpo_warp.evaluation.evaluate_policy import is_flow, make_policy
+    flow-step count N (``options.flow_steps``, else the first of ``eval.flow_steps``) and initial-noise protocol
+    (``eval.initial_noise``), or the Gaussian's mean action."""
+    from refpo_warp.evaluation.evaluate_policy import is_flow, make_policy, setting_name
 
     if not is_flow(actor):
         return {"mean action": lambda env: make_policy(actor, None)}, "mean"
     steps = options.flow_steps or [cfg["eval"]["flow_steps"][0]]
-    protocol = cfg["eval"]["initial_noise"], cfg["eval"]["perturbation"]
-    panels = {f"N={n}": (lambda env, n=n: make_policy(actor, n, *protocol)) for n in steps}
-    return panels, "N" + "-".join(map(str, steps))
+    protocols, perturbation = cfg["eval"]["initial_noise"], cfg["eval"]["perturbation"]
+    panels = {setting_name(n, noise): (lambda env, n=n, noise=noise: make_policy(actor, n, noise, perturbation))
+              for noise in protocols for n in steps}  # fmt: skip
+    tag = "N" + "-".join(map(str, steps)) + ("" if protocols == ["random"] else "_" + "-".join(protocols))
+    return panels, tag
 
 
 def agent_policy(agent: str, seed: int) -> Callable:

@@ -15,11 +15,26 @@ from torch import nn
 
 from refpo_warp.models.normalization import with_clip
 from refpo_warp.models.stateless import Stateless
-from refpo_warp.utils.option_rules import Int, OneOf
+from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_rules import Check, Int, OneOf
 
 NUM_FLOW_STEPS = Int(1, 1000, fixed=False)  # Euler / chain steps N of a sampler; any N samples the same policy
 INITIAL_NOISE = ("random", "zero")
 INITIAL_NOISE_RULE = OneOf(INITIAL_NOISE)
+
+
+def noise_protocols(key: str, value) -> list[str]:
+    """One initial-noise protocol or a list of them, as a list without repeats (the first is the headline)."""
+    items = value if isinstance(value, (list, tuple)) else [value]
+    if not items:
+        raise ConfigError(f"{key}=[] is invalid; expected random, zero or a list of them (e.g. [random, zero])")
+    out = [INITIAL_NOISE_RULE.check(key, item) for item in items]
+    if len(set(out)) < len(out):
+        raise ConfigError(f"{key}={value} is invalid: a protocol is listed twice")
+    return out
+
+
+NOISE_PROTOCOLS_RULE = Check(noise_protocols, "random, zero or a list of them (e.g. [random, zero])")
 
 
 class SampledPolicyProtocol(Stateless):

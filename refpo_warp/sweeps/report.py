@@ -40,6 +40,7 @@ from refpo_warp.sweeps.tables import (
     SOURCES_MAIN,
     RunRecord,
     appendix_c_markdown,
+    cliffs_markdown,
     main_markdown,
     method_rows,
     run_metrics,
@@ -101,6 +102,7 @@ def load_record(sweep_dir: Path, entry: dict, status: dict) -> RunRecord:
         record.status, record.note = "unreadable", f"{type(err).__name__}: {err}"
         return record
     record.metrics, record.multi_n = run_metrics(report)
+    record.cliffs = [setting for setting, h in (report.get("health") or {}).items() if h.get("cliff")]
     return record
 
 
@@ -164,10 +166,11 @@ def runs_csv(records: list[RunRecord]) -> str:
     metrics = list(METRIC_TITLES)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["task", "label", "seed", "status", "multi_step_n", *metrics, "note", "run_dir"])
+    writer.writerow(["task", "label", "seed", "status", "multi_step_n", *metrics, "cliffs", "note", "run_dir"])
     for r in records:
         writer.writerow([r.task, r.label, r.seed, r.status, r.multi_n or "",
-                         *[repr(r.metrics[m]) if m in r.metrics else "" for m in metrics], r.note, r.run_dir])
+                         *[repr(r.metrics[m]) if m in r.metrics else "" for m in metrics], ";".join(r.cliffs), r.note,
+                         r.run_dir])  # fmt: skip
     return out.getvalue()
 
 
@@ -231,6 +234,7 @@ def report_markdown(spec, records, mrows, trows, figures, notes, sweep_dir: Path
               f"`python tools/report.py {sweep_dir}`.", "",
               "## DMC table (the paper's \"MuJoCo Playground results\")", "", main_markdown(mrows), AGGREGATION, "",
               SOURCES_MAIN, "", "## Per task", "", task_markdown(trows),
+              "## Run health: runs that fell 30 % or more below their peak", "", cliffs_markdown(records),
               "## Appendix C: Jacobian and policy-ratio diagnostics", "", appendix_c_markdown(mrows),
               SOURCES_APPENDIX_C, "",
               "CSV: `main.csv`, `per_task.csv`, `appendix_c.csv` (full precision), `runs.csv` (one row per run).", ""]

@@ -3,11 +3,13 @@
 Per run (``eval.json``, the project's shared format):
 - 10-step reward: ``results["N=<n>"].return_mean`` for the largest n > 1 (ReinFlow: N = 4, marked in the cell);
   a Gaussian policy's ``results["mean_action"].return_mean``;
-- 1-step reward: ``results["N=1"].return_mean``;
+- 1-step reward: ``results["N=1"].return_mean``; both again under zero initial noise (``N=<n>/zero``, ``N=1/zero``)
+  where the run evaluated that protocol;
 - Straightness: ``diagnostics.straightness_error``; Explosion and Ratio Expl.: ``diagnostics.explosion_rate``
   (per action, the paper's number); Jac. Expl., Mean Jac. Norm, Jac. Norm P95: ``diagnostics.jacobian_*``;
 - 1-step Err. (ours): ``diagnostics.one_step_error_eval``, E|T(a_1) - T(a_N)|^2 with shared noise on the final
   policy's evaluation states, and 1-step Ratio its ratio to the policy's spread (``one_step_ratio_eval``).
+- Train min.: ``train_time_s`` / 60; Cliffs: the settings whose run health (``health``) flags a cliff.
 A number a run does not have (e.g. PPO's diagnostics) is left out and prints as ``--``.
 
 Aggregation (``AGGREGATION`` says it in the reports): the method table pools all finished (task, seed) runs of a
@@ -29,6 +31,8 @@ MISSING = "--"
 METRIC_TITLES = {
     "return_multi": "10-step Reward",
     "return_1": "1-step Reward",
+    "return_multi_zero": "10-step, zero noise",
+    "return_1_zero": "1-step, zero noise",
     "straightness": "Straightness",
     "explosion": "Explosion",
     "one_step": "1-step Err.",
@@ -37,6 +41,7 @@ METRIC_TITLES = {
     "ratio_expl": "Ratio Expl.",
     "jac_norm_mean": "Mean Jac. Norm",
     "jac_norm_p95": "Jac. Norm P95",
+    "minutes": "Train min.",
 }
 DIAGNOSTIC_KEYS = {
     "straightness": "straightness_error",
@@ -48,7 +53,8 @@ DIAGNOSTIC_KEYS = {
     "jac_norm_mean": "jacobian_norm_mean",
     "jac_norm_p95": "jacobian_norm_p95",
 }
-MAIN_METRICS = ("return_multi", "return_1", "straightness", "explosion", "one_step", "one_step_ratio")
+REWARD_METRICS = ("return_multi", "return_1", "return_multi_zero", "return_1_zero")  # printed with their std
+MAIN_METRICS = REWARD_METRICS + ("straightness", "explosion", "one_step", "one_step_ratio", "minutes")
 APPENDIX_C_METRICS = ("jac_expl", "ratio_expl", "jac_norm_mean", "jac_norm_p95")
 AGGREGATION = (
     "Each method cell pools the method's finished (task, seed) runs: mean over them ± population standard deviation "
@@ -61,10 +67,13 @@ AGGREGATION = (
 SOURCES_MAIN = (
     "Sources per run (`eval.json`): 10-step Reward = `results[\"N=<largest N>\"].return_mean` (Gaussian policies: "
     "`results[\"mean_action\"]`; `(N=4)` marks a multi-step N other than 10), 1-step Reward = "
-    "`results[\"N=1\"].return_mean`, Straightness = `diagnostics.straightness_error`, Explosion = "
+    "`results[\"N=1\"].return_mean`, the same under zero initial noise = `results[\"N=<n>/zero\"]` (where the run "
+    "evaluated it), Straightness = `diagnostics.straightness_error`, Explosion = "
     "`diagnostics.explosion_rate`; 1-step Err. (ours, not in the paper) = `diagnostics.one_step_error_eval`, the "
     "mean squared gap between the 1-step and the N-step action from the same noise in the env's action space on the "
-    "final policy's states, and 1-step Ratio = that gap over the policy's spread (`one_step_ratio_eval`)."
+    "final policy's states, and 1-step Ratio = that gap over the policy's spread (`one_step_ratio_eval`). Train min. "
+    "= `train_time_s` / 60 (training only; shared machines run slower); Cliffs = runs whose periodic evaluation ends "
+    "30 % or more below its peak in some setting (`health`), of the finished runs."
 )
 SOURCES_APPENDIX_C = (
     "Means over the same runs as above (std in `appendix_c.csv`). Sources: `diagnostics.jacobian_explosion_rate`, "
@@ -84,6 +93,7 @@ class RunRecord:
     note: str = ""
     metrics: dict[str, float] = field(default_factory=dict)
     multi_n: int | None = None  # the multi-step N of the 10-step column (None: Gaussian mean action)
+    cliffs: list[str] = field(default_factory=list)  # the settings whose run health flags a cliff
 
 
 @dataclass
@@ -102,7 +112,8 @@ def _finite(value) -> float | None:
 
 
 def run_metrics(report: dict) -> tuple[dict[str, float], int | None]:
-    """The table numbers of one ``eval.json`` and the multi-step N used for the 10-step column."""
+    """The table numbers of one ``eval.json`` and the multi-step N used for the 10-step column (see the module
+    docstring)."""
     results = report.get("results") or {}
     steps = sorted(int(k[2:]) for k in results if k.startswith("N=") and k[2:].isdigit())
     raw: dict[str, object] = {}
@@ -113,6 +124,9 @@ def run_metrics(report: dict) -> tuple[dict[str, float], int | None]:
         raw["return_multi"] = results["mean_action"].get("return_mean")
     if 1 in steps:
         raw["return_1"] = results["N=1"].get("return_mean")
+    raw["return_multi_zero"] = results.get(f"N={multi}/zero", {}).get("return_mean")
+    raw["return_1_zero"] = results.get("N=1/zero", {}).get("return_mean")
+    raw["minutes"] = report["train_time_s"] / 60 if _finite(report.get("train_time_s")) else None
     diagnostics = report.get("diagnostics") or {}
     for metric, key in DIAGNOSTIC_KEYS.items():
         raw[metric] = diagnostics.get(key)
@@ -165,6 +179,19 @@ def _runs_cell(records: list[RunRecord]) -> str:
     return f"{sum(r.status == 'ok' for r in records)}/{len(records)}"
 
 
+def cliff_count(records: list[RunRecord]) -> str:
+    """Runs flagged by their health / finished runs."""
+    ok = [r for r in records if r.status == "ok"]
+    return f"{sum(bool(r.cliffs) for r in ok)}/{len(ok)}"
+
+
+def cliffs_markdown(records: list[RunRecord]) -> str:
+    """One line per flagged run: the settings that fell off their peak."""
+    lines = [f"- {r.task} / {r.label} / seed {r.seed}: {', '.join(r.cliffs)}" for r in records
+             if r.status == "ok" and r.cliffs]  # fmt: skip
+    return "\n".join(lines) + "\n" if lines else "None.\n"
+
+
 def method_rows(records: list[RunRecord], methods: list[tuple[str, str]], metrics=MAIN_METRICS) -> list[dict]:
     """One row per method (label, display name): a Stat per metric over all its runs."""
     rows = []
@@ -193,20 +220,23 @@ def markdown_table(header: list[str], rows: list[list[str]]) -> str:
 
 def main_markdown(rows: list[dict]) -> str:
     """The paper's DMC table: rewards as mean ± std, diagnostics as means."""
-    header = ["Method", "Runs"] + [METRIC_TITLES[m] for m in MAIN_METRICS]
+    header = ["Method", "Runs"] + [METRIC_TITLES[m] for m in MAIN_METRICS] + ["Cliffs"]
     body = []
     for row in rows:
         s = row["stats"]
         body.append([row["name"], _runs_cell(row["records"]),
-                     fmt_stat(s["return_multi"]) + (_multi_note(row["records"]) if s["return_multi"].n else ""),
-                     fmt_stat(s["return_1"])] + [fmt_stat(s[m], False) for m in MAIN_METRICS[2:]])
+                     fmt_stat(s["return_multi"]) + (_multi_note(row["records"]) if s["return_multi"].n else "")]
+                    + [fmt_stat(s[m]) for m in REWARD_METRICS[1:]]
+                    + [fmt_stat(s[m], False) for m in MAIN_METRICS[len(REWARD_METRICS):]]
+                    + [cliff_count(row["records"])])  # fmt: skip
     return markdown_table(header, body)
 
 
 def task_markdown(rows: list[dict]) -> str:
-    header = ["Task", "Method", "Runs"] + [METRIC_TITLES[m] for m in MAIN_METRICS]
+    header = ["Task", "Method", "Runs"] + [METRIC_TITLES[m] for m in MAIN_METRICS] + ["Cliffs"]
     body = [[row["task"], row["name"], _runs_cell(row["records"])]
-            + [fmt_stat(row["stats"][m]) for m in MAIN_METRICS] for row in rows]  # fmt: skip
+            + [fmt_stat(row["stats"][m]) for m in MAIN_METRICS] + [cliff_count(row["records"])]
+            for row in rows]  # fmt: skip
     return markdown_table(header, body)
 
 

@@ -49,11 +49,21 @@ def headline_numbers(results: dict) -> list[tuple[str, str]]:
         parts += [f"{k} {v:.4g}" for k, v in summary.items() if k not in GENERIC and isinstance(v, float)]
         parts.append(f"({summary.get('episodes', 0)} episodes)")
         rows.append((f"eval {setting}", "  ".join(parts)))
+    if results.get("health"):
+        rows.append(("run health", health_line(results["health"])))
     diagnostics = results.get("diagnostics", {})
     shown = [f"{k} {diagnostics[k]:.4g}" for k in HEADLINE_DIAGNOSTICS if isinstance(diagnostics.get(k), float)]
     if shown:
         rows.append(("diagnostics", "  ".join(shown) + "  (all of them in eval.json)"))
     return rows
+
+
+def health_line(health: dict[str, dict]) -> str:
+    """A run's health (``refpo_warp.evaluation.run_health``) on one line:
+    ``N=10 peak 950 (it 39), final 940 (-1 %);  N=1 peak 724 (it 48), final 75 (-90 %) CLIFF``."""
+    return ";  ".join(f"{setting} peak {h['peak']:.4g} (it {h['peak_iteration']}), final {h['final']:.4g} "
+                      f"({-100 * h['drop']:+.0f} %)" + (" CLIFF" if h["cliff"] else "")
+                      for setting, h in health.items())  # fmt: skip
 
 
 def run_outputs(run_dir: Path, checkpoint, results: dict | None) -> list[tuple[str, object]]:

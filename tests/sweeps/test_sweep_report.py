@@ -21,9 +21,14 @@ from refpo_warp.utils.paths import REPO_ROOT
 ROOT = REPO_ROOT
 
 
-def flow_eval(n10, n1, straight=None, explosion=None, jac=None, multi=10):
+def flow_eval(n10, n1, straight=None, explosion=None, jac=None, multi=10, zero=None, seconds=None, cliff=None):
     report = {"task": "t", "algo": "refpo", "results": {f"N={multi}": {"return_mean": n10},
                                                         "N=1": {"return_mean": n1}}}  # fmt: skip
+    if zero is not None:
+        report["results"].update({f"N={multi}/zero": {"return_mean": zero[0]}, "N=1/zero": {"return_mean": zero[1]}})
+    if seconds is not None:
+        report["train_time_s"] = seconds
+    report["health"] = {"N=10": {"cliff": False}, "N=1": {"cliff": cliff == "N=1"}}
     diagnostics = {}
     if straight is not None:
         diagnostics.update(straightness_error=straight, explosion_rate=explosion)
@@ -44,10 +49,11 @@ RUNS = {
     ("dmc_a", "fpo", 1): flow_eval(400.0, 100.0, 0.05, 0.004),
     ("dmc_a", "fpo", 2): flow_eval(500.0, 300.0, 0.07, 0.002),
     ("dmc_b", "fpo", 1): flow_eval(600.0, 200.0, 0.06, 0.003), ("dmc_b", "fpo", 2): None,
-    ("dmc_a", "refpo", 1): flow_eval(600.0, 500.0, 0.01, 0.001, (0.01, 0.4, 0.8)),
-    ("dmc_a", "refpo", 2): flow_eval(700.0, 700.0, 0.02, 0.002, (0.03, 0.5, 0.9)),
-    ("dmc_b", "refpo", 1): flow_eval(800.0, 800.0, 0.03, 0.003, (0.0, 0.6, 1.0)),
-    ("dmc_b", "refpo", 2): flow_eval(900.0, 800.0, 0.06, 0.002, (0.02, 0.5, 1.3)),
+    ("dmc_a", "refpo", 1): flow_eval(600.0, 500.0, 0.01, 0.001, (0.01, 0.4, 0.8), zero=(650.0, 600.0), seconds=120),
+    ("dmc_a", "refpo", 2): flow_eval(700.0, 700.0, 0.02, 0.002, (0.03, 0.5, 0.9), zero=(750.0, 600.0), seconds=180),
+    ("dmc_b", "refpo", 1): flow_eval(800.0, 800.0, 0.03, 0.003, (0.0, 0.6, 1.0), zero=(850.0, 600.0), seconds=240),
+    ("dmc_b", "refpo", 2): flow_eval(900.0, 800.0, 0.06, 0.002, (0.02, 0.5, 1.3), zero=(950.0, 600.0), seconds=300,
+                                     cliff="N=1"),
     ("dmc_a", "reinflow", 1): flow_eval(300.0, 250.0, multi=4),
     ("dmc_a", "refpo_l0.08", 1): flow_eval(1000.0, 1000.0, 0.0, 0.0),
 }  # fmt: skip
@@ -121,15 +127,19 @@ def test_method_table_numbers_by_hand(sweep_dir):
 
 def test_markdown_tables(sweep_dir):
     text = (sweep_dir / "report" / "report.md").read_text()
-    assert "| Method | Runs | 10-step Reward | 1-step Reward | Straightness | Explosion |" in text
-    assert "| PPO | 4/4 | 400 ± 224 | -- | -- | -- |" in text
-    assert "| FPO | 3/4 | 500 ± 81.6 | 200 ± 81.6 | 0.06 | 0.003 |" in text
-    assert "| ReFPO* | 4/4 | 750 ± 112 | 700 ± 122 | 0.03 | 0.002 |" in text
-    assert "| ReinFlow | 1/1 | 300 (N=4) | 250 | -- | -- |" in text
-    assert "| λ=0.08 | 0/1 | -- | -- | -- | -- |" in text
+    assert ("| Method | Runs | 10-step Reward | 1-step Reward | 10-step, zero noise | 1-step, zero noise | Straightness "
+            "| Explosion | 1-step Err. | 1-step Ratio | Train min. | Cliffs |") in text
+    assert "| PPO | 4/4 | 400 ± 224 | -- | -- | -- | -- | -- | -- | -- | -- | 0/4 |" in text
+    assert "| FPO | 3/4 | 500 ± 81.6 | 200 ± 81.6 | -- | -- | 0.06 | 0.003 | -- | -- | -- | 0/3 |" in text
+    # zero noise: 10-step 650..950 -> 800 ± 112, 1-step 600 ± 0; minutes 2, 3, 4, 5 -> 3.5; one run flagged
+    assert "| ReFPO* | 4/4 | 750 ± 112 | 700 ± 122 | 800 ± 112 | 600 ± 0 | 0.03 | 0.002 | -- | -- | 3.5 | 1/4 |" in text
+    assert "| ReinFlow | 1/1 | 300 (N=4) | 250 | -- | -- | -- | -- | -- | -- | -- | 0/1 |" in text
+    assert "| λ=0.08 | 0/1 | -- | -- | -- | -- | -- | -- | -- | -- | -- | 0/0 |" in text
     # Per task, mean ± std over seeds: dmc_a ReFPO 600/700 -> 650 ± 50, 1-step 500/700 -> 600 ± 100.
-    assert "| dmc_a | ReFPO* | 2/2 | 650 ± 50 | 600 ± 100 | 0.015 ± 0.005 | 0.0015 ± 0.0005 |" in text
-    assert "| dmc_b | FPO | 1/2 | 600 | 200 | 0.06 | 0.003 |" in text
+    assert ("| dmc_a | ReFPO* | 2/2 | 650 ± 50 | 600 ± 100 | 700 ± 50 | 600 ± 0 | 0.015 ± 0.005 | 0.0015 ± 0.0005 | -- "
+            "| -- | 2.5 ± 0.5 | 0/2 |") in text
+    assert "| dmc_b | FPO | 1/2 | 600 | 200 | -- | -- | 0.06 | 0.003 | -- | -- | -- | 0/1 |" in text
+    assert "## Run health: runs that fell 30 % or more below their peak\n\n- dmc_b / refpo / seed 2: N=1\n" in text
     # Appendix C: Jac. Expl. (0.01 + 0.03 + 0 + 0.02) / 4, Ratio Expl. = Explosion, norms 0.5 and P95 1.
     assert "| ReFPO* | 4/4 | 0.015 | 0.002 | 0.5 | 1 |" in text
     assert "| FPO | 3/4 | -- | 0.003 | -- | -- |" in text
@@ -146,6 +156,8 @@ def test_per_task_csv_and_runs_csv(sweep_dir):
     assert len(runs) == len(RUNS)
     failed = next(r for r in runs if (r["task"], r["label"], r["seed"]) == ("dmc_b", "fpo", "2"))
     assert failed["status"] == "failed" and failed["return_multi"] == ""
+    flagged = next(r for r in runs if (r["task"], r["label"], r["seed"]) == ("dmc_b", "refpo", "2"))
+    assert (flagged["cliffs"], flagged["return_1_zero"], flagged["minutes"]) == ("N=1", "600.0", "5.0")
 
 
 def test_figures_written(sweep_dir):
