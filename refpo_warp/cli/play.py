@@ -1,13 +1,14 @@
 """``tools/play.py``: a video of what a trained policy (or a zero / random agent) does in its task.
 
-    python tools/play.py run_dir=runs/dmc_cheetah_run/refpo_seed1 [checkpoint=PATH] [flow_steps=[1,10]] [num_envs=4]
+    python tools/play.py run_dir=runs/dmc_cheetah_run/refpo_seed1 [checkpoint=PATH] [flow_steps=[1,10]]
+                         [initial_noise=[random,zero]] [num_envs=4]
                          [length=300] [width=640] [height=480] [camera=track] [format=mp4|gif|both] [fps=30]
                          [seed=3] [name=NAME] [shadows=false] [reference=true] [device=cpu]
     python tools/play.py task=dmc_cheetah_run agent=zero|random [env options ...] [out=DIR] [video options ...]
 
 A run is loaded as ``tools/eval.py`` loads it (its saved config, the newest usable checkpoint or ``checkpoint=``,
 read with ``weights_only``) and plays its evaluation protocol (``eval.env``, ``eval.initial_noise``,
-``eval.perturbation``); the video goes to ``<run dir>/videos/``, without a run to ``out=`` (default
+``eval.perturbation``; ``initial_noise=`` replaces the run's protocols, one panel per N and protocol); the video goes to ``<run dir>/videos/``, without a run to ``out=`` (default
 ``runs/videos``). Every option is checked before anything is built; the video options are
 ``refpo_warp/render/options.py``'s.
 """
@@ -22,7 +23,7 @@ from refpo_warp.render.options import VideoOptions
 from refpo_warp.utils.errors import ConfigError, unknown
 
 AGENTS = ("zero", "random")
-RUN_KEYS = ("run_dir", "checkpoint", "device")
+RUN_KEYS = ("run_dir", "checkpoint", "device", "initial_noise")
 AGENT_KEYS = ("task", "agent", "device", "out")
 
 
@@ -64,12 +65,14 @@ def play(args: list[str]) -> list[Path]:
 
     select_gl_platform()  # before anything imports MuJoCo
     if "run_dir" in picked:
-        return _play_run(Path(str(picked["run_dir"])), picked.get("checkpoint"), picked.get("device"), video)
+        overrides = {f"eval.{k}" if k == "initial_noise" else k: picked[k] for k in ("device", "initial_noise")
+                     if picked.get(k) is not None}  # fmt: skip
+        return _play_run(Path(str(picked["run_dir"])), picked.get("checkpoint"), overrides, video)
     return _play_agent(str(picked["task"]), str(picked["agent"]), str(picked.get("device", "cpu")),
                        Path(str(picked.get("out", "runs/videos"))), video, env_options)  # fmt: skip
 
 
-def _play_run(run_dir: Path, checkpoint, device, video: VideoOptions) -> list[Path]:
+def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -> list[Path]:
     from refpo_warp.config.saved import load_run_config
     from refpo_warp.evaluation.videos import VIDEO_DIR, policy_panels, record
     from refpo_warp.runner.build import build_runner
@@ -78,7 +81,7 @@ def _play_run(run_dir: Path, checkpoint, device, video: VideoOptions) -> list[Pa
 
     if checkpoint is not None and not isinstance(checkpoint, str):
         raise ConfigError(f"checkpoint={checkpoint!r} is invalid; expected a path to a model_<iteration>.pt file")
-    cfg = load_run_config(run_dir, {"device": device} if device else {})
+    cfg = load_run_config(run_dir, overrides)
     env_options = {**cfg["env"], **cfg["eval"]["env"]}
     from refpo_warp.envs.registry import make_env
 

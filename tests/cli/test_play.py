@@ -38,6 +38,13 @@ def test_one_step_beside_ten_from_a_trained_run(tmp_path):
     assert video.name == "model_0_N1-10.mp4"
     frames = read_video(video)
     assert frames.shape[1:] == (48, 2 * 2 * 64, 3)  # two panels side by side, two envs tiled in each
+    # both initial-noise protocols: one panel per (protocol, N)
+    proc = play(f"run_dir={run_dir}", "flow_steps=[1]", "initial_noise=[random, zero]", "num_envs=1", "length=3", *SMALL)
+    assert proc.returncode == 0, proc.stderr
+    video = run_dir / "videos" / "model_0_N1_random-zero.mp4"
+    assert read_video(video).shape[1:] == (48, 2 * 64, 3)
+    proc = play(f"run_dir={run_dir}", "initial_noise=none", *SMALL)
+    assert proc.returncode == 2 and "eval.initial_noise='none' is invalid" in proc.stderr
 
 
 def test_bad_options_and_a_missing_gl_platform_get_one_message_and_an_exit_code(tmp_path):

@@ -86,3 +86,23 @@ def test_play_records_a_video_of_the_checkpoint(trained):
     assert len(frames) == VIDEO_FRAMES and width > 0 and height > 0
     assert all(len(frame) == width * height * 3 for frame in frames)
     assert len({bytes(frame) for frame in frames}) > 1  # the cartpole moves
+
+
+@pytest.mark.rsl_rl
+def test_evaluate_reports_both_initial_noise_protocols(trained):
+    """The checkpoint's return rate under zero (play's, the default) and random initial noise, as eval.initial_noise
+    names them; a bad value is one message and exit code 2."""
+    import json
+
+    _, run_dir = trained
+    base = [sys.executable, "-m", "refpo_warp.integrations.mjlab.evaluate", TASK, str(run_dir / "model_1.pt"),
+            "num_envs=4", "num_steps=20"]  # fmt: skip
+    both = subprocess.run([*base, "initial_noise=random,zero"], capture_output=True, text=True, timeout=600)
+    assert both.returncode == 0, both.stderr[-2000:]
+    rates = json.loads(both.stdout.strip().splitlines()[-1])
+    zero = json.loads(subprocess.run(base, capture_output=True, text=True, timeout=600).stdout.strip().splitlines()[-1])
+    assert set(rates) == {"reward_rate/random", "reward_rate/zero"} and rates["reward_rate/zero"] == zero["reward_rate"]
+    bad = subprocess.run([*base, "initial_noise=none"], capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and "initial_noise='none' is invalid" in bad.stderr and "Traceback" not in bad.stderr
+    bad = subprocess.run([*base, "num_envs=abc"], capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and "num_envs=abc is invalid" in bad.stderr and "Traceback" not in bad.stderr
