@@ -21,6 +21,11 @@ cpu_reflow_pairs.yaml) and writes into out= (default SWEEP_DIR/one_step):
   sampler's paths and the returns after them, <task>_intervention_seed<k>.png;
 - one_step.json with every number behind the figures.
 
+screen=<sweep> (with intervene=<iteration>) screens the sweep's candidates instead (e.g. configs/sweep/cpu_onestep.yaml):
+from that checkpoint of the "refpo" run of every seed, intervene_iterations iterations under each candidate's
+overrides and under ReFPO's own rule, the same first rollout for all, then the one-step error on the checkpoint's
+N-step states and the N = 10 and N = 1 returns; <task>_screen.md and screen.json.
+
 curves_only=true redraws the training figures alone (seconds, as more runs of the sweep finish) and updates their
 numbers in an existing one_step.json, keeping its probes and intervention.
 """
@@ -37,7 +42,7 @@ from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.utils.errors import ConfigError, DataFileError, unknown
 
 OPTIONS = {"out": None, "task": "dmc_point_mass", "seed": 1, "states": 256, "noises": 16, "every": 1, "device": "cpu",
-           "intervene": None, "intervene_iterations": 5, "curves_only": False}  # fmt: skip
+           "intervene": None, "intervene_iterations": 5, "curves_only": False, "screen": None}  # fmt: skip
 PANELS = [("eval/return_N10", "N = 10 return", False), ("eval/return_N1", "N = 1 return", False),
           ("Flow/one_step_error", "one-step error", True), ("Flow/one_step_ratio", "one-step ratio", True),
           ("Flow/reflow_coef", "Reflow coefficient λ", False)]  # fmt: skip
@@ -196,6 +201,41 @@ def one_sign(minibatches, sign: str):
     return batches
 
 
+def screen(seeds: dict[str, dict[int, Path]], task: str, options: dict, out: Path) -> Path:
+    """The ``screen=`` mode (module docstring): every seed of the "refpo" runs, ReFPO's own rule and every candidate
+    of the sweep; writes ``<task>_screen.md`` and ``screen.json``, returns the Markdown file."""
+    from refpo_warp.sweeps.spec import load_sweep
+
+    runs = seeds.get("refpo")
+    if not runs:
+        raise ConfigError(f"screen= needs the sweep's 'refpo' runs of {task} (checkpoints every few iterations)")
+    sweep = load_sweep(str(options["screen"]))
+    candidates = {"ReFPO (the paper's rule)": {}}
+    candidates.update({m.name: dict(m.overrides) for m in sweep.methods})
+    iteration, iterations = int(options["intervene"]), int(options["intervene_iterations"])
+    results = {seed: intervene(run, iteration, iterations, {**options, "seed": seed}, candidates, light=True)
+               for seed, run in sorted(runs.items())}  # fmt: skip
+    write_numbers({"iteration": iteration, "iterations": iterations, "seeds": results}, out / "screen.json")
+    lines = [f"# Screen on {task}: {iterations} iterations from the iteration-{iteration} checkpoint of ReFPO",
+             "", f"One-step error (on the checkpoint's N-step states) and N = 10 / N = 1 returns (32 episodes) per seed "
+             f"{', '.join(map(str, sorted(runs)))}; the checkpoint itself first.", "",
+             "| candidate | " + " | ".join(f"seed {s}: error, N=10 / N=1" for s in sorted(runs)) + " |",
+             "|---|" + "---|" * len(runs)]  # fmt: skip
+
+    def cells(get) -> str:
+        return " | ".join(f"{r['states_N']['one_step_error']:.3f}, {r['returns']['N=10']:.0f} / "
+                          f"{r['returns']['N=1']:.0f}" for r in (get(results[s]) for s in sorted(runs)))  # fmt: skip
+
+    lines.append(f"| checkpoint (iteration {iteration}) | " + cells(lambda r: r["checkpoint"]) + " |")
+    for name in candidates:
+        lines.append(f"| {name} | " + cells(lambda r, name=name: r["variants"][name]) + " |")
+    path = out / f"{task}_screen.md"
+    from refpo_warp.utils.atomic_files import write_text
+
+    write_text(path, "\n".join(lines) + "\n")
+    return path
+
+
 def evaluate_returns(actor, cfg: dict, device: str) -> dict[str, float]:
     """N = 10 and N = 1 returns of 32 evaluation episodes (the run's evaluation protocol and env seed)."""
     from refpo_warp.envs.registry import make_env
@@ -211,10 +251,11 @@ def evaluate_returns(actor, cfg: dict, device: str) -> dict[str, float]:
     return out
 
 
-def intervene(run: Path, iteration: int, iterations: int, options: dict) -> dict:
-    """From checkpoint ``iteration`` of ``run``: ``iterations`` training iterations under each of ``VARIANTS``, then
+def intervene(run: Path, iteration: int, iterations: int, options: dict, variants: dict = VARIANTS,
+              light: bool = False) -> dict:  # fmt: skip
+    """From checkpoint ``iteration`` of ``run``: ``iterations`` training iterations under each of ``variants``, then
     the sampler probe on fixed states (those the checkpoint's N-step and 1-step policies visit), the velocity error
-    by tau on its own paths, and the evaluation returns."""
+    by tau on its own paths (not if ``light``), and the evaluation returns."""
     import contextlib
     import io
 
@@ -228,22 +269,24 @@ def intervene(run: Path, iteration: int, iterations: int, options: dict) -> dict
     device = options["device"]
     base = CheckpointPolicy(run, device)
     actor = base.load(checkpoint)
-    fixed = {"states_N": base.states(actor, options["states"], actor.num_flow_steps),
-             "states_1": base.states(actor, options["states"], 1)}  # fmt: skip
+    fixed = {"states_N": base.states(actor, options["states"], actor.num_flow_steps)}
+    if not light:
+        fixed["states_1"] = base.states(actor, options["states"], 1)
 
     def measure(actor) -> dict:
         out = {}
         for where, obs in fixed.items():
             gen = torch.Generator().manual_seed(options["seed"])
             out[where] = sampler_probe(actor, obs, actor.num_flow_steps, base.transform, options["noises"], gen)
-        gen = torch.Generator().manual_seed(options["seed"])
-        out["own_path_by_tau"] = velocity_error_by_tau(actor, fixed["states_N"], actor.num_flow_steps, TAUS, 8,
-                                                       gen)["own_path"]  # fmt: skip
+        if not light:
+            gen = torch.Generator().manual_seed(options["seed"])
+            out["own_path_by_tau"] = velocity_error_by_tau(actor, fixed["states_N"], actor.num_flow_steps, TAUS, 8,
+                                                           gen)["own_path"]  # fmt: skip
         out["returns"] = evaluate_returns(actor, base.cfg, device)
         return out
 
     results = {"checkpoint": measure(actor), "iterations": iterations, "variants": {}}
-    for name, change in VARIANTS.items():
+    for name, change in variants.items():
         print(f"[one_step] {run.name} from iteration {iteration}: {iterations} iterations, {name}", flush=True)
         overrides = {"device": device, **{k: v for k, v in change.items() if k != "advantages"}}
         cfg = load_run_config(run, overrides)
@@ -398,7 +441,7 @@ def main(argv: list[str]) -> int:
         runs = method_runs(sweep)
         if options["task"] not in runs:
             raise unknown("task", options["task"], list(runs))
-        numbers = {"training": training_figures(runs, out), "probes": {}}
+        numbers = {"training": training_figures(runs, out) if options["screen"] is None else {}, "probes": {}}
         if options["curves_only"]:
             previous = out / "one_step.json"
             kept = json.loads(previous.read_text()) if previous.is_file() else {}
@@ -406,12 +449,17 @@ def main(argv: list[str]) -> int:
             print(previous)
             return
         task, seed = options["task"], options["seed"]
-        for label, seeds in sorted(runs[task].items()):
+        for label, seeds in sorted(runs[task].items()) if options["screen"] is None else ():
             if seed in seeds:
                 print(f"[one_step] probing {task}/{label}/seed{seed}", flush=True)
                 numbers["probes"][label] = probe_run(seeds[seed], options)
         for path in probe_figures(task, seed, numbers["probes"], out):
             print(path)
+        if options["screen"] is not None:
+            if options["intervene"] is None:
+                raise ConfigError("screen= needs intervene=<checkpoint iteration> (the iteration to screen from)")
+            print(screen(runs[task], task, options, out))
+            return
         if options["intervene"] is not None:
             base = runs[task].get("refpo", {}).get(seed)
             if base is None:

@@ -19,6 +19,11 @@ sample was integrated from (before any post-sample perturbation, which the store
 v(x_tau, tau) onto a - eps_0 at x_tau = (1 - tau) eps_0 + tau a, at the stored tau_k: the rectified flow's Reflow,
 which straightens the sampler's own paths. The ratio keeps its independent pairs either way. The coefficient lambda
 is fixed or adapted to the one-step consistency (``reflow_schedule``, ``refpo_warp/algorithms/reflow_schedule.py``).
+``reflow_tau_weight: towards_zero`` weights the Reflow pairs by 1 - tau (normalised over the minibatch), towards the
+small flow times that one Euler step reads. ``one_step_coef`` adds a one-step consistency term (ours): the mean over
+actions of |v(eps_0, 0; o) - (a - eps_0)|^2 on the rollout's own (eps_0, a), i.e. |a_1(eps_0) - a| for the deployed
+one-step sampler against the action the rollout's N-step sampler drew from the same noise: one extra network pass on
+B rows beside the ratio's B x K.
 
 Diagnostics (``Flow/...``, paper §4.2 and Appendix C): ``explosion_rate`` is the fraction of actions whose
 log-ratio mean_k (L_old,k - L_new,k) exceeds ``explosion_threshold`` in magnitude (the paper's "Explosion" /
@@ -48,6 +53,7 @@ TAU_SAMPLING = ("uniform", "discrete", "logit_normal", "uniform_inset")
 TAU_INSET = 0.005  # "uniform_inset" keeps flow times this far from both ends (FPO++)
 RATIO_MODES = ("mean", "per_sample")
 REFLOW_PAIRS = ("independent", "coupled")
+REFLOW_TAU_WEIGHTS = ("uniform", "towards_zero")
 DIAGNOSTIC_SEED_OFFSET = 7919  # the diagnostics' own random stream: they never move the training's
 
 
@@ -88,6 +94,8 @@ class ReFPO(OnPolicyAlgorithm):
         reflow_coef_range: [min, max] of the adaptive lambda.
         one_step_states: Rollout states of the per-update one-step diagnostic (0: off; the adaptive schedule needs it).
         trust_region: ``"ppo"`` clip (the paper's), ``"spo"`` penalty or FPO++'s ``"aspo"`` (``trust_region.py``).
+        reflow_tau_weight: ``"uniform"`` (the paper's) or ``"towards_zero"``: Reflow pairs weighted by 1 - tau.
+        one_step_coef: Weight of the one-step consistency term on the rollout's (eps_0, a) (0: off, the paper's).
     """
 
     option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
@@ -106,6 +114,8 @@ class ReFPO(OnPolicyAlgorithm):
         "reflow_coef_range": Check(coefficient_range, "[min, max] with 0 <= min <= max"),
         "one_step_states": Int(0, 1_000_000),
         "trust_region": OneOf(TRUST_REGIONS),
+        "reflow_tau_weight": OneOf(REFLOW_TAU_WEIGHTS),
+        "one_step_coef": Real(0, 1e6),
     }
 
     def __init__(
@@ -128,6 +138,8 @@ class ReFPO(OnPolicyAlgorithm):
         reflow_coef_range: tuple[float, float] = (0.01, 0.2),
         one_step_states: int = 256,
         trust_region: str = "ppo",
+        reflow_tau_weight: str = "uniform",
+        one_step_coef: float = 0.0,
         clip_param: float = 0.05,
         learning_rate: float = 3e-4,
         schedule: str = "fixed",
@@ -165,6 +177,8 @@ class ReFPO(OnPolicyAlgorithm):
         self.reflow_coef = self.reflow_schedule.start(self.reflow_coef)
         self.one_step_states = int(one_step_states)
         self.trust_region = trust_region
+        self.reflow_tau_weight = reflow_tau_weight
+        self.one_step_coef = float(one_step_coef)
         if reflow_schedule == "adaptive" and not self.one_step_states:
             raise ValueError("reflow_schedule='adaptive' needs the one-step diagnostic: set one_step_states > 0")
         self.action_transform: str | None = None  # the env's (construct_algorithm): the diagnostic's action space
@@ -191,7 +205,7 @@ class ReFPO(OnPolicyAlgorithm):
         n = actions.shape[0]
         tau, eps = self.sample_pairs(n, actions.device)
         self.store.write(self.storage.step, tau=tau, eps=eps)
-        if self.reflow_pairs == "coupled":  # the x_0 this action was integrated from
+        if self.reflow_pairs == "coupled" or self.one_step_coef > 0:  # the x_0 this action was integrated from
             self.store.write(self.storage.step, eps0=uncompiled(self, "actor")._last_noise)
         t = self.transition
         t.actions = actions
@@ -228,8 +242,19 @@ class ReFPO(OnPolicyAlgorithm):
         return surrogate(ratio, advantages, self.clip_param, self.trust_region)
 
     def reflow_loss(self, new_loss: torch.Tensor, batch: Minibatch) -> torch.Tensor:
-        """The Reflow term: the CFM loss of the current parameters on the Reflow pairs, un-weighted."""
-        return new_loss.mean()
+        """The Reflow term: the CFM loss of the current parameters on the Reflow pairs, un-weighted by the advantage;
+        by flow time with ``reflow_tau_weight: towards_zero`` (weights 1 - tau, normalised over the minibatch)."""
+        if self.reflow_tau_weight == "uniform":
+            return new_loss.mean()
+        weights = 1.0 - batch.field("tau")
+        return (weights * new_loss).sum() / weights.sum().clamp(min=1e-12)
+
+    def one_step_loss(self, batch: Minibatch) -> torch.Tensor:
+        """mean_i |v(eps_0,i, 0; o_i) - (a_i - eps_0,i)|^2 / D: the one-step sampler's squared error against the
+        rollout's own action from the same initial noise (see the module docstring)."""
+        eps0 = batch.field("eps0").unsqueeze(1)
+        tau = torch.zeros(eps0.shape[0], 1, device=eps0.device)
+        return self.actor.cfm_terms(batch.observations, batch.actions, tau, eps0).velocity_error.mean()
 
     def reflow_pair_losses(self, batch: Minibatch, tau: torch.Tensor, eps: torch.Tensor, new_loss: torch.Tensor):
         """CFM losses (B, K) of the Reflow pairs: the ratio's (independent), or the rollout's (eps_0, a) at each
@@ -272,6 +297,9 @@ class ReFPO(OnPolicyAlgorithm):
         reflow = self.reflow_loss(self.reflow_pair_losses(batch, tau, eps, new_loss), batch)
         loss = surrogate + self.reflow_coef * reflow
         stats = {"surrogate": surrogate, "reflow": reflow}
+        if self.one_step_coef > 0:
+            stats["one_step"] = self.one_step_loss(batch)
+            loss = loss + self.one_step_coef * stats["one_step"]
         if self.bound_coef > 0:
             stats["bound"] = soft_bound_loss(terms.clean_action, self.bound)
             loss = loss + self.bound_coef * stats["bound"]
