@@ -117,6 +117,12 @@ def test_an_adaptive_run_logs_its_coefficient_and_one_step_statistics_every_upda
     random_rollout(alg, T, N, OBS)
     out = alg.update()
     assert {"Flow/one_step_error", "Flow/policy_spread", "Flow/one_step_ratio", "Flow/reflow_coef"} <= out.keys()
-    assert 0.01 <= out["Flow/reflow_coef"] <= 0.2
+    # the first update's lambda is 0.04 moved once by the rule: x 1.5 above 2 x target (0.25), / 1.5 below target / 2
+    ratio = out["Flow/one_step_ratio"]
+    expected = 0.04 * 1.5 if ratio > 0.5 else 0.04 / 1.5 if ratio < 0.125 else 0.04
+    assert out["Flow/reflow_coef"] == pytest.approx(expected), ratio
+    raised = build(reflow_schedule="adaptive", one_step_states=8, one_step_target=1e-6)  # every ratio is above
+    random_rollout(raised, T, N, OBS)
+    assert raised.update()["Flow/reflow_coef"] == pytest.approx(0.06)
     with pytest.raises(ValueError, match="one_step_states"):
         build(reflow_schedule="adaptive", one_step_states=0)

@@ -62,6 +62,15 @@ def test_rollouts_use_the_live_actor_and_the_policy_is_the_ema():
     assert policy is alg.ema.model and policy is not alg.actor
     live, ema = alg.actor.sample(obs, initial_noise="zero"), policy.sample(obs, initial_noise="zero")
     assert not torch.allclose(live, ema)  # 3 updates apart
+
+    def from_one_stream(sample):
+        torch.manual_seed(3)
+        with torch.inference_mode():
+            return sample()
+
+    step = from_one_stream(lambda: alg.act(obs))  # the action a rollout step stores and sends to the env
+    torch.testing.assert_close(step, from_one_stream(lambda: alg.actor(obs, stochastic_output=True)))
+    assert not torch.allclose(step, from_one_stream(lambda: policy(obs, stochastic_output=True)))
     plain, _ = build()  # off by default for ReFPO
     assert plain.ema is None and plain.get_policy() is plain.actor
 

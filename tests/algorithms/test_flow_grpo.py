@@ -178,7 +178,11 @@ def test_runner_builds_it_without_a_critic_and_takes_the_group_size_from_the_env
     }  # fmt: skip
     runner = OnPolicyRunner(env, copy.deepcopy(cfg), log_dir=None, device="cpu")
     assert isinstance(runner.alg.critic, NoCritic) and runner.alg.group_size == 8
+    before = [p.detach().clone() for p in runner.alg.actor.parameters()]
     runner.learn(1)
+    after = list(runner.alg.actor.parameters())
+    assert any(not torch.equal(a, b) for a, b in zip(before, after)), "the update changed no actor parameter"
+    assert all(torch.isfinite(p).all() for p in after)
     with pytest.raises(ValueError, match="reset_group_size"):
         OnPolicyRunner(make_env("gridworld", num_envs=16, device="cpu", seed=1), copy.deepcopy(cfg), device="cpu")
     cfg["algorithm"]["group_size"] = 4

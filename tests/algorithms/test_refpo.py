@@ -133,9 +133,12 @@ def test_tau_sampling_modes():
     assert tau.min().item() >= 1e-4 and tau.max().item() <= 1.0
     grid = sample_tau((1000,), "discrete", 5, 0, 1, "cpu")
     assert set((grid * 5).round().unique().tolist()) == {0, 1, 2, 3, 4}  # the 5-step Euler grid k/5
-    alg, _ = make_refpo(tau_sampling="discrete")
+    alg, _ = make_refpo(tau_sampling="discrete")  # the actor's 5 flow steps: tau on k/5, eps ~ N(0, I)
     tau, eps = alg.sample_pairs(1000, "cpu")
     assert tau.shape == (1000, 4) and eps.shape == (1000, 4, ACT)
+    torch.testing.assert_close(tau * 5, (tau * 5).round())
+    assert set((tau * 5).round().unique().tolist()) == {0, 1, 2, 3, 4}
+    assert eps.mean().item() == pytest.approx(0.0, abs=0.05) and eps.std().item() == pytest.approx(1.0, abs=0.05)
 
 
 def test_bound_loss_hand_worked_and_applied_to_the_predicted_action():

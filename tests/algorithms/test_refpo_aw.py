@@ -107,5 +107,10 @@ def test_plain_rsl_rl_runner_trains_it_by_class_name():
                       "num_learning_epochs": 1, "num_mini_batches": 2},
     }  # fmt: skip
     runner = OnPolicyRunner(make_env("gridworld", num_envs=8, device="cpu", seed=1), cfg, log_dir=None, device="cpu")
+    before = [p.detach().clone() for p in runner.alg.actor.parameters()]
     runner.learn(2)
-    assert runner.alg.num_updates == 2 and runner.alg.reflow_weighting == "softplus"
+    assert isinstance(runner.alg, AdvantageWeightedReFPO) and runner.alg.reflow_weighting == "softplus"
+    assert runner.alg.num_updates == 2
+    after = list(runner.alg.actor.parameters())
+    assert any(not torch.equal(a, b) for a, b in zip(before, after)), "two updates changed no actor parameter"
+    assert all(torch.isfinite(p).all() for p in after)

@@ -167,5 +167,9 @@ def test_plain_rsl_rl_runner_trains_it_by_class_name_on_chunked_actions():
     }  # fmt: skip
     runner = OnPolicyRunner(env, cfg, log_dir=None, device="cpu")
     assert runner.alg.actor.action_dim == 4  # a chunk of two 2-D moves
+    before = [p.detach().clone() for p in runner.alg.actor.parameters()]
     runner.learn(2)
     assert runner.alg.num_updates == 2
+    after = list(runner.alg.actor.parameters())
+    assert any(not torch.equal(a, b) for a, b in zip(before, after)), "two updates changed no actor parameter"
+    assert all(torch.isfinite(p).all() for p in after)

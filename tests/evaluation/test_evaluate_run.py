@@ -23,7 +23,10 @@ def test_one_name_per_metric_in_eval_json(tmp_run_dir, quick_run):
         # success_mean (= success_rate) and reached_top_mean (= top_share x success_rate) are not repeated
         assert set(summary) == {"episodes", "unfinished", "return_mean", "return_std", "length_mean", "success_rate",
                                 "top_share", "bottom_share"}  # fmt: skip
-        assert abs(summary["top_share"] + summary["bottom_share"] - 1.0) < 1e-9 or summary["success_rate"] == 0.0
+        # shares of the successes (none: both 0); the return is 20 per success, GridWorld's only reward
+        shares = summary["top_share"] + summary["bottom_share"]
+        assert shares == pytest.approx(1.0 if summary["success_rate"] else 0.0)
+        assert summary["return_mean"] == pytest.approx(20.0 * summary["success_rate"])
 
 
 def test_eval_keeps_the_previous_eval_json_and_says_so(tmp_run_dir, quick_run):

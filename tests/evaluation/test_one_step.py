@@ -74,9 +74,19 @@ def test_saturation_is_counted_before_the_transform_and_actions_after_it():
 def test_drive_plays_the_same_starts_with_the_same_noise():
     from refpo_warp.envs.registry import make_env
 
-    actor = actor_with_field(lambda x, tau: -x, obs_dim=4)  # a = 0 after one step: the point mass is not pushed
-    runs = [drive(actor, make_env("dmc_point_mass", num_envs=4, device="cpu", seed=5), n, 6, seed=0) for n in (1, 1)]
-    torch.testing.assert_close(runs[0]["obs"], runs[1]["obs"])
+    def point_mass():
+        return make_env("dmc_point_mass", num_envs=4, device="cpu", seed=5)
+
+    # v = 0.2: a = x_0 + 0.2 whatever the number of steps, so N = 1 and N = 10 act alike only on the same noise
+    actor = actor_with_field(lambda x, tau: torch.full_like(x, 0.2), obs_dim=4)
+    runs = [drive(actor, point_mass(), n, 6, seed=0) for n in (1, 10)]
     assert runs[0]["obs"].shape == (7, 4, 4) and runs[0]["actions"].shape == (6, 4, 2)
-    assert runs[0]["actions"].abs().max() < 1e-6
-    torch.testing.assert_close(runs[0]["obs"][-1, :, 2:], torch.zeros(4, 2), atol=1e-6, rtol=0)  # never moved
+    gen = torch.Generator().manual_seed(0)
+    noise = torch.stack([torch.randn(4, 2, generator=gen) for _ in range(6)])  # seed 0's draws, one per step
+    for run in runs:
+        torch.testing.assert_close(run["actions"], noise + 0.2)
+    torch.testing.assert_close(runs[0]["obs"], runs[1]["obs"])  # same starts, same actions: the same path
+    still = drive(actor_with_field(lambda x, tau: -x, obs_dim=4), point_mass(), 1, 6, seed=0)  # a = 0 after 1 step
+    torch.testing.assert_close(still["obs"][0], runs[0]["obs"][0])  # the env seed's starts
+    assert still["actions"].abs().max() < 1e-6
+    torch.testing.assert_close(still["obs"][-1, :, 2:], torch.zeros(4, 2), atol=1e-6, rtol=0)  # never moved

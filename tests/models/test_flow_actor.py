@@ -109,7 +109,11 @@ def test_noise_and_perturbation_are_separate_flags():
     clean = actor.sample(obs, noise=noise)
     perturbed = actor.sample(obs, noise=noise, perturbation=True)
     assert (perturbed - clean).std().item() == pytest.approx(0.05, rel=0.05)
-    assert actor(obs, stochastic_output=True).std(0).sum() > 0
+    # rsl_rl's rollout sample: random x_0 (not zero), then the perturbation on top of its flow
+    rollout = actor(obs, stochastic_output=True)
+    x0 = actor._last_noise.clone()
+    assert x0.std().item() == pytest.approx(1.0, rel=0.05)
+    assert (rollout - actor.sample(obs, noise=x0)).std().item() == pytest.approx(0.05, rel=0.05)
 
 
 def test_adaln_starts_time_independent_and_head_gain_scales_the_first_actions():

@@ -84,6 +84,9 @@ def test_observations_are_fresh_tensors_and_episode_length_is_assignable(env):
     assert torch.equal(held["policy"], snapshot), "a returned observation must not change on the next step"
     env.episode_length_buf = torch.full((NUM_ENVS,), 5)
     assert (env.episode_length_buf == 5).all() and first.shape == (NUM_ENVS, 2)
+    env.episode_length_buf = torch.full((NUM_ENVS,), 199)  # as rsl_rl's random initial lengths: the kernels see it
+    _, _, dones, extras = env.step(torch.zeros(NUM_ENVS, 2))  # standing still: the 200-step time-out, no goal
+    assert dones.all() and extras["time_outs"].all()
 
 
 def test_graph_replay_matches_eager_stepping():
