@@ -102,6 +102,7 @@ def test_evaluate_reports_both_initial_noise_protocols(trained):
     rates = json.loads(both.stdout.strip().splitlines()[-1])
     zero = json.loads(subprocess.run(base, capture_output=True, text=True, timeout=600).stdout.strip().splitlines()[-1])
     assert set(rates) == {"reward_rate/random", "reward_rate/zero"} and rates["reward_rate/zero"] == zero["reward_rate"]
+    assert rates["reward_rate/random"] != rates["reward_rate/zero"]  # random x_0 is not the deterministic policy
     bad = subprocess.run([*base, "initial_noise=none"], capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and "initial_noise='none' is invalid" in bad.stderr and "Traceback" not in bad.stderr
     bad = subprocess.run([*base, "num_envs=abc"], capture_output=True, text=True, timeout=600)
