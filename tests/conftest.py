@@ -25,6 +25,17 @@ def cuda_available() -> bool:
     return init_warp().get_cuda_device_count() > 0
 
 
+def pytest_addoption(parser):
+    parser.addoption("--null-control", action="store_true",
+                     help="run each learning check with learning switched off (tests/learning/checks.py NULL_CONTROL) "
+                          "and assert that its bound is NOT met")  # fmt: skip
+
+
+@pytest.fixture
+def null_control(request) -> bool:
+    return bool(request.config.getoption("--null-control"))
+
+
 def pytest_configure(config):
     # xdist hands each worker 2 tests at first and then 1 at a time (instead of long runs of consecutive tests), so
     # the order below decides which long tests each worker starts with.

@@ -441,7 +441,7 @@ def main(argv: list[str]) -> int:
         runs = method_runs(sweep)
         if options["task"] not in runs:
             raise unknown("task", options["task"], list(runs))
-        numbers = {"training": training_figures(runs, out) if options["screen"] is None else {}, "probes": {}}
+        numbers = {"training": {} if options["screen"] else training_figures(runs, out), "probes": {}}
         if options["curves_only"]:
             previous = out / "one_step.json"
             kept = json.loads(previous.read_text()) if previous.is_file() else {}
@@ -449,17 +449,17 @@ def main(argv: list[str]) -> int:
             print(previous)
             return
         task, seed = options["task"], options["seed"]
-        for label, seeds in sorted(runs[task].items()) if options["screen"] is None else ():
-            if seed in seeds:
-                print(f"[one_step] probing {task}/{label}/seed{seed}", flush=True)
-                numbers["probes"][label] = probe_run(seeds[seed], options)
-        for path in probe_figures(task, seed, numbers["probes"], out):
-            print(path)
         if options["screen"] is not None:
             if options["intervene"] is None:
                 raise ConfigError("screen= needs intervene=<checkpoint iteration> (the iteration to screen from)")
             print(screen(runs[task], task, options, out))
             return
+        for label, seeds in sorted(runs[task].items()):
+            if seed in seeds:
+                print(f"[one_step] probing {task}/{label}/seed{seed}", flush=True)
+                numbers["probes"][label] = probe_run(seeds[seed], options)
+        for path in probe_figures(task, seed, numbers["probes"], out):
+            print(path)
         if options["intervene"] is not None:
             base = runs[task].get("refpo", {}).get(seed)
             if base is None:

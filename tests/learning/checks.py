@@ -1,0 +1,237 @@
+"""The bounded learning checks: what each trains, the statistic it reads and the bound that statistic must meet.
+
+A check trains one method on one task with a profile that ships in ``configs/`` and reads one or more statistics
+from the run: the final evaluation against the policy the run started from (same seed and construction, the run's
+own evaluation protocol, measured in the same test), or the trend of a training curve. Its **null control** is the
+same check with learning switched off (``NULL_CONTROL``: a learning rate of 1e-12 and a fixed schedule, nothing else
+changed); a check's bound must fail there. ``docs/results/learning_checks.md`` gives each check's measured runs
+(seeds 1-5 on one torch thread, 1-3 on two, the null control on seeds 1-3) and where its bound sits between them;
+``tests/learning/measure.py`` makes those runs and that table.
+
+A bound obeys the rule the table checks: strictly beyond the null control's best, and at most halfway from it to the
+learning runs' worst, so that another CPU, which moves a run as another seed does, cannot fail it by a hair.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import operator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+NULL_CONTROL = ("algorithm.learning_rate=1e-12", "algorithm.schedule=fixed")
+ROW_KEYS = ("iteration", "env_steps", "reward_mean", "episode_length_mean")  # kept per iteration in a record
+
+
+@dataclass(frozen=True)
+class Bound:
+    """``statistic op value``: ``>=`` (higher is learning) or ``<=`` (lower is learning)."""
+
+    statistic: str
+    op: str
+    value: float
+
+    def holds(self, stats: dict[str, float]) -> bool:
+        return {">=": operator.ge, "<=": operator.le}[self.op](stats[self.statistic], self.value)
+
+    def __str__(self) -> str:
+        return f"{self.statistic} {self.op} {self.value:g}"
+
+
+@dataclass(frozen=True)
+class LearningCheck:
+    """One learning check: ``overrides`` (without seed, device and run dir) train it, ``statistics(record)`` reads
+    it, every bound in ``bounds`` must hold; ``initial_eval`` evaluates the starting policy first."""
+
+    name: str
+    overrides: tuple[str, ...]
+    statistics: Callable[[dict], dict[str, float]]
+    bounds: tuple[Bound, ...]
+    initial_eval: bool = True
+    describe: str = ""
+    properties: Callable[[dict], list[str]] = field(default=lambda record: [])  # failures of non-learning asserts
+    runner: str = "refpo_warp"  # or "mjlab": mjlab's own train command, in an mjlab environment
+    minutes: float = 3.0  # its wall time in CI (the slow marker's, which orders the run)
+
+    def verdict(self, record: dict) -> tuple[bool, dict[str, float]]:
+        stats = self.statistics(record)
+        return all(b.holds(stats) for b in self.bounds), stats
+
+
+# ------------------------------------------------------------------------------------------------------ statistics
+def gain(record: dict, setting: str, key: str = "return_mean") -> float:
+    """Final evaluation over the initial policy's, for one evaluation setting (``N=10``, ``mean_action``)."""
+    return record["final"][setting][key] / record["initial"][setting][key]
+
+
+def linear_trend(y) -> tuple[float, float]:
+    """(t statistic of the least-squares slope, fitted rise over the series relative to the fitted start)."""
+    y = np.asarray(y, dtype=float)
+    x = np.arange(len(y), dtype=float)
+    slope, start = np.polyfit(x, y, 1)
+    residuals = y - (start + slope * x)
+    standard_error = np.sqrt(residuals @ residuals / (len(y) - 2) / ((x - x.mean()) ** 2).sum())
+    return float(slope / standard_error), float(slope * (len(y) - 1) / start)
+
+
+def return_gains(*settings: str):
+    def statistics(record: dict) -> dict[str, float]:
+        return {f"gain_{s}": gain(record, s) for s in settings}
+
+    return statistics
+
+
+def length_ratios(*settings: str):
+    """Episode length relative to the initial policy's, per setting (a learned GridWorld policy walks straight to a
+    goal band)."""
+
+    def statistics(record: dict) -> dict[str, float]:
+        return {f"length_ratio_{s}": record["final"][s]["length_mean"] / record["initial"][s]["length_mean"]
+                for s in settings}  # fmt: skip
+
+    return statistics
+
+
+def gridworld_properties(record: dict) -> list[str]:
+    """The paper's multimodality: both goal bands keep a real share of the successes; no ratio explosions."""
+    failures = [f"{s}: {record['final'][s]}" for s in ("N=1", "N=10")
+                if min(record["final"][s]["top_share"], record["final"][s]["bottom_share"]) < 0.2]  # fmt: skip
+    if record["diagnostics"].get("explosion_rate", 0.0) >= 0.01:
+        failures.append(f"explosion_rate {record['diagnostics']['explosion_rate']}")
+    return failures
+
+
+def length_trend(record: dict) -> dict[str, float]:
+    t, rise = linear_trend([row["episode_length_mean"] for row in record["rows"]])
+    return {"length_trend_t": t, "length_rise": rise}
+
+
+def rate_gain(record: dict) -> dict[str, float]:
+    """mjlab: the last checkpoint's deterministic return rate minus the first checkpoint's."""
+    return {"rate_gain": record["final"]["reward_rate"] - record["initial"]["reward_rate"]}
+
+
+# ------------------------------------------------------------------------------------------------------ the checks
+CARTPOLE = ("task=dmc_cartpole_balance",)
+MJLAB_ITERATIONS = 100
+CHECKS: dict[str, LearningCheck] = {
+    check.name: check
+    for check in (
+        LearningCheck(
+            "gridworld_refpo", ("task=gridworld", "algo=refpo", "eval.flow_steps=[1, 10]"), length_ratios("N=1", "N=10"),
+            (Bound("length_ratio_N=1", "<=", 0.5), Bound("length_ratio_N=10", "<=", 0.5)),
+            describe="ReFPO on GridWorld (the paper's 260k env steps): episode length at N = 1 and 10 over the "
+                     "initial policy's", properties=gridworld_properties),
+        LearningCheck(
+            "cartpole_refpo", (*CARTPOLE, "algo=refpo"), return_gains("N=10", "N=1"),
+            (Bound("gain_N=10", ">=", 1.3), Bound("gain_N=1", ">=", 1.3)),
+            describe="ReFPO on dmc_cartpole_balance (450k env steps): N = 10 and N = 1 return over the initial "
+                     "policy's"),
+        LearningCheck(
+            "cartpole_ppo", (*CARTPOLE, "algo=ppo", "eval.interval=0"), return_gains("mean_action"),
+            (Bound("gain_mean_action", ">=", 1.5),),
+            describe="Gaussian PPO on dmc_cartpole_balance (450k env steps): mean-action return over the initial "
+                     "policy's"),
+        LearningCheck(
+            "cartpole_refpo_aw", (*CARTPOLE, "algo=refpo_aw"), return_gains("N=10"),
+            (Bound("gain_N=10", ">=", 1.5),),
+            describe="advantage-weighted ReFPO on dmc_cartpole_balance (450k env steps): N = 10 return over the "
+                     "initial policy's"),
+        LearningCheck(
+            "cartpole_fpo_pp", (*CARTPOLE, "algo=fpo_pp"), return_gains("N=10", "N=1"),
+            (Bound("gain_N=10", ">=", 1.3), Bound("gain_N=1", ">=", 1.3)),
+            describe="FPO++ on dmc_cartpole_balance (450k env steps): N = 10 and N = 1 return (random initial "
+                     "noise, the EMA actor) over the initial policy's"),
+        LearningCheck(
+            "cartpole_flow_grpo", (*CARTPOLE, "algo=flow_grpo"), return_gains("N=10"),
+            (Bound("gain_N=10", ">=", 1.2),),
+            describe="Flow-GRPO on dmc_cartpole_balance (1M env steps): N = 10 return over the initial policy's"),
+        LearningCheck(
+            "gridworld_reinflow", ("task=gridworld", "algo=reinflow"), length_ratios("N=4", "N=1"),
+            (Bound("length_ratio_N=4", "<=", 0.5),),
+            describe="ReinFlow on GridWorld (the paper's 260k env steps): deterministic K = 4 chain's episode length "
+                     "over the initial policy's"),
+        LearningCheck(
+            "humanoid_refpo", ("task=humanoid_all_residual", "algo=refpo", "max_iterations=40", "eval.at_end=false"),
+            length_trend, (Bound("length_trend_t", ">=", 3.0), Bound("length_rise", ">=", 0.05)), initial_eval=False,
+            describe="ReFPO on humanoid_all_residual (40 iterations): trend of the training episode length"),
+        LearningCheck(
+            "humanoid_ppo", ("task=humanoid_all_residual", "algo=ppo", "max_iterations=40", "eval.at_end=false"),
+            length_trend, (Bound("length_trend_t", ">=", 3.0), Bound("length_rise", ">=", 0.05)), initial_eval=False,
+            describe="Gaussian PPO on humanoid_all_residual (40 iterations): trend of the training episode length"),
+        LearningCheck(
+            "mjlab_cartpole_refpo", ("Mjlab-Cartpole-Balance-ReFPO", "--env.scene.num-envs", "64",
+                                     "--agent.max-iterations", str(MJLAB_ITERATIONS)),
+            rate_gain, (Bound("rate_gain", ">=", 0.1),), runner="mjlab",
+            describe=f"ReFPO inside mjlab's own train on Mjlab-Cartpole-Balance-ReFPO ({MJLAB_ITERATIONS} "
+                     "iterations, 64 envs): deterministic return rate of the last checkpoint minus the first's"),
+    )
+}
+MJLAB_NULL_CONTROL = ("--agent.algorithm.learning-rate", "1e-12")  # ReFPO's schedule is fixed already
+
+
+# ------------------------------------------------------------------------------------------------------ running one
+def overrides_of(check: LearningCheck, seed: int, run_dir: Path, null: bool) -> list[str]:
+    return [*check.overrides, f"seed={seed}", "device=cpu", f"run_dir={run_dir}", *(NULL_CONTROL if null else ())]
+
+
+def initial_results(overrides: list[str]) -> dict[str, dict]:
+    """The final evaluation's results for the policy training with ``overrides`` starts from (same seed, same
+    construction, the run's own evaluation protocol)."""
+    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.evaluation.evaluate_policy import evaluate_actor, make_eval_env
+    from refpo_warp.runner.build import build_runner, seed_everything
+
+    cfg = resolve_config(overrides)
+    seed_everything(cfg["seed"])
+    with contextlib.redirect_stdout(io.StringIO()):
+        _, runner = build_runner(cfg, None)
+    actor = runner.alg.get_policy().eval()
+    results, _ = evaluate_actor(cfg, actor, make_eval_env(cfg), list(cfg["eval"]["flow_steps"]))
+    return results
+
+
+def run_mjlab_check(check: LearningCheck, seed: int, run_dir: Path, null: bool = False) -> dict:
+    """mjlab's own ``train`` (the console script beside this interpreter) on the CPU with this process's torch threads,
+    then the first and last checkpoints' deterministic return rate (``refpo_warp.integrations.mjlab.evaluate``)."""
+    import os
+    import subprocess
+    import sys
+
+    import torch
+
+    from refpo_warp.integrations.mjlab.evaluate import evaluate
+
+    task, *options = check.overrides
+    cmd = [str(Path(sys.executable).parent / "train"), task, *options, "--agent.seed", str(seed),
+           "--agent.logger", "tensorboard", "--gpu-ids", "None", "--log-root", str(run_dir),
+           *(MJLAB_NULL_CONTROL if null else ())]  # fmt: skip
+    env = {**os.environ, "OMP_NUM_THREADS": str(torch.get_num_threads())}
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=3600, check=False, env=env)
+    if out.returncode:
+        raise RuntimeError(f"mjlab's train failed ({out.returncode}):\n{out.stdout[-3000:]}{out.stderr[-3000:]}")
+    (experiment,) = Path(run_dir).iterdir()
+    (run,) = experiment.iterdir()
+    last = max(run.glob("model_*.pt"), key=lambda p: int(p.stem.split("_")[1]))
+    first, final = (evaluate(task, str(path)) for path in (run / "model_0.pt", last))
+    return {"check": check.name, "overrides": list(check.overrides), "seed": seed, "null": null, "initial": first,
+            "final": final, "diagnostics": {}, "rows": []}
+
+
+def run_check(check: LearningCheck, seed: int, run_dir: Path, null: bool = False) -> dict:
+    """Train the check's run and return its record: initial and final evaluation, diagnostics, the training curve."""
+    if check.runner == "mjlab":
+        return run_mjlab_check(check, seed, run_dir, null)
+    from refpo_warp.runner.progress import read_rows
+    from refpo_warp.training import train
+
+    overrides = overrides_of(check, seed, Path(run_dir), null)
+    initial = initial_results(overrides) if check.initial_eval else {}
+    out = train(overrides)
+    rows = [{k: row[k] for k in ROW_KEYS if k in row} for row in read_rows(run_dir)]
+    return {"check": check.name, "overrides": list(check.overrides), "seed": seed, "null": null, "initial": initial, "final": out.get("results", {}),
+            "diagnostics": out.get("diagnostics", {}), "rows": rows}

@@ -1,0 +1,38 @@
+"""The bounded learning checks (``tests/learning/checks.py``): each trains seed 1 on one torch thread and asserts its
+bound against the policy it started from, measured in the same test. Their runs over seeds and threads, their null
+controls and the margins: ``docs/results/learning_checks.md``.
+
+    python -m pytest -m slow tests/learning                   # the checks (CI runs them, longest first)
+    python -m pytest -m slow tests/learning --null-control    # each with learning off: its bound must fail
+"""
+
+import importlib.util
+
+import pytest
+from checks import CHECKS, run_check  # tests/learning/checks.py
+
+
+def marks(check):
+    out = [pytest.mark.slow(minutes=check.minutes)]
+    if check.runner == "mjlab" and importlib.util.find_spec("mjlab") is None:
+        out.append(pytest.mark.skip(reason="mjlab is not installed: the mjlab job runs it in its venv (.ci/mjlab)"))
+    elif check.runner != "mjlab" and importlib.util.find_spec("warp") is None:
+        out.append(pytest.mark.skip(reason="needs the sim extra (warp, newton)"))
+    return out
+
+
+@pytest.mark.parametrize("name", [pytest.param(name, marks=marks(check)) for name, check in CHECKS.items()])
+def test_learning_check(name, tmp_run_dir, null_control):
+    check = CHECKS[name]
+    record = run_check(check, seed=1, run_dir=tmp_run_dir, null=null_control)
+    passed, stats = check.verdict(record)
+    shown = ", ".join(f"{k} {v:.3f}" for k, v in stats.items())
+    print(f"[learning check] {name}{' (null control)' if null_control else ''}: {shown}; bounds "
+          f"{', '.join(map(str, check.bounds))}", flush=True)  # fmt: skip
+    if null_control:
+        assert not passed, f"{name} passes with learning switched off: {shown}"
+        return
+    assert passed, f"{name}: {shown} against {', '.join(map(str, check.bounds))}"
+    assert not check.properties(record), check.properties(record)
+    nonfinite = [s for s, summary in record["final"].items() if summary.get("nonfinite_resets_mean", 0) > 0]
+    assert not nonfinite, f"non-finite env states reset during evaluation: {nonfinite}"
