@@ -72,6 +72,17 @@ def _play(args: list[str]) -> None:
         print(f"{path}  ({path.stat().st_size / 1024:.0f} KiB)", flush=True)
 
 
+def _list_tasks(args: list[str]) -> None:
+    """Every task id with its description, those of the config folders the arguments name included."""
+    from refpo_warp.config.dotted import parse_overrides
+    from refpo_warp.config.resolve import run_config_path
+    from refpo_warp.envs.registry import get_task, list_tasks
+
+    run_config_path(parse_overrides(args))
+    for task in list_tasks():
+        print(f"{task:28s} {get_task(task).description}")
+
+
 COMMANDS = {"train": _train, "eval": _eval, "play": _play}
 
 
@@ -92,11 +103,7 @@ def main(command: str, args: list[str], usage: str) -> int:
         print(usage)
         return EXIT_OK
     if "--tasks" in args:
-        from refpo_warp.envs.registry import get_task, list_tasks
-
-        for task in list_tasks():
-            print(f"{task:28s} {get_task(task).description}")
-        return EXIT_OK
+        return run_guarded(lambda: _list_tasks([a for a in args if a != "--tasks"]))
     args, explain_keys = _explain_keys(args)
     if explain_keys is not None:
         return run_guarded(lambda: _explain(command, args, explain_keys))

@@ -13,7 +13,7 @@ from typing import Any
 
 from refpo_warp.config.classes import CLASS_SECTIONS, POSITIONAL, class_defaults
 from refpo_warp.config.dotted import LEAF_KEYS, flatten
-from refpo_warp.config.layers import shown
+from refpo_warp.utils.paths import shown
 from refpo_warp.config.resolve import Resolution
 from refpo_warp.utils.errors import unknown
 

@@ -14,7 +14,7 @@ from refpo_warp.config.saved import fixed_changes
 from refpo_warp.envs.registry import get_task, list_tasks
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real, checks_options, rules_for
-from refpo_warp.utils.paths import CONFIG_DIR
+from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR as CONFIG_DIR
 
 # Constructor arguments rsl_rl passes itself (never a config option).
 _PASSED_BY_RSL_RL = {"device", "multi_gpu_cfg"}
