@@ -2,7 +2,7 @@
 new task id, a variant of the registered task its ``base`` chain names (its env, env cfg and the env options that id
 fixes), trained with the file's settings over that task's::
 
-    # my_configs/task/gridworld_small.yaml: `python tools/train.py task=gridworld_small config_dir=my_configs`
+    # my_configs/task/gridworld_small.yaml: `refpo train task=gridworld_small config_dir=my_configs`
     base: gridworld
     num_envs: 8
     env: {max_episode_length: 100}

@@ -1,5 +1,5 @@
 """Where a run's option got its value:
-``python tools/train.py task=gridworld algo=fpo --explain algorithm.reflow_coef``.
+``refpo train task=gridworld algo=fpo --explain algorithm.reflow_coef``.
 
 For each key: the resolved value, the layer that set it (a file and section, the command line, a constructor's or an
 env cfg's default, or the task id) and what the earlier layers had set. A section (``--explain algorithm``) lists

@@ -4,7 +4,7 @@ is built or written. The task, algo and base files are found along the config pa
 ``config_dir`` and those of ``REFPO_CONFIG_PATH``, then the shipped ``configs/`` (``refpo_warp/config/config_path.py``).
 
 ``resolve_config(["task=dmc_cheetah_run", "algo=fpo", "algorithm.learning_rate=1e-4"])`` returns the config as a
-nested dict; ``resolve(...)`` also says which layer set each key (``python tools/train.py ... --explain KEY``).
+nested dict; ``resolve(...)`` also says which layer set each key (``refpo train ... --explain KEY``).
 Env options may be given without their ``env.`` prefix (``motion_file=...``). A key given twice (on the command line
 or in one YAML mapping) is an error.
 """

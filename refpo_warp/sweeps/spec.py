@@ -61,7 +61,7 @@ class Run:
     method: Method
     seed: int
     run_dir: Path
-    args: tuple[str, ...]  # tools/train.py arguments, device excluded (chosen at launch)
+    args: tuple[str, ...]  # refpo train arguments, device excluded (chosen at launch)
 
     @property
     def key(self) -> str:
@@ -306,7 +306,7 @@ def fingerprint(cfg: dict) -> str:
 
 
 def validate(sweep: Sweep) -> dict[str, str]:
-    """Resolve every run's config (as ``tools/train.py`` will); returns run key -> config fingerprint.
+    """Resolve every run's config (as ``refpo train`` will); returns run key -> config fingerprint.
 
     All failures are collected and raised together, naming the runs, so a typo fails before anything starts.
     Seeds differ only in the plain ``seed`` key, so each (task, method) is resolved once and its seeds share it.

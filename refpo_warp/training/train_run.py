@@ -1,4 +1,4 @@
-"""Train a policy from a resolved config: the implementation behind ``tools/train.py``.
+"""Train a policy from a resolved config: the implementation behind ``refpo train``.
 
 ``train(["task=gridworld", "algo=refpo", "seed=1"])`` builds the env and rsl_rl's runner (extended in
 ``refpo_warp.runner.runner``), writes the resolved config next to the checkpoints, trains (or resumes), evaluates at the

@@ -13,9 +13,10 @@ from refpo_warp.utils.paths import REPO_ROOT as ROOT
 
 PACKAGE = "refpo_warp"
 
-# Top to bottom: the folders (first name below refpo_warp) of each layer. refpo_warp.tasks is the repository's tasks/.
+# Top to bottom: the folders (first name below refpo_warp) of each layer. refpo_warp.tasks is the repository's tasks/;
+# refpo_warp/__main__.py (python -m refpo_warp) is the command line too.
 LAYERS = {
-    "cli": ["cli"],
+    "cli": ["cli", "__main__"],
     "app": ["training", "evaluation", "sweeps", "benchmarks", "integrations"],
     "run": ["config", "runner"],
     "core": ["algorithms", "models", "envs", "sim", "motion", "render", "tasks"],

@@ -3,7 +3,7 @@ validated and explained like the shipped ones, and its task files are listed; mi
 
 import pytest
 
-from refpo_warp.cli.commands import main
+from refpo_warp.cli.main import main
 from refpo_warp.config.config_path import ENV_VAR, config_path
 from refpo_warp.config.resolve import resolve
 from refpo_warp.sweeps.spec import load_sweep
@@ -44,11 +44,11 @@ def test_the_environment_variable_names_folders_too(user_configs, monkeypatch):
 
 
 def test_tasks_lists_the_users_task_and_explain_names_its_file(user_configs, capsys):
-    assert main("train", ["--tasks", f"config_dir={user_configs}"], "") == 0
+    assert main(["train", "--tasks", f"config_dir={user_configs}"]) == 0
     listed = capsys.readouterr().out
     assert "gridworld " in listed and "grid_small" in listed and "grid_small.yaml" in listed
-    code = main("train", ["task=grid_small", "algo=my_refpo", "device=cpu", f"config_dir={user_configs}", "--explain",
-                          "algorithm.reflow_coef"], "")  # fmt: skip
+    code = main(["train", "task=grid_small", "algo=my_refpo", "device=cpu", f"config_dir={user_configs}", "--explain",
+                 "algorithm.reflow_coef"])  # fmt: skip
     assert code == 0
     explained = capsys.readouterr().out
     assert f"algorithm.reflow_coef = 0.3\n  set by  {user_configs / 'algo' / 'my_refpo.yaml'}" in explained
