@@ -15,7 +15,6 @@ PACKAGE_DIR = Path(__file__).resolve().parents[1]
 PACKAGED_CONFIG_DIR = Path(importlib.util.find_spec("refpo_warp.configs").submodule_search_locations[0]).resolve()
 # The checkout the package was installed from in editable mode (in a wheel: the site-packages folder).
 REPO_ROOT = PACKAGE_DIR.parent
-TOOLS_DIR = REPO_ROOT / "tools"  # the training command a sweep launches (a checkout's)
 
 
 def shown(path: str | Path) -> str:
