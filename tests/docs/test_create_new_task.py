@@ -9,10 +9,8 @@ from refpo_warp.algorithms.refpo import ReFPO
 from refpo_warp.envs.env_cfg import EnvCfg
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.envs.warp_vec_env import WarpVecEnv
-from refpo_warp.utils.device import configure_warp
 from refpo_warp.utils.option_rules import Real
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 
 # --- 1. the task: options (tasks/line/cfg.py)
