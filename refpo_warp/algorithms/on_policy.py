@@ -2,9 +2,17 @@
 
 A subclass says how it acts (``act``, storing what it needs in ``self.store``) and what its policy loss is
 (``policy_loss(batch)``); this class runs the passes over the rollout: minibatches (rsl_rl's single permutation, or
-a fresh one per pass as Brax does), per-minibatch advantage normalisation, the value loss, a non-finite check before
-any step is applied, gradient reduction across ranks, clipping, the optimizer step, the learning-rate schedule and
-the statistics, which are kept on the device and read once per update.
+a fresh one per pass as Brax does), per-minibatch advantage normalisation, the value loss, gradient reduction across
+ranks, clipping, the optimizer step, the learning-rate schedule and the statistics, which are kept on the device and
+read once per update.
+
+Non-finite losses: every minibatch's loss is checked on the device and the flags are read with the statistics, once
+per update (a check per minibatch would wait for the device 512 times an update at the CUDA DMC sizes). A non-finite
+loss is therefore applied like any other, and undone: the parameters, the optimizer state and the learning rate are
+copied (on the device) before the update and put back when any loss of the update was non-finite; then
+``NonFiniteLossError`` names the first such minibatch's statistics. A failed update leaves the model as it was before
+the update. (rsl_rl's adaptive schedule, ``schedule=adaptive``, still reads each minibatch's KL: its learning rate is
+a number on the host.)
 
 Options shared by every algorithm (besides rsl_rl's PPO arguments):
     reward_scale: Multiplier on rewards for learning (Brax-style; logged returns stay unscaled).
@@ -23,6 +31,7 @@ a key ending in ``_max`` is the maximum over the update's minibatches, every oth
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -162,20 +171,19 @@ class OnPolicyAlgorithm(RslPPO):
     def update(self) -> dict[str, float]:
         self.before_update()
         device_type = torch.device(self.device).type
+        restore_point = self._restore_point()
         means: dict[str, list[torch.Tensor]] = {}
         maxima: dict[str, torch.Tensor] = {}
+        finite: list[torch.Tensor] = []  # per minibatch, on the device: read with the statistics (module docstring)
+        minibatch_stats: list[dict[str, torch.Tensor]] = []  # for the message naming the first non-finite one
         for batch in self.minibatches():
             with torch.autocast(device_type=device_type, enabled=self.use_mixed_precision, dtype=torch.bfloat16):
                 loss, stats = self.policy_loss(batch)
                 if self.uses_critic:
                     stats["value"] = self.value_loss(batch)
                     loss = loss + self.value_loss_coef * stats["value"]
-            if not torch.isfinite(loss):
-                raise NonFiniteLossError(
-                    f"Non-finite {type(self).__name__} loss ("
-                    + ", ".join(f"{k}={float(v.detach()):.4g}" for k, v in stats.items())
-                    + "); the update was stopped before applying it."
-                )
+            finite.append(torch.isfinite(loss.detach()))
+            minibatch_stats.append({k: v.detach() for k, v in stats.items()})
             self.optimizer.zero_grad()
             loss.backward()
             if self.is_multi_gpu:
@@ -196,6 +204,26 @@ class OnPolicyAlgorithm(RslPPO):
                 else:
                     means.setdefault(key, []).append(value)
 
+        keys, max_keys = list(means), list(maxima)
+        flags = torch.stack(finite).float()
+        if self.is_multi_gpu:  # every rank stops, or none: a non-finite loss on one rank is one on all
+            torch.distributed.all_reduce(flags, op=torch.distributed.ReduceOp.MIN)
+        parts = [flags]
+        if keys:
+            parts.append(torch.stack([torch.stack(means[k]).mean() for k in keys]))
+        if max_keys:
+            parts.append(torch.stack([maxima[k] for k in max_keys]))
+        values = torch.cat(parts).tolist()  # the update's one host read
+        if min(values[: len(finite)]) < 1.0:
+            self._restore(restore_point)
+            first = minibatch_stats[values.index(0.0)]
+            raise NonFiniteLossError(
+                f"Non-finite {type(self).__name__} loss ("
+                + ", ".join(f"{k}={float(v):.4g}" for k, v in first.items())
+                + "); the update was stopped before applying it."
+            )
+        out = dict(zip(keys + max_keys, values[len(finite) :]))
+
         # Normalisers follow the data after the update, as in rsl_rl's PPO (before 5.5 it did so at every env step).
         if not NORMALIZERS_UPDATE_PER_STEP:
             obs = self.storage.observations.flatten(0, 1)
@@ -206,14 +234,20 @@ class OnPolicyAlgorithm(RslPPO):
         if self.lr_decay_rate > 0:
             decay = max(math.exp(-self.lr_decay_rate * self.num_updates), self.lr_decay_floor)
             self._set_learning_rate(self.base_learning_rate * decay)
-
-        out = {}
-        if means:  # one host read for all statistics
-            keys = list(means)
-            values = torch.stack([torch.stack(means[k]).mean() for k in keys]).cpu().tolist()
-            out.update(zip(keys, values))
-        out.update({k: float(v) for k, v in maxima.items()})
         return out
+
+    def _restore_point(self) -> tuple[list[torch.Tensor], dict, float]:
+        """Copies (on the device, no host read) of what an update changes: parameters, optimizer state, rate."""
+        params = [p.detach().clone() for group in self.optimizer.param_groups for p in group["params"]]
+        return params, copy.deepcopy(self.optimizer.state_dict()), self.learning_rate
+
+    @torch.no_grad()
+    def _restore(self, point: tuple[list[torch.Tensor], dict, float]) -> None:
+        params, optimizer_state, learning_rate = point
+        for p, saved in zip((p for group in self.optimizer.param_groups for p in group["params"]), params):
+            p.copy_(saved)
+        self.optimizer.load_state_dict(optimizer_state)
+        self._set_learning_rate(learning_rate)
 
     # ------------------------------------------------------------------------------------------------ learning rate
     def _set_learning_rate(self, lr: float) -> None:
