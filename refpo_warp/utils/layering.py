@@ -1,7 +1,7 @@
 """The layers of the project (``docs/architecture.md``): each folder of ``refpo_warp/`` belongs to one layer, and a
 module's layer is its folder's. A module may import its own layer and the layers below, never above;
 ``tests/utils/test_layering.py`` checks this and that the import graph has no circles, on every run.
-``tools/draw_layers.py`` draws it.
+``docs/figures/draw_layers.py`` draws it.
 """
 
 from __future__ import annotations
