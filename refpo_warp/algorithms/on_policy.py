@@ -14,16 +14,11 @@ copied (on the device) before the update and put back when any loss of the updat
 the update. (rsl_rl's adaptive schedule, ``schedule=adaptive``, still reads each minibatch's KL: its learning rate is
 a number on the host.)
 
-Options shared by every algorithm (besides rsl_rl's PPO arguments):
-    reward_scale: Multiplier on rewards for learning (Brax-style; logged returns stay unscaled).
-    value_clip_param: Clip range of the clipped value loss (None: ``clip_param``, as rsl_rl). The reference humanoid
-        set-up clips the ratio at 0.01 but values at 0.2.
-    reshuffle_each_epoch: New minibatch permutation on every pass (Brax / MuJoCo Playground) instead of one for all.
-    joint_grad_clip: Clip the gradient norm of actor and critic together (Puffer-PHC) instead of separately (rsl_rl).
-    lr_decay_rate, lr_decay_floor: After update k the learning rate is lr * max(exp(-rate * k), floor) (Puffer-PHC's
-        exponential decay; rate 0 keeps it constant).
-    bound_coef, bound: Soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on the policy's predicted action
-        (Puffer-PHC, coefficient 10, bound 0.9 of the action range); 0 turns it off.
+Options: each algorithm declares its own once, as the fields of its ``Options`` dataclass (default, rule, doc;
+``refpo_warp/utils/options.py``), and inherits its bases' (``OnPolicyAlgorithm.Options`` below: those every algorithm
+shares) and rsl_rl's PPO arguments; a field may give one of those another default. The constructor sets every option
+as an attribute of the same name and passes rsl_rl's arguments to rsl_rl's PPO; a subclass's constructor only adds
+what it derives from them.
 
 Logged statistics: keys with a ``/`` (e.g. ``Flow/ratio_max``) are logged under that name, others as ``Loss/<key>``;
 a key ending in ``_max`` is the maximum over the update's minibatches, every other key the mean.
@@ -44,7 +39,8 @@ from refpo_warp.algorithms import rsl_rl_rules  # noqa: F401  (the rules of rsl_
 from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_indices
 from refpo_warp.utils.errors import NonFiniteLossError
 from refpo_warp.utils.option_rules import Flag, Real, checks_options
-from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, split_newer_ppo_args
+from refpo_warp.utils.options import option, option_values
+from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, PPO_ARGUMENTS, split_newer_ppo_args
 
 
 @dataclass
@@ -82,52 +78,46 @@ class OnPolicyAlgorithm(RslPPO):
     """Shared update loop; subclasses implement ``act`` and ``policy_loss`` (see the module docstring)."""
 
     uses_critic: bool = True
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
-        "reward_scale": Real(0, 1e6, lo_open=True),
-        "value_clip_param": Real(0, None, lo_open=True, optional=True),
-        "reshuffle_each_epoch": Flag(),
-        "joint_grad_clip": Flag(),
-        "lr_decay_rate": Real(0, 10),
-        "lr_decay_floor": Real(0, 1),
-        "bound_coef": Real(0, 1e6),
-        "bound": Real(0, None),
-    }
 
-    def __init__(
-        self,
-        actor: nn.Module,
-        critic: nn.Module,
-        storage,
-        reward_scale: float = 1.0,
-        value_clip_param: float | None = None,
-        reshuffle_each_epoch: bool = False,
-        joint_grad_clip: bool = False,
-        lr_decay_rate: float = 0.0,
-        lr_decay_floor: float = 0.2,
-        bound_coef: float = 0.0,
-        bound: float = 0.9,
-        **ppo_kwargs,
-    ) -> None:
+    @dataclass(frozen=True)
+    class Options:
+        """Options every algorithm shares, besides rsl_rl's PPO arguments."""
+
+        reward_scale: float = option(1.0, Real(0, 1e6, lo_open=True),
+                                     "rewards x scale for learning; logged returns unscaled (Brax; DMC: 10)")
+        value_clip_param: float | None = option(None, Real(0, None, lo_open=True, optional=True),
+                                                "clip range of the clipped value loss; null: clip_param, as rsl_rl "
+                                                "(Puffer-PHC clips the ratio at 0.01, values at 0.2)")
+        reshuffle_each_epoch: bool = option(False, Flag(), "a new minibatch permutation on every pass (Brax / "
+                                                           "Playground; DMC: true) instead of one for all (rsl_rl)")
+        joint_grad_clip: bool = option(False, Flag(), "one gradient-norm clip over actor and critic (Puffer-PHC) "
+                                                      "instead of one each (rsl_rl)")
+        lr_decay_rate: float = option(0.0, Real(0, 10), "after update k the learning rate is lr * max(exp(-rate k), "
+                                                        "lr_decay_floor); 0 keeps it (Puffer-PHC: 1.5e-4)")
+        lr_decay_floor: float = option(0.2, Real(0, 1), "the floor of that decay (Puffer-PHC: 0.2)")
+        bound_coef: float = option(0.0, Real(0, 1e6), "soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on "
+                                                      "the predicted action; 0 turns it off (Puffer-PHC: 10)")
+        bound: float = option(0.9, Real(0, None), "the bound of that loss, in the action range (Puffer-PHC: 0.9)")
+
+    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         for name in ("rnd_cfg", "symmetry_cfg"):
-            if ppo_kwargs.get(name):
+            if kwargs.get(name):
                 raise ValueError(
                     f"{type(self).__name__} does not support {name}; remove '{name}' from the algorithm config "
                     "(or set it to None)."
                 )
         if getattr(critic, "is_recurrent", False) or getattr(actor, "is_recurrent", False):
             raise ValueError(f"{type(self).__name__} supports feed-forward actors and critics only.")
+        options, ppo_kwargs = option_values(type(self), kwargs)
+        ppo_kwargs.update({name: options.pop(name) for name in list(options) if name in PPO_ARGUMENTS})
         newer = split_newer_ppo_args(ppo_kwargs, honoured=("use_mixed_precision",))  # rsl-rl-lib < 5.5
         super().__init__(actor, critic, storage, **ppo_kwargs)
         if not hasattr(self, "use_mixed_precision"):  # this update loop applies it on every rsl_rl version
             self.use_mixed_precision = bool(newer.get("use_mixed_precision", False))
-        self.reward_scale = float(reward_scale)
-        self.value_clip_param = self.clip_param if value_clip_param is None else float(value_clip_param)
-        self.reshuffle_each_epoch = bool(reshuffle_each_epoch)
-        self.joint_grad_clip = bool(joint_grad_clip)
-        self.lr_decay_rate = float(lr_decay_rate)
-        self.lr_decay_floor = float(lr_decay_floor)
-        self.bound_coef = float(bound_coef)
-        self.bound = float(bound)
+        for name, value in options.items():
+            setattr(self, name, value)
+        if self.value_clip_param is None:
+            self.value_clip_param = self.clip_param
         self.base_learning_rate = float(self.learning_rate)
         self.num_updates = 0
         self.store = TransitionStore(storage.num_transitions_per_env, storage.num_envs, self.device)

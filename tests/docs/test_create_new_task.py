@@ -10,6 +10,7 @@ from refpo_warp.envs.env_cfg import EnvCfg
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.envs.warp_vec_env import WarpVecEnv
 from refpo_warp.utils.option_rules import Real
+from refpo_warp.utils.options import option
 from refpo_warp.utils.warp_setup import wp
 
 
@@ -67,11 +68,9 @@ class LineEnv(WarpVecEnv):
 class CappedReflowReFPO(ReFPO):
     """ReFPO whose Reflow term averages min(l_i, reflow_cap) over the actions' CFM losses l_i."""
 
-    option_rules = {"reflow_cap": Real(0, 1e6, lo_open=True)}  # checked by the resolver and the constructor
-
-    def __init__(self, actor, critic, storage, reflow_cap: float = 1.0, **kwargs):
-        super().__init__(actor, critic, storage, **kwargs)
-        self.reflow_cap = reflow_cap
+    @dataclass(frozen=True)
+    class Options:  # each option once: its default, its rule, its meaning
+        reflow_cap: float = option(1.0, Real(0, 1e6, lo_open=True), "the cap on each action's CFM loss")
 
     def reflow_loss(self, new_loss, batch):
         return new_loss.mean(dim=-1).clamp(max=self.reflow_cap).mean()
@@ -159,5 +158,6 @@ def test_an_algo_file_derived_from_refpo_takes_every_tasks_refpo_settings(tmp_pa
     out = proc.stdout
     assert f"  5. {configs / 'algo' / 'capped_reflow.yaml'}\n" in out
     assert f"algorithm.reflow_cap = 1.0\n  set by  the default of {__name__}.CappedReflowReFPO" in out
+    assert "  means   the cap on each action's CFM loss" in out
     assert "algorithm.reflow_coef = 0.1\n  set by  configs/task/gridworld.yaml by_algo.refpo" in out
     assert "algorithm.num_mc_samples = 50" in out

@@ -2,12 +2,11 @@
 one."""
 
 import dataclasses
-import inspect
 
 import pytest
 import yaml
 
-from refpo_warp.config.classes import POSITIONAL, resolve_class
+from refpo_warp.config.classes import POSITIONAL, class_defaults, resolve_class
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.config.run_options import NOT_RULED, RUN_RULES
 from refpo_warp.config.saved import fixed_changes
@@ -21,15 +20,8 @@ _PASSED_BY_RSL_RL = {"device", "multi_gpu_cfg"}
 
 
 def _constructor_options(cls) -> set[str]:
-    names = set()
-    for klass in inspect.getmro(cls):
-        if klass is object or "__init__" not in vars(klass):
-            continue
-        params = inspect.signature(klass.__init__).parameters
-        names |= {n for n, p in params.items() if n != "self" and p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
-        if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
-            break
-    return names
+    """The options of a class: its Options fields and its constructor chain's keyword parameters."""
+    return set(class_defaults(f"{cls.__module__}:{cls.__qualname__}"))
 
 
 def _selected_classes():
