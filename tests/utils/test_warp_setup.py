@@ -4,11 +4,10 @@ in a fresh interpreter (Warp loaded before it, unconfigured, as another library 
 options set."""
 
 import ast
-import json
-import subprocess
-import sys
 
-from refpo_warp.utils.layering import ROOT, first_party_modules
+from fresh_imports import import_each_alone  # tests/utils is on sys.path under pytest
+
+from refpo_warp.utils.layering import first_party_modules
 
 SETUP = "refpo_warp.utils.warp_setup"
 DEFINES = ("wp.kernel", "wp.func", "wp.struct", "wp.constant")  # what freezes a Warp module's options
@@ -34,33 +33,10 @@ def test_each_warp_module_imported_alone_defines_its_kernels_with_the_options_se
     modules = [name for name, path in first_party_modules().items()
                if any(d in path.read_text(encoding="utf-8") for d in DEFINES) and name != SETUP]  # fmt: skip
     assert "refpo_warp.tasks.dmc.suite.cartpole_balance" in modules and "refpo_warp.tasks.dmc.rewards" in modules
-    script = f"""
-import json, os, traceback
-import numpy, torch, warp  # Warp loaded first, with its own defaults
-failed = {{}}
-for name in {modules!r}:
-    r, w = os.pipe()
-    pid = os.fork()
-    if pid == 0:
-        os.close(r)
-        try:
-            __import__(name)
-            options = warp.get_module(name).options
-            msg = "" if warp.config.enable_backward is False and options["enable_backward"] is False else (
-                f"enable_backward: config {{warp.config.enable_backward}}, module {{options['enable_backward']}}")
-        except BaseException:
-            msg = traceback.format_exc()[-2000:]
-        os.write(w, msg.encode())
-        os._exit(0)
-    os.close(w)
-    msg = os.read(r, 4000).decode()
-    os.close(r)
-    os.waitpid(pid, 0)
-    if msg:
-        failed[name] = msg
-print(json.dumps(failed))
+    check = """
+options = warp.get_module(name).options
+if warp.config.enable_backward is not False or options["enable_backward"] is not False:
+    msg = f"enable_backward: config {warp.config.enable_backward}, module {options['enable_backward']}"
 """
-    out = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=600)
-    assert out.returncode == 0, out.stderr[-3000:]
-    failed = json.loads(out.stdout.strip().splitlines()[-1])
+    failed = import_each_alone(modules, "import numpy, torch, warp  # Warp loaded first, with its own defaults", check)
     assert not failed, "\n".join(f"{k}: {v}" for k, v in failed.items())
