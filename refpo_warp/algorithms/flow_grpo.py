@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import copy
 import warnings
+from dataclasses import dataclass
+from enum import Enum
 
 import torch
 from rsl_rl.algorithms import PPO as RslPPO
@@ -34,9 +36,18 @@ from torch import nn
 from refpo_warp.algorithms.flow_sde import gaussian_log_prob, sample_sde_chain, sde_grid, sde_means
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm
 from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real
+from refpo_warp.utils.options import choices, option
 
-KL_REFERENCES = ("rollout", "initial")
-GROUP_STD = ("global", "group")
+
+class KlReference(str, Enum):
+    ROLLOUT = "rollout"  # the policy that collected the batch: a trust-region penalty
+    INITIAL = "initial"  # a frozen copy of the policy at construction
+
+
+class GroupStd(str, Enum):
+    GLOBAL = "global"  # over all envs at a time step (Flow-GRPO's default)
+    GROUP = "group"  # within the group
+
 NO_CRITIC = "refpo_warp.models:NoCritic"
 
 
@@ -67,84 +78,55 @@ def group_advantages(returns: torch.Tensor, group_size: int, std_mode: str = "gl
     elif std_mode == "group":
         std = grouped.std(dim=-1, unbiased=False, keepdim=True)
     else:
-        raise ValueError(f"group_std must be one of {GROUP_STD}, got '{std_mode}'")
+        raise ValueError(f"group_std must be one of {choices(GroupStd)}, got '{std_mode}'")
     advantages = (centred / (std + eps)).reshape(steps, envs)
     return advantages if clip is None else advantages.clamp(-clip, clip)
 
 
 class FlowGRPO(OnPolicyAlgorithm):
-    """Flow-GRPO on rsl_rl's PPO machinery (see the module docstring); defaults from the ReFPO paper's table (c).
-
-    Args (besides the shared ``OnPolicyAlgorithm`` options and rsl_rl's PPO arguments):
-        noise_level: a, the SDE noise level (table (c): 1.0; Flow-GRPO's default 0.7).
-        feather_std: Std of the Gaussian noise added to the sampled action (table (c): 0.05).
-        feather_in_chain: The feathered action replaces x_N in the chain (FPO ``denoising_mdp``); else it stays
-            outside the likelihood.
-        kl_coef: beta of the KL term (table (c): 5e-3); 0 turns it off.
-        kl_reference: ``"rollout"`` (the policy that collected the batch) or ``"initial"`` (a frozen copy of the
-            policy at construction).
-        group_size: Envs per group; None takes the env's ``reset_group_size`` (set by ``construct_algorithm``).
-        group_std: ``"global"`` (all envs at a time step, Flow-GRPO's default) or ``"group"``.
-        adv_clip: Clip of the advantages (table (c): 8); None: no clip.
-        timestep_fraction: Train the first int(N * fraction) denoising steps (Flow-GRPO: 0.99, i.e. 9 of 10).
-    """
+    """Flow-GRPO on rsl_rl's PPO machinery (see the module docstring); defaults from the ReFPO paper's table (c)."""
 
     uses_critic = False
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
-        "noise_level": Real(0, 100, lo_open=True),  # the log-probabilities need noise
-        "feather_std": Real(0, 100),
-        "feather_in_chain": Flag(),
-        "kl_coef": Real(0, 1e6),
-        "kl_reference": OneOf(KL_REFERENCES),
-        "group_size": Int(2, 1_000_000, optional=True),
-        "group_std": OneOf(GROUP_STD),
-        "adv_clip": Real(0, None, lo_open=True, optional=True),
-        "timestep_fraction": Real(0, 1, lo_open=True),
-        "explosion_threshold": Real(0, None, lo_open=True),
-    }
 
-    def __init__(
-        self,
-        actor: nn.Module,
-        critic: nn.Module,
-        storage,
-        noise_level: float = 1.0,
-        feather_std: float = 0.05,
-        feather_in_chain: bool = True,
-        kl_coef: float = 5e-3,
-        kl_reference: str = "rollout",
-        group_size: int | None = None,
-        group_std: str = "global",
-        adv_clip: float | None = 8.0,
-        timestep_fraction: float = 1.0,
-        clip_param: float = 0.1,
-        learning_rate: float = 1e-4,
-        schedule: str = "fixed",
-        entropy_coef: float = 0.0,
-        value_loss_coef: float = 0.0,
-        explosion_threshold: float = 3.0,
-        **kwargs,
-    ) -> None:
+    @dataclass(frozen=True)
+    class Options:
+        """Flow-GRPO's options, besides the shared ones (``OnPolicyAlgorithm.Options``) and rsl_rl's PPO arguments."""
+
+        noise_level: float = option(1.0, Real(0, 100, lo_open=True), "a, the SDE noise level (table (c): 1.0; "
+                                    "Flow-GRPO's default 0.7); the log-probabilities need noise")
+        feather_std: float = option(0.05, Real(0, 100), "std of the Gaussian noise added to the sampled action "
+                                                        "(table (c): 0.05)")
+        feather_in_chain: bool = option(True, Flag(), "the feathered action replaces x_N in the chain (FPO's "
+                                                      "denoising_mdp); else it stays outside the likelihood")
+        kl_coef: float = option(5e-3, Real(0, 1e6), "beta of the KL term (table (c): 5e-3); 0 turns it off")
+        kl_reference: KlReference = option("rollout", OneOf(KlReference), "rollout: the policy that collected the "
+                                           "batch; initial: a frozen copy of the policy at construction")
+        group_size: int | None = option(None, Int(2, 1_000_000, optional=True),
+                                        "envs per group; null: the env's reset_group_size")
+        group_std: GroupStd = option("global", OneOf(GroupStd), "advantage std over all envs at a time step "
+                                     "(global, Flow-GRPO's default) or within the group")
+        adv_clip: float | None = option(8.0, Real(0, None, lo_open=True, optional=True),
+                                        "clip of the advantages (table (c): 8); null: no clip")
+        timestep_fraction: float = option(1.0, Real(0, 1, lo_open=True), "train the first int(N * fraction) "
+                                          "denoising steps (Flow-GRPO: 0.99, i.e. 9 of 10)")
+        explosion_threshold: float = option(3.0, Real(0, None, lo_open=True),
+                                            "|log rho| above which a step counts in Flow/explosion_rate")
+        clip_param: float = option(0.1, doc="PPO clip range (table (c))")
+        learning_rate: float = option(1e-4, doc="learning rate (table (c))")
+        schedule: str = option("fixed", doc="learning-rate schedule (rsl_rl's default: adaptive)")
+        entropy_coef: float = option(0.0, doc="entropy bonus (rsl_rl's default: 0.01)")
+        value_loss_coef: float = option(0.0, doc="no critic, no value loss")
+
+    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         if not (hasattr(actor, "velocity") and hasattr(actor, "encode") and hasattr(actor, "num_flow_steps")):
             raise TypeError("FlowGRPO needs a flow actor; set actor.class_name to refpo_warp.models:FlowActor")
-        super().__init__(actor, critic, storage, clip_param=clip_param, learning_rate=learning_rate,
-                         schedule=schedule, entropy_coef=entropy_coef, value_loss_coef=value_loss_coef,
-                         **kwargs)  # fmt: skip
+        super().__init__(actor, critic, storage, **kwargs)
         if self.bound_coef > 0:
             warnings.warn("FlowGRPO ignores bound_coef: its policy predicts no clean action to bound.")
-        self.noise_level = float(noise_level)
-        self.feather_std = float(feather_std)
-        self.feather_in_chain = bool(feather_in_chain)
-        self.kl_coef = float(kl_coef)
-        self.kl_reference = kl_reference
-        self.group_size = None if group_size is None else int(group_size)
-        self.group_std = group_std
-        self.adv_clip = None if adv_clip is None else float(adv_clip)
-        self.explosion_threshold = float(explosion_threshold)
         self.grid = sde_grid(actor.num_flow_steps, self.noise_level, self.device)  # fixed: the stored chains' N
-        self.num_trained_steps = max(1, int(actor.num_flow_steps * timestep_fraction))
+        self.num_trained_steps = max(1, int(actor.num_flow_steps * self.timestep_fraction))
         self.reference_actor = None
-        if kl_reference == "initial" and self.kl_coef > 0:
+        if self.kl_reference == "initial" and self.kl_coef > 0:
             self.reference_actor = copy.deepcopy(actor).eval().requires_grad_(False)
 
     @staticmethod

@@ -23,14 +23,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
+from enum import Enum
 
 import torch
 
 from refpo_warp.algorithms.on_policy import Minibatch
 from refpo_warp.algorithms.refpo import ReFPO
 from refpo_warp.utils.option_rules import OneOf, Real
+from refpo_warp.utils.options import option
 
-CFM_REDUCTIONS = ("mean", "sqrt_dim")
+
+class CfmReduction(str, Enum):
+    MEAN = "mean"  # the mean over action dimensions (ReFPO's)
+    SQRT_DIM = "sqrt_dim"  # the sum over them / sqrt(D) (FPO++'s "sqrt")
 
 
 def straight_through_max(x: torch.Tensor, cap: float) -> torch.Tensor:
@@ -39,51 +45,31 @@ def straight_through_max(x: torch.Tensor, cap: float) -> torch.Tensor:
 
 
 class FPOPlusPlus(ReFPO):
-    """FPO++ on ReFPO's machinery; its defaults are FPO++'s algorithm (module docstring).
+    """FPO++ on ReFPO's machinery; its defaults are FPO++'s algorithm (module docstring)."""
 
-    Args (besides ReFPO's, whose defaults change to FPO++'s: ``reflow_coef`` 0, ``ratio_mode`` per_sample,
-    ``trust_region`` aspo, ``tau_sampling`` uniform_inset, ``output_mode`` u, ``ema_decay`` 0.95):
-        cfm_reduction: ``"sqrt_dim"`` (sum over action dimensions / sqrt(D), FPO++) or ``"mean"`` (ReFPO's).
-        loss_cap: Cap on the old and new CFM losses of the ratio (None: none).
-        negative_advantage_loss_cap: Cap on the new CFM loss where A < 0 (None: none).
-        log_ratio_cap: Straight-through upper cap on each pair's log-ratio (None: none).
-        advantage_clip: Clamp of the normalised advantages to [-c, c] (None: none).
-    """
+    @dataclass(frozen=True)
+    class Options:
+        """FPO++'s own options, and its defaults for ReFPO's (``ReFPO.Options``)."""
 
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
-        "cfm_reduction": OneOf(CFM_REDUCTIONS),
-        "loss_cap": Real(0, None, lo_open=True, optional=True),
-        "negative_advantage_loss_cap": Real(0, None, lo_open=True, optional=True),
-        "log_ratio_cap": Real(0, None, lo_open=True, optional=True),
-        "advantage_clip": Real(0, None, lo_open=True, optional=True),
-    }
-
-    def __init__(
-        self,
-        actor,
-        critic,
-        storage,
-        cfm_reduction: str = "sqrt_dim",
-        loss_cap: float | None = 20.0,
-        negative_advantage_loss_cap: float | None = 20.0,
-        log_ratio_cap: float | None = 10.0,
-        advantage_clip: float | None = 100.0,
-        reflow_coef: float = 0.0,
-        ratio_mode: str = "per_sample",
-        trust_region: str = "aspo",
-        tau_sampling: str = "uniform_inset",
-        output_mode: str | None = "u",
-        ema_decay: float | None = 0.95,
-        **kwargs,
-    ) -> None:
-        super().__init__(actor, critic, storage, reflow_coef=reflow_coef, ratio_mode=ratio_mode,
-                         trust_region=trust_region, tau_sampling=tau_sampling, output_mode=output_mode,
-                         ema_decay=ema_decay, **kwargs)  # fmt: skip
-        self.cfm_reduction = cfm_reduction
-        self.loss_cap = None if loss_cap is None else float(loss_cap)
-        self.negative_advantage_loss_cap = None if negative_advantage_loss_cap is None else float(negative_advantage_loss_cap)
-        self.log_ratio_cap = None if log_ratio_cap is None else float(log_ratio_cap)
-        self.advantage_clip = None if advantage_clip is None else float(advantage_clip)
+        cfm_reduction: CfmReduction = option("sqrt_dim", OneOf(CfmReduction), "sqrt_dim: the CFM loss summed over "
+                                             "action dimensions / sqrt(D) (FPO++); mean: ReFPO's mean over them")
+        loss_cap: float | None = option(20.0, Real(0, None, lo_open=True, optional=True),
+                                        "cap on the old and new CFM losses of the ratio (FPO++: 20); null: none")
+        negative_advantage_loss_cap: float | None = option(20.0, Real(0, None, lo_open=True, optional=True),
+                                                           "cap on the new CFM loss where A < 0 (FPO++: 20); "
+                                                           "null: none")
+        log_ratio_cap: float | None = option(10.0, Real(0, None, lo_open=True, optional=True),
+                                             "straight-through upper cap on each pair's log-ratio (FPO++: 10); "
+                                             "null: none")
+        advantage_clip: float | None = option(100.0, Real(0, None, lo_open=True, optional=True),
+                                              "clamp of the normalised advantages to [-c, c] (FPO++: 100); null: "
+                                              "none")
+        reflow_coef: float = option(0.0, doc="lambda; 0 is FPO++, > 0 ReFPO on FPO++ (algo=refpo_pp: 0.04)")
+        ratio_mode: str = option("per_sample", doc="one ratio per (tau, eps) pair (FPO++)")
+        trust_region: str = option("aspo", doc="PPO's clip for A > 0, SPO's penalty otherwise (FPO++)")
+        tau_sampling: str = option("uniform_inset", doc="flow times U[0.005, 0.995] (FPO++)")
+        output_mode: str | None = option("u", doc="velocity regression (FPO++ hard-codes it)")
+        ema_decay: float | None = option(0.95, doc="the EMA actor that evaluation and export use (FPO++: 0.95)")
 
     def cfm_losses(self, obs, actions, tau, eps):
         loss, terms = super().cfm_losses(obs, actions, tau, eps)

@@ -2,24 +2,28 @@
 
 A subclass says how it acts (``act``, storing what it needs in ``self.store``) and what its policy loss is
 (``policy_loss(batch)``); this class runs the passes over the rollout: minibatches (rsl_rl's single permutation, or
-a fresh one per pass as Brax does), per-minibatch advantage normalisation, the value loss, a non-finite check before
-any step is applied, gradient reduction across ranks, clipping, the optimizer step, the learning-rate schedule and
-the statistics, which are kept on the device and read once per update.
+a fresh one per pass as Brax does), per-minibatch advantage normalisation, the value loss, gradient reduction across
+ranks, clipping, the optimizer step, the learning-rate schedule and the statistics, which are kept on the device and
+read once per update.
 
-Options shared by every algorithm (besides rsl_rl's PPO arguments):
-    reward_scale: Multiplier on rewards for learning (Brax-style; logged returns stay unscaled).
-    value_clip_param: Clip range of the clipped value loss (None: ``clip_param``, as rsl_rl). The reference humanoid
-        set-up clips the ratio at 0.01 but values at 0.2.
-    reshuffle_each_epoch: New minibatch permutation on every pass (Brax / MuJoCo Playground) instead of one for all.
-    joint_grad_clip: Clip the gradient norm of actor and critic together (Puffer-PHC) instead of separately (rsl_rl).
-    lr_decay_rate, lr_decay_floor: After update k the learning rate is lr * max(exp(-rate * k), floor) (Puffer-PHC's
-        exponential decay; rate 0 keeps it constant).
-    bound_coef, bound: Soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on the policy's predicted action
-        (Puffer-PHC, coefficient 10, bound 0.9 of the action range); 0 turns it off.
-    ema_decay, ema_warmup: An exponential moving average of the actor's weights (FPO++), updated once per update and
-        restarted from the live weights after ``ema_warmup`` updates (``refpo_warp.models.ema``); evaluation and export
-        (``get_policy``) use it, rollouts the live actor; checkpoints hold both and a resume trains on from the live
-        weights. None: off.
+Non-finite losses: every minibatch's loss is checked on the device and the flags are read with the statistics, once
+per update (a check per minibatch would wait for the device 512 times an update at the CUDA DMC sizes). A non-finite
+loss is therefore applied like any other, and undone: the parameters, the optimizer state and the learning rate are
+copied (on the device) before the update and put back when any loss of the update was non-finite; then
+``NonFiniteLossError`` names the first such minibatch's statistics. A failed update leaves the model as it was before
+the update. (rsl_rl's adaptive schedule, ``schedule=adaptive``, still reads each minibatch's KL: its learning rate is
+a number on the host.)
+
+Options: each algorithm declares its own once, as the fields of its ``Options`` dataclass (default, rule, doc;
+``refpo_warp/utils/options.py``), and inherits its bases' (``OnPolicyAlgorithm.Options`` below: those every algorithm
+shares) and rsl_rl's PPO arguments; a field may give one of those another default. The constructor sets every option
+as an attribute of the same name and passes rsl_rl's arguments to rsl_rl's PPO; a subclass's constructor only adds
+what it derives from them.
+
+The EMA actor (``ema_decay``, ``ema_warmup``; FPO++): an exponential moving average of the actor's weights, updated once
+per update and restarted from the live weights after ``ema_warmup`` updates (``refpo_warp.models.ema``); evaluation
+and export (``get_policy``) use it, rollouts the live actor; checkpoints hold both and a resume trains on from the
+live weights.
 
 Logged statistics: keys with a ``/`` (e.g. ``Flow/ratio_max``) are logged under that name, others as ``Loss/<key>``;
 a key ending in ``_max`` is the maximum over the update's minibatches, every other key the mean.
@@ -27,6 +31,7 @@ a key ending in ``_max`` is the maximum over the update's minibatches, every oth
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -40,7 +45,8 @@ from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_in
 from refpo_warp.models.ema import ActorEMA
 from refpo_warp.utils.errors import NonFiniteLossError
 from refpo_warp.utils.option_rules import Flag, Int, Real, checks_options
-from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, split_newer_ppo_args, uncompiled
+from refpo_warp.utils.options import option, option_values
+from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, PPO_ARGUMENTS, split_newer_ppo_args, uncompiled
 
 
 @dataclass
@@ -78,60 +84,55 @@ class OnPolicyAlgorithm(RslPPO):
     """Shared update loop; subclasses implement ``act`` and ``policy_loss`` (see the module docstring)."""
 
     uses_critic: bool = True
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
-        "reward_scale": Real(0, 1e6, lo_open=True),
-        "value_clip_param": Real(0, None, lo_open=True, optional=True),
-        "reshuffle_each_epoch": Flag(),
-        "joint_grad_clip": Flag(),
-        "lr_decay_rate": Real(0, 10),
-        "lr_decay_floor": Real(0, 1),
-        "bound_coef": Real(0, 1e6),
-        "bound": Real(0, None),
-        "ema_decay": Real(0, 1, lo_open=True, hi_open=True, optional=True),
-        "ema_warmup": Int(0, 10**9),
-    }
 
-    def __init__(
-        self,
-        actor: nn.Module,
-        critic: nn.Module,
-        storage,
-        reward_scale: float = 1.0,
-        value_clip_param: float | None = None,
-        reshuffle_each_epoch: bool = False,
-        joint_grad_clip: bool = False,
-        lr_decay_rate: float = 0.0,
-        lr_decay_floor: float = 0.2,
-        bound_coef: float = 0.0,
-        bound: float = 0.9,
-        ema_decay: float | None = None,
-        ema_warmup: int = 500,
-        **ppo_kwargs,
-    ) -> None:
+    @dataclass(frozen=True)
+    class Options:
+        """Options every algorithm shares, besides rsl_rl's PPO arguments."""
+
+        reward_scale: float = option(1.0, Real(0, 1e6, lo_open=True),
+                                     "rewards x scale for learning; logged returns unscaled (Brax; DMC: 10)")
+        value_clip_param: float | None = option(None, Real(0, None, lo_open=True, optional=True),
+                                                "clip range of the clipped value loss; null: clip_param, as rsl_rl "
+                                                "(Puffer-PHC clips the ratio at 0.01, values at 0.2)")
+        reshuffle_each_epoch: bool = option(False, Flag(), "a new minibatch permutation on every pass (Brax / "
+                                                           "Playground; DMC: true) instead of one for all (rsl_rl)")
+        joint_grad_clip: bool = option(False, Flag(), "one gradient-norm clip over actor and critic (Puffer-PHC) "
+                                                      "instead of one each (rsl_rl)")
+        lr_decay_rate: float = option(0.0, Real(0, 10), "after update k the learning rate is lr * max(exp(-rate k), "
+                                                        "lr_decay_floor); 0 keeps it (Puffer-PHC: 1.5e-4)")
+        lr_decay_floor: float = option(0.2, Real(0, 1), "the floor of that decay (Puffer-PHC: 0.2)")
+        bound_coef: float = option(0.0, Real(0, 1e6), "soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on "
+                                                      "the predicted action; 0 turns it off (Puffer-PHC: 10)")
+        bound: float = option(0.9, Real(0, None), "the bound of that loss, in the action range (Puffer-PHC: 0.9)")
+        ema_decay: float | None = option(None, Real(0, 1, lo_open=True, hi_open=True, optional=True),
+                                         "an EMA of the actor's weights, which evaluation and export use (FPO++: 0.95); "
+                                         "null: off")
+        ema_warmup: int = option(500, Int(0, 10**9), "updates after which the EMA restarts from the live weights "
+                                                     "(FPO++: 500)")
+
+    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         for name in ("rnd_cfg", "symmetry_cfg"):
-            if ppo_kwargs.get(name):
+            if kwargs.get(name):
                 raise ValueError(
                     f"{type(self).__name__} does not support {name}; remove '{name}' from the algorithm config "
                     "(or set it to None)."
                 )
         if getattr(critic, "is_recurrent", False) or getattr(actor, "is_recurrent", False):
             raise ValueError(f"{type(self).__name__} supports feed-forward actors and critics only.")
+        options, ppo_kwargs = option_values(type(self), kwargs)
+        ppo_kwargs.update({name: options.pop(name) for name in list(options) if name in PPO_ARGUMENTS})
         newer = split_newer_ppo_args(ppo_kwargs, honoured=("use_mixed_precision",))  # rsl-rl-lib < 5.5
         super().__init__(actor, critic, storage, **ppo_kwargs)
         if not hasattr(self, "use_mixed_precision"):  # this update loop applies it on every rsl_rl version
             self.use_mixed_precision = bool(newer.get("use_mixed_precision", False))
-        self.reward_scale = float(reward_scale)
-        self.value_clip_param = self.clip_param if value_clip_param is None else float(value_clip_param)
-        self.reshuffle_each_epoch = bool(reshuffle_each_epoch)
-        self.joint_grad_clip = bool(joint_grad_clip)
-        self.lr_decay_rate = float(lr_decay_rate)
-        self.lr_decay_floor = float(lr_decay_floor)
-        self.bound_coef = float(bound_coef)
-        self.bound = float(bound)
+        for name, value in options.items():
+            setattr(self, name, value)
+        if self.value_clip_param is None:
+            self.value_clip_param = self.clip_param
         self.base_learning_rate = float(self.learning_rate)
         self.num_updates = 0
         self.store = TransitionStore(storage.num_transitions_per_env, storage.num_envs, self.device)
-        self.ema = ActorEMA(uncompiled(self, "actor"), ema_decay, ema_warmup) if ema_decay else None
+        self.ema = ActorEMA(uncompiled(self, "actor"), self.ema_decay, self.ema_warmup) if self.ema_decay else None
 
     # ------------------------------------------------------------------------------------------------ rollout
     def process_env_step(
@@ -172,20 +173,19 @@ class OnPolicyAlgorithm(RslPPO):
     def update(self) -> dict[str, float]:
         self.before_update()
         device_type = torch.device(self.device).type
+        restore_point = self._restore_point()
         means: dict[str, list[torch.Tensor]] = {}
         maxima: dict[str, torch.Tensor] = {}
+        finite: list[torch.Tensor] = []  # per minibatch, on the device: read with the statistics (module docstring)
+        minibatch_stats: list[dict[str, torch.Tensor]] = []  # for the message naming the first non-finite one
         for batch in self.minibatches():
             with torch.autocast(device_type=device_type, enabled=self.use_mixed_precision, dtype=torch.bfloat16):
                 loss, stats = self.policy_loss(batch)
                 if self.uses_critic:
                     stats["value"] = self.value_loss(batch)
                     loss = loss + self.value_loss_coef * stats["value"]
-            if not torch.isfinite(loss):
-                raise NonFiniteLossError(
-                    f"Non-finite {type(self).__name__} loss ("
-                    + ", ".join(f"{k}={float(v.detach()):.4g}" for k, v in stats.items())
-                    + "); the update was stopped before applying it."
-                )
+            finite.append(torch.isfinite(loss.detach()))
+            minibatch_stats.append({k: v.detach() for k, v in stats.items()})
             self.optimizer.zero_grad()
             loss.backward()
             if self.is_multi_gpu:
@@ -206,6 +206,26 @@ class OnPolicyAlgorithm(RslPPO):
                 else:
                     means.setdefault(key, []).append(value)
 
+        keys, max_keys = list(means), list(maxima)
+        flags = torch.stack(finite).float()
+        if self.is_multi_gpu:  # every rank stops, or none: a non-finite loss on one rank is one on all
+            torch.distributed.all_reduce(flags, op=torch.distributed.ReduceOp.MIN)
+        parts = [flags]
+        if keys:
+            parts.append(torch.stack([torch.stack(means[k]).mean() for k in keys]))
+        if max_keys:
+            parts.append(torch.stack([maxima[k] for k in max_keys]))
+        values = torch.cat(parts).tolist()  # the update's one host read
+        if min(values[: len(finite)]) < 1.0:
+            self._restore(restore_point)
+            first = minibatch_stats[values.index(0.0)]
+            raise NonFiniteLossError(
+                f"Non-finite {type(self).__name__} loss ("
+                + ", ".join(f"{k}={float(v):.4g}" for k, v in first.items())
+                + "); the update was stopped before applying it."
+            )
+        out = dict(zip(keys + max_keys, values[len(finite) :]))
+
         # Normalisers follow the data after the update, as in rsl_rl's PPO (before 5.5 it did so at every env step).
         if not NORMALIZERS_UPDATE_PER_STEP:
             obs = self.storage.observations.flatten(0, 1)
@@ -218,14 +238,20 @@ class OnPolicyAlgorithm(RslPPO):
         if self.lr_decay_rate > 0:
             decay = max(math.exp(-self.lr_decay_rate * self.num_updates), self.lr_decay_floor)
             self._set_learning_rate(self.base_learning_rate * decay)
-
-        out = {}
-        if means:  # one host read for all statistics
-            keys = list(means)
-            values = torch.stack([torch.stack(means[k]).mean() for k in keys]).cpu().tolist()
-            out.update(zip(keys, values))
-        out.update({k: float(v) for k, v in maxima.items()})
         return out
+
+    def _restore_point(self) -> tuple[list[torch.Tensor], dict, float]:
+        """Copies (on the device, no host read) of what an update changes: parameters, optimizer state, rate."""
+        params = [p.detach().clone() for group in self.optimizer.param_groups for p in group["params"]]
+        return params, copy.deepcopy(self.optimizer.state_dict()), self.learning_rate
+
+    @torch.no_grad()
+    def _restore(self, point: tuple[list[torch.Tensor], dict, float]) -> None:
+        params, optimizer_state, learning_rate = point
+        for p, saved in zip((p for group in self.optimizer.param_groups for p in group["params"]), params):
+            p.copy_(saved)
+        self.optimizer.load_state_dict(optimizer_state)
+        self._set_learning_rate(learning_rate)
 
     # ------------------------------------------------------------------------------------------------ learning rate
     def _set_learning_rate(self, lr: float) -> None:

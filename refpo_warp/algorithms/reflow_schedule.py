@@ -10,10 +10,18 @@ KL divergence): lambda moves only when the one-step error is far from the target
 
 from __future__ import annotations
 
+from enum import Enum
+
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import ListOf, Real
+from refpo_warp.utils.options import choices
 
-REFLOW_SCHEDULES = ("fixed", "adaptive")
+
+class ScheduleMode(str, Enum):
+    FIXED = "fixed"  # the paper's
+    ADAPTIVE = "adaptive"  # to the one-step ratio (ours)
+
+
 STEP = 1.5  # factor per update
 BAND = 2.0  # no change while target / BAND <= r <= target * BAND
 
@@ -31,8 +39,8 @@ class ReflowSchedule:
 
     def __init__(self, mode: str = "fixed", target: float = 0.25,
                  coef_range: tuple[float, float] = (0.01, 0.2)) -> None:  # fmt: skip
-        if mode not in REFLOW_SCHEDULES:
-            raise ValueError(f"reflow_schedule must be one of {REFLOW_SCHEDULES}, got '{mode}'")
+        if mode not in choices(ScheduleMode):
+            raise ValueError(f"reflow_schedule must be one of {choices(ScheduleMode)}, got '{mode}'")
         self.mode, self.target = mode, float(target)
         self.low, self.high = float(coef_range[0]), float(coef_range[1])
 

@@ -36,24 +36,45 @@ on ``one_step_states`` states of the rollout, ``one_step_error``, ``policy_sprea
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
+from enum import Enum
 
 import torch
 from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm, soft_bound_loss
-from refpo_warp.algorithms.reflow_schedule import REFLOW_SCHEDULES, ReflowSchedule, coefficient_range
-from refpo_warp.algorithms.trust_region import TRUST_REGIONS, surrogate
+from refpo_warp.algorithms.reflow_schedule import ReflowSchedule, ScheduleMode, coefficient_range
+from refpo_warp.algorithms.trust_region import TrustRegion, surrogate
 from refpo_warp.models.flow_actor import OUTPUT_MODES, cfm_loss
 from refpo_warp.models.flow_diagnostics import one_step_consistency
 from refpo_warp.utils.option_rules import Check, Int, OneOf, Real
+from refpo_warp.utils.options import choices, option
 from refpo_warp.utils.rsl_rl_versions import uncompiled
 
-TAU_SAMPLING = ("uniform", "discrete", "logit_normal", "uniform_inset")
+
+class TauSampling(str, Enum):
+    UNIFORM = "uniform"  # U[0, 1)
+    DISCRETE = "discrete"  # the sampler's Euler grid k/N (Playground)
+    LOGIT_NORMAL = "logit_normal"  # Puffer-PHC's
+    UNIFORM_INSET = "uniform_inset"  # U[0.005, 0.995] (FPO++)
+
+
+class RatioMode(str, Enum):
+    MEAN = "mean"  # average the K losses before the exp (the reference)
+    PER_SAMPLE = "per_sample"  # one ratio per pair
+
+
+class ReflowPairs(str, Enum):
+    INDEPENDENT = "independent"  # the ratio's own pairs (the paper's)
+    COUPLED = "coupled"  # the rollout's (eps_0, a) (ours)
+
+
+class ReflowTauWeight(str, Enum):
+    UNIFORM = "uniform"  # every pair alike (the paper's)
+    TOWARDS_ZERO = "towards_zero"  # pairs weighted by 1 - tau (ours)
+
 TAU_INSET = 0.005  # "uniform_inset" keeps flow times this far from both ends (FPO++)
-RATIO_MODES = ("mean", "per_sample")
-REFLOW_PAIRS = ("independent", "coupled")
-REFLOW_TAU_WEIGHTS = ("uniform", "towards_zero")
 DIAGNOSTIC_SEED_OFFSET = 7919  # the diagnostics' own random stream: they never move the training's
 
 
@@ -71,115 +92,79 @@ def sample_tau(shape: tuple[int, ...], mode: str, num_flow_steps: int, logit_mea
     if mode == "logit_normal":
         sigma = torch.exp(torch.randn(shape, device=device) * logit_std + logit_mean)
         return (1.0 / (1.0 + sigma)).clamp(1e-4, 1.0)
-    raise ValueError(f"tau_sampling must be one of {TAU_SAMPLING}, got '{mode}'")
+    raise ValueError(f"tau_sampling must be one of {choices(TauSampling)}, got '{mode}'")
 
 
 class ReFPO(OnPolicyAlgorithm):
     """Reflow-regularised Flow Matching Policy Gradients on rsl_rl's PPO machinery.
 
     The defaults are the project's tuned values (a fixed learning rate, not rsl_rl's adaptive schedule).
-
-    Args (in addition to the shared ones of ``OnPolicyAlgorithm`` and rsl_rl's PPO arguments):
-        reflow_coef: lambda, the weight of the un-weighted CFM (Reflow) term; 0 gives FPO.
-        num_mc_samples: K, (tau, eps) pairs stored per action.
-        output_mode: ``"u"``, ``"eps"`` or ``"data"`` CFM loss; default: the actor's ``output_mode``.
-        tau_sampling: ``"uniform"``, ``"discrete"`` (the sampler's Euler grid k/N) or ``"logit_normal"``.
-        tau_logit_mean, tau_logit_std: Parameters of the logit-normal tau (Puffer-PHC: -1.2, 1.2).
-        ratio_mode: ``"mean"`` (average the K losses before the exp) or ``"per_sample"``.
-        log_ratio_clip: Clamp for the log-ratio (None: no clamp).
-        explosion_threshold: |log-ratio| above which an action (or pair) counts towards the Explosion Rate.
-        reflow_pairs: ``"independent"`` (the paper's) or ``"coupled"`` (the rollout's (eps_0, a); module docstring).
-        reflow_schedule: ``"fixed"`` lambda (the paper's) or ``"adaptive"`` (``reflow_schedule.py``).
-        one_step_target: The one-step ratio the adaptive schedule steers towards.
-        reflow_coef_range: [min, max] of the adaptive lambda.
-        one_step_states: Rollout states of the per-update one-step diagnostic (0: off; the adaptive schedule needs it).
-        trust_region: ``"ppo"`` clip (the paper's), ``"spo"`` penalty or FPO++'s ``"aspo"`` (``trust_region.py``).
-        reflow_tau_weight: ``"uniform"`` (the paper's) or ``"towards_zero"``: Reflow pairs weighted by 1 - tau.
-        one_step_coef: Weight of the one-step consistency term on the rollout's (eps_0, a) (0: off, the paper's).
     """
 
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
-        "reflow_coef": Real(0, 1e6),
-        "num_mc_samples": Int(1, 1024),
-        "output_mode": OneOf(None, OUTPUT_MODES),
-        "tau_sampling": OneOf(TAU_SAMPLING),
-        "tau_logit_mean": Real(-10, 10),
-        "tau_logit_std": Real(0, 10, lo_open=True),
-        "ratio_mode": OneOf(RATIO_MODES),
-        "log_ratio_clip": Real(0, 100, lo_open=True, optional=True),
-        "explosion_threshold": Real(0, None, lo_open=True),
-        "reflow_pairs": OneOf(REFLOW_PAIRS),
-        "reflow_schedule": OneOf(REFLOW_SCHEDULES),
-        "one_step_target": Real(0, None, lo_open=True),
-        "reflow_coef_range": Check(coefficient_range, "[min, max] with 0 <= min <= max"),
-        "one_step_states": Int(0, 1_000_000),
-        "trust_region": OneOf(TRUST_REGIONS),
-        "reflow_tau_weight": OneOf(REFLOW_TAU_WEIGHTS),
-        "one_step_coef": Real(0, 1e6),
-    }
+    @dataclass(frozen=True)
+    class Options:
+        """ReFPO's options, besides the shared ones (``OnPolicyAlgorithm.Options``) and rsl_rl's PPO arguments."""
 
-    def __init__(
-        self,
-        actor: nn.Module,
-        critic: nn.Module,
-        storage,
-        reflow_coef: float = 0.04,
-        num_mc_samples: int = 8,
-        output_mode: str | None = None,
-        tau_sampling: str = "uniform",
-        tau_logit_mean: float = -1.2,
-        tau_logit_std: float = 1.2,
-        ratio_mode: str = "mean",
-        log_ratio_clip: float | None = None,
-        explosion_threshold: float = 3.0,
-        reflow_pairs: str = "independent",
-        reflow_schedule: str = "fixed",
-        one_step_target: float = 0.25,
-        reflow_coef_range: tuple[float, float] = (0.01, 0.2),
-        one_step_states: int = 256,
-        trust_region: str = "ppo",
-        reflow_tau_weight: str = "uniform",
-        one_step_coef: float = 0.0,
-        clip_param: float = 0.05,
-        learning_rate: float = 3e-4,
-        schedule: str = "fixed",
-        entropy_coef: float = 0.0,
-        use_clipped_value_loss: bool = False,
-        **kwargs,
-    ) -> None:
+        reflow_coef: float = option(0.04, Real(0, 1e6), "lambda, the weight of the un-weighted CFM (Reflow) term; 0 "
+                                                        "gives FPO (0.04 DMC, 0.1 GridWorld / humanoid)")
+        num_mc_samples: int = option(8, Int(1, 1024), "K, (tau, eps) pairs stored per action (8 DMC, 50 GridWorld, "
+                                                      "1 humanoid)")
+        output_mode: str | None = option(None, OneOf(None, OUTPUT_MODES), "the CFM loss mode (u, eps, data); null: "
+                                                                          "the actor's output_mode")
+        tau_sampling: TauSampling = option("uniform", OneOf(TauSampling), "flow times of the pairs: uniform "
+                                           "U[0, 1), discrete k/N (Playground), logit_normal (Puffer-PHC), "
+                                           "uniform_inset U[0.005, 0.995] (FPO++)")
+        tau_logit_mean: float = option(-1.2, Real(-10, 10), "mean of the logit-normal tau (Puffer-PHC: -1.2)")
+        tau_logit_std: float = option(1.2, Real(0, 10, lo_open=True), "std of the logit-normal tau (Puffer-PHC: 1.2)")
+        ratio_mode: RatioMode = option("mean", OneOf(RatioMode), "mean: average the K losses before the exp; "
+                                                                 "per_sample: one ratio per pair")
+        log_ratio_clip: float | None = option(None, Real(0, 100, lo_open=True, optional=True),
+                                              "clamp each pair's log-ratio to [-c, c]; null: no clamp (GridWorld "
+                                              "reference: 3)")
+        explosion_threshold: float = option(3.0, Real(0, None, lo_open=True),
+                                            "|log-ratio| above which an action (or pair) counts in the Explosion Rate")
+        reflow_pairs: ReflowPairs = option("independent", OneOf(ReflowPairs), "independent: the Reflow term on the "
+                                           "ratio's pairs (the paper's); coupled: on the rollout's (eps_0, a)")
+        reflow_schedule: ScheduleMode = option("fixed", OneOf(ScheduleMode), "fixed lambda (the paper's), or "
+                                               "adaptive to the one-step ratio (reflow_schedule.py)")
+        one_step_target: float = option(0.25, Real(0, None, lo_open=True),
+                                        "the one-step ratio the adaptive schedule steers towards")
+        reflow_coef_range: tuple[float, float] = option((0.01, 0.2), Check(coefficient_range, "[min, max] with 0 "
+                                                        "<= min <= max"), "[min, max] of the adaptive lambda")
+        one_step_states: int = option(256, Int(0, 1_000_000), "rollout states of the per-update one-step "
+                                      "diagnostic; 0 turns it off (the adaptive schedule needs it)")
+        trust_region: TrustRegion = option("ppo", OneOf(TrustRegion), "ppo: PPO's clip (the paper's); spo: SPO's "
+                                           "penalty; aspo: clip for A > 0, penalty otherwise (FPO++; trust_region.py)")
+        reflow_tau_weight: ReflowTauWeight = option("uniform", OneOf(ReflowTauWeight), "uniform (the paper's), or "
+                                                    "towards_zero: Reflow pairs weighted by 1 - tau (ours)")
+        one_step_coef: float = option(0.0, Real(0, 1e6), "weight of the one-step consistency term |v(eps_0, 0) - "
+                                      "(a - eps_0)|^2 on the rollout's own noise and action (ours); 0: off")
+        clip_param: float = option(0.05, doc="PPO clip range (rsl_rl's default: 0.2)")
+        learning_rate: float = option(3e-4, doc="learning rate (rsl_rl's default: 1e-3)")
+        schedule: str = option("fixed", doc="learning-rate schedule (rsl_rl's default: adaptive, which the proxy "
+                                            "ratio's KL would drive to its bounds)")
+        entropy_coef: float = option(0.0, doc="ignored: a flow policy has no closed-form entropy (rsl_rl's: 0.01)")
+        use_clipped_value_loss: bool = option(False, doc="PPO's clipped value loss (rsl_rl's default: true)")
+
+    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         for method in ("cfm_terms", "sample"):
             if not hasattr(actor, method):
                 raise TypeError(
                     f"ReFPO needs a flow actor with {method}(); set actor.class_name to refpo_warp.models:FlowActor"
                 )
-        if entropy_coef:
+        super().__init__(actor, critic, storage, **kwargs)
+        if self.entropy_coef:
             warnings.warn("ReFPO ignores entropy_coef: a flow policy has no closed-form entropy.")
-        if schedule == "adaptive":
+        if self.schedule == "adaptive":
             warnings.warn(
                 "ReFPO with schedule='adaptive': rsl_rl's schedule would be driven by the CFM proxy ratio's KL "
                 "estimate, which is not the policy's KL and moves the learning rate to its bounds within an "
                 "iteration (measured: 1e-3 -> 2e-5). Use schedule='fixed' (ReFPO's default)."
             )
-        super().__init__(actor, critic, storage, clip_param=clip_param, learning_rate=learning_rate,
-                         schedule=schedule, entropy_coef=entropy_coef, use_clipped_value_loss=use_clipped_value_loss,
-                         **kwargs)  # fmt: skip
-        self.reflow_coef = float(reflow_coef)
-        self.num_mc_samples = int(num_mc_samples)
-        self.output_mode = output_mode or actor.output_mode
-        self.tau_sampling = tau_sampling
-        self.tau_logit_mean = float(tau_logit_mean)
-        self.tau_logit_std = float(tau_logit_std)
-        self.ratio_mode = ratio_mode
-        self.log_ratio_clip = None if log_ratio_clip is None else float(log_ratio_clip)
-        self.explosion_threshold = float(explosion_threshold)
-        self.reflow_pairs = reflow_pairs
-        self.reflow_schedule = ReflowSchedule(reflow_schedule, one_step_target, reflow_coef_range)
+        self.output_mode = self.output_mode or actor.output_mode
+        self.reflow_schedule = ReflowSchedule(self.reflow_schedule, self.one_step_target, self.reflow_coef_range)
         self.reflow_coef = self.reflow_schedule.start(self.reflow_coef)
-        self.one_step_states = int(one_step_states)
-        self.trust_region = trust_region
-        self.reflow_tau_weight = reflow_tau_weight
-        self.one_step_coef = float(one_step_coef)
-        if reflow_schedule == "adaptive" and not self.one_step_states:
+        if self.reflow_schedule.mode == "adaptive" and not self.one_step_states:
             raise ValueError("reflow_schedule='adaptive' needs the one-step diagnostic: set one_step_states > 0")
         self.action_transform: str | None = None  # the env's (construct_algorithm): the diagnostic's action space
         self.diagnostic_generator = torch.Generator().manual_seed(torch.initial_seed() + DIAGNOSTIC_SEED_OFFSET)

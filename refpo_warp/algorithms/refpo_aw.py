@@ -15,14 +15,23 @@ per-action CFM loss on the stored pairs and A_i the advantage the surrogate uses
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from enum import Enum
+
 import torch
 import torch.nn.functional as F
 
 from refpo_warp.algorithms.on_policy import Minibatch
 from refpo_warp.algorithms.refpo import ReFPO
 from refpo_warp.utils.option_rules import OneOf
+from refpo_warp.utils.options import choices, option
 
-REFLOW_WEIGHTINGS = ("positive", "softplus", "relu", "trajectory")
+
+class ReflowWeighting(str, Enum):
+    POSITIVE = "positive"  # the mean over positive-advantage actions
+    SOFTPLUS = "softplus"  # weights softplus(A) / mean softplus(A)
+    RELU = "relu"  # weights max(A, 0) / mean max(A, 0)
+    TRAJECTORY = "trajectory"  # the positive mask on the episode segment's advantage
 
 
 def weighted_reflow(per_action_loss: torch.Tensor, advantages: torch.Tensor, weighting: str) -> torch.Tensor:
@@ -36,7 +45,7 @@ def weighted_reflow(per_action_loss: torch.Tensor, advantages: torch.Tensor, wei
     elif weighting == "relu":
         weights = advantages.clamp(min=0.0)
     else:
-        raise ValueError(f"reflow_weighting must be one of {REFLOW_WEIGHTINGS}, got '{weighting}'")
+        raise ValueError(f"reflow_weighting must be one of {choices(ReflowWeighting)}, got '{weighting}'")
     return (weights * per_action_loss).sum() / weights.sum().clamp(min=1e-12)
 
 
@@ -60,11 +69,10 @@ def segment_returns(rewards: torch.Tensor, dones: torch.Tensor) -> torch.Tensor:
 class AdvantageWeightedReFPO(ReFPO):
     """ReFPO with the Reflow term weighted by the advantage (``reflow_weighting``, see the module docstring)."""
 
-    option_rules = {"reflow_weighting": OneOf(REFLOW_WEIGHTINGS)}  # checked by the resolver and the constructor
-
-    def __init__(self, actor, critic, storage, reflow_weighting: str = "positive", **kwargs) -> None:
-        super().__init__(actor, critic, storage, **kwargs)
-        self.reflow_weighting = reflow_weighting
+    @dataclass(frozen=True)
+    class Options:
+        reflow_weighting: ReflowWeighting = option("positive", OneOf(ReflowWeighting), "which actions' CFM loss the "
+                                                   "Reflow term weights, and how (module docstring)")
 
     def before_update(self, chunk: int = 65536) -> None:
         super().before_update(chunk)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import dataclass
 
 import torch
 from tensordict import TensorDict
@@ -29,6 +30,7 @@ from torch import nn
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import Check, Int, ListOf, Real
+from refpo_warp.utils.options import option
 
 
 def decayed_sigma_max(update: int, total: int, sigma_min: float, sigma_max: float, hold_ratio: float,
@@ -50,58 +52,39 @@ def log_prob_range(key: str, value) -> list[float]:
 
 
 class ReinFlow(OnPolicyAlgorithm):
-    """ReinFlow on rsl_rl's PPO machinery (see the module docstring); defaults from the ReFPO paper's table (d).
+    """ReinFlow on rsl_rl's PPO machinery (see the module docstring); defaults from the ReFPO paper's table (d)."""
 
-    Args (besides the shared ``OnPolicyAlgorithm`` options and rsl_rl's PPO arguments):
-        logprob_clip: [min, max] clamp of the old and new normalised log-probabilities; None: no clamp.
-        noise_decay_updates: Updates over which the noise bound decays (None: constant bounds).
-        noise_hold_ratio, noise_decay_ratio: ReinFlow's hold fraction (0.35) and decayed-bound ratio (0.7).
-        explosion_threshold: |log rho| above which a sample counts towards ``Flow/explosion_rate``.
-    """
+    @dataclass(frozen=True)
+    class Options:
+        """ReinFlow's options, besides the shared ones (``OnPolicyAlgorithm.Options``) and rsl_rl's PPO arguments."""
 
-    option_rules = {  # valid values, checked by the config resolver and the constructor (refpo_warp.utils.option_rules)
-        "logprob_clip": Check(log_prob_range, "null or [min, max] with min < max", optional=True),
-        "noise_decay_updates": Int(1, None, optional=True),
-        "noise_hold_ratio": Real(0, 1),
-        "noise_decay_ratio": Real(0, 1),
-        "explosion_threshold": Real(0, None, lo_open=True),
-    }
+        logprob_clip: tuple[float, float] | None = option((-1.0, 1.0), Check(log_prob_range, "null or [min, max] "
+                                                          "with min < max", optional=True),
+                                                          "[min, max] clamp of the old and new normalised "
+                                                          "log-probabilities; null: no clamp")
+        noise_decay_updates: int | None = option(None, Int(1, None, optional=True),
+                                                 "updates over which the noise bound decays; null: constant bounds")
+        noise_hold_ratio: float = option(0.35, Real(0, 1), "ReinFlow's hold fraction of the decay")
+        noise_decay_ratio: float = option(0.7, Real(0, 1), "ReinFlow's decayed-bound ratio")
+        explosion_threshold: float = option(3.0, Real(0, None, lo_open=True),
+                                            "|log rho| above which a sample counts in Flow/explosion_rate")
+        clip_param: float = option(0.1, doc="PPO clip range (table (d))")
+        entropy_coef: float = option(0.05, doc="entropy bonus (table (d))")
+        value_loss_coef: float = option(0.3, doc="value loss weight (table (d))")
+        learning_rate: float = option(3e-5, doc="learning rate (table (d))")
+        gamma: float = option(0.99, doc="discount (table (d))")
+        lam: float = option(0.95, doc="GAE lambda (table (d))")
+        schedule: str = option("fixed", doc="learning-rate schedule (rsl_rl's default: adaptive)")
+        use_clipped_value_loss: bool = option(False, doc="PPO's clipped value loss (rsl_rl's default: true)")
+        normalize_advantage_per_mini_batch: bool = option(True, doc="normalise advantages per minibatch (ReinFlow's)")
 
-    def __init__(
-        self,
-        actor: nn.Module,
-        critic: nn.Module,
-        storage,
-        logprob_clip: list[float] | None = (-1.0, 1.0),
-        noise_decay_updates: int | None = None,
-        noise_hold_ratio: float = 0.35,
-        noise_decay_ratio: float = 0.7,
-        explosion_threshold: float = 3.0,
-        clip_param: float = 0.1,
-        entropy_coef: float = 0.05,
-        value_loss_coef: float = 0.3,
-        learning_rate: float = 3e-5,
-        gamma: float = 0.99,
-        lam: float = 0.95,
-        schedule: str = "fixed",
-        use_clipped_value_loss: bool = False,
-        normalize_advantage_per_mini_batch: bool = True,
-        **kwargs,
-    ) -> None:
+    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         if not (hasattr(actor, "sample_chain") and hasattr(actor, "chain_log_prob")):
             raise TypeError("ReinFlow needs a noisy-chain actor; set actor.class_name to "
                             "refpo_warp.models:ReinFlowActor")  # fmt: skip
-        super().__init__(actor, critic, storage, clip_param=clip_param, entropy_coef=entropy_coef,
-                         value_loss_coef=value_loss_coef, learning_rate=learning_rate, gamma=gamma, lam=lam,
-                         schedule=schedule, use_clipped_value_loss=use_clipped_value_loss,
-                         normalize_advantage_per_mini_batch=normalize_advantage_per_mini_batch, **kwargs)  # fmt: skip
+        super().__init__(actor, critic, storage, **kwargs)
         if self.bound_coef > 0:
             warnings.warn("ReinFlow ignores bound_coef: its chain already clamps the action to [-1, 1].")
-        self.logprob_clip = None if logprob_clip is None else (float(logprob_clip[0]), float(logprob_clip[1]))
-        self.noise_decay_updates = None if noise_decay_updates is None else int(noise_decay_updates)
-        self.noise_hold_ratio = float(noise_hold_ratio)
-        self.noise_decay_ratio = float(noise_decay_ratio)
-        self.explosion_threshold = float(explosion_threshold)
         self.initial_sigma_max = float(actor.sigma_max)
 
     # ---------------------------------------------------------------------------------------------- rollout

@@ -12,9 +12,15 @@ The loss is the mean over every sample (and pair).
 
 from __future__ import annotations
 
+from enum import Enum
+
 import torch
 
-TRUST_REGIONS = ("ppo", "spo", "aspo")
+
+class TrustRegion(str, Enum):
+    PPO = "ppo"  # PPO's clip
+    SPO = "spo"  # SPO's quadratic penalty
+    ASPO = "aspo"  # FPO++: the clip where A > 0, the penalty otherwise
 
 
 def ppo_clip(ratio: torch.Tensor, adv: torch.Tensor, clip: float) -> torch.Tensor:
@@ -34,4 +40,4 @@ def surrogate(ratio: torch.Tensor, advantages: torch.Tensor, clip: float, trust_
         return spo_penalty(ratio, adv, clip).mean()
     if trust_region == "aspo":
         return torch.where(adv > 0, ppo_clip(ratio, adv, clip), spo_penalty(ratio, adv, clip)).mean()
-    raise ValueError(f"trust_region must be one of {TRUST_REGIONS}, got '{trust_region}'")
+    raise ValueError(f"trust_region must be one of {[t.value for t in TrustRegion]}, got '{trust_region}'")

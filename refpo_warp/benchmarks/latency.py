@@ -1,13 +1,13 @@
 """Action-latency benchmark (the paper's Figure 5b): time to compute one batch of actions with N = 10 and N = 1
 Euler steps for flow policies, and with the mean action for a Gaussian policy.
 
-    python tools/bench.py latency [--tasks dmc_cheetah_run] [--algos ppo,fpo,refpo] [--batch 1,128]
+    refpo bench latency [--tasks dmc_cheetah_run] [--algos ppo,fpo,refpo] [--batch 1,128]
                                   [--device auto] [--repeats 50] [--json PATH]
 
 Each policy is the task's actor at its resolved config (the device's profile) with freshly initialised weights:
 latency depends on the architecture and N, not on the weights. The observation batch comes from the task's env
 after reset; each timing is the median of ``repeats`` calls after warm-up, synchronising the device every call.
-``--json PATH`` also writes the rows (read by ``tools/report.py`` for the latency figure).
+``--json PATH`` also writes the rows (read by ``refpo report`` for the latency figure).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def policy_latency(task: str, algo: str, device: str, batches: list[int], flow_s
 
 
 def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="tools/bench.py latency", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="refpo bench latency", description=__doc__.split("\n\n")[0])
     parser.add_argument("--tasks", default="dmc_cheetah_run", help="comma-separated task ids")
     parser.add_argument("--algos", default="ppo,fpo,refpo", help="comma-separated algo names")
     parser.add_argument("--batch", default="1,num_envs", help="observations per call; 'num_envs': the profile's")

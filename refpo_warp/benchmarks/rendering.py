@@ -1,4 +1,4 @@
-"""Rendering speed: python tools/bench.py render [--width 640] [--height 480] [--frames 60] [--seconds 10]
+"""Rendering speed: refpo bench render [--width 640] [--height 480] [--frames 60] [--seconds 10]
 
 Frames per second of each family's frames (a DMC task with its tracking camera, the humanoid with and without its
 reference, GridWorld), drawn from envs stepped by uniform random actions, and the time to record and write a
@@ -68,7 +68,7 @@ def video_seconds(env, source, fps: float, seconds: float, width: int, height: i
 
 
 def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="tools/bench.py render", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="refpo bench render", description=__doc__.split("\n\n")[0])
     parser.add_argument("--width", type=int, default=640)
     parser.add_argument("--height", type=int, default=480)
     parser.add_argument("--frames", type=int, default=60, help="timed frames per case")

@@ -1,4 +1,4 @@
-"""Update time of every algorithm on one batch size: python tools/bench.py algorithms [--task T] [--envs E] ...
+"""Update time of every algorithm on one batch size: refpo bench algorithms [--task T] [--envs E] ...
 
 Each algorithm is built from its config for the task (its own actor, pairs/chain and losses), collects one rollout
 of ``envs x steps`` transitions and times ``update()`` (median of ``--repeats`` fresh rollouts, 5 by default) with
@@ -35,10 +35,11 @@ PAPER_PASSES = {"fpo": 16, "refpo": 16, "refpo_aw": 16, "fpo_pp": 16, "refpo_pp"
 
 
 def algorithms() -> list[str]:
-    """Every configs/algo/<algo>.yaml (nothing to list here when an algorithm is added)."""
+    """Every algo file of the config folders (nothing to list here when an algorithm is added)."""
+    from refpo_warp.config.config_path import config_path
     from refpo_warp.config.layers import algo_names
 
-    found = algo_names()
+    found = algo_names(config_path())
     return [a for a in ORDER if a in found] + sorted(set(found) - set(ORDER))
 
 
@@ -78,7 +79,7 @@ def update_time(alg, env, device: str, repeats: int) -> float:
 
 
 def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="bench.py algorithms", description=__doc__)
+    parser = argparse.ArgumentParser(prog="refpo bench algorithms", description=__doc__)
     parser.add_argument("--task", default="dmc_cheetah_run")
     parser.add_argument("--envs", type=int, default=256, help="a multiple of 8 (Flow-GRPO's groups)")
     parser.add_argument("--steps", type=int, default=60, help="policy steps per env and rollout")

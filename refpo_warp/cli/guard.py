@@ -1,10 +1,10 @@
-"""One clear message and a documented exit code for every failure of a tool (``docs/cli.md``).
+"""One clear message and a documented exit code for every failure of a command (``docs/cli.md``).
 
 Exit codes: 0 done; 1 unexpected error (the message, and the file holding the full traceback); 2 invalid command
 line or config (bad option value, unknown key, a resume that would change the run, a run dir that cannot be used);
 3 training stopped on a non-finite loss; 4 an input file is missing, damaged or refused (checkpoint, motion file,
 saved config, progress log); 5 the system refused (disk full, permission denied, out of memory, no OpenGL platform
-for rendering); 130 interrupted.
+for rendering); 130 interrupted. A sweep with a failed run exits 1 (its summary names the run and its log).
 """
 
 from __future__ import annotations
@@ -24,10 +24,11 @@ EXIT_INTERRUPTED = 130
 ERROR_LOG = "error.log"
 
 
-def run_guarded(fn: Callable[[], object]) -> int:
-    """Run ``fn``; turn every failure into one message on stderr and its exit code (see the module docstring)."""
+def run_guarded(fn: Callable[[], int | None]) -> int:
+    """Run ``fn``; turn every failure into one message on stderr and its exit code (see the module docstring). The
+    exit code of a run that ends: ``fn``'s, when it returns one (a sweep with a failed run), else 0."""
     try:
-        fn()
+        code = fn()
     except ConfigError as err:
         return _fail(f"error: {err}", EXIT_USAGE)
     except DataFileError as err:
@@ -54,7 +55,7 @@ def run_guarded(fn: Callable[[], object]) -> int:
         summary = " ".join(str(err).split())[:500] or "(no message)"
         return _fail(f"error: unexpected {type(err).__name__}: {summary}\nThis is a bug or a case refpo_warp does not "
                      f"foresee; the full traceback is in {log}", EXIT_UNEXPECTED)  # fmt: skip
-    return EXIT_OK
+    return EXIT_OK if code is None else code
 
 
 def non_finite_message(err: NonFiniteLossError) -> str:
@@ -65,7 +66,7 @@ def non_finite_message(err: NonFiniteLossError) -> str:
     lines = [f"error: training stopped: {err}"]
     if checkpoint is not None:
         lines.append(f"The checkpoints written before the failure are intact; the newest is {checkpoint}. To continue "
-                     f"from it with {smaller}: python tools/train.py run_dir={run_dir} resume=true "
+                     f"from it with {smaller}: refpo train run_dir={run_dir} resume=true "
                      f"algorithm.learning_rate=<value>")  # fmt: skip
     else:
         where = f" in {run_dir}" if run_dir else ""

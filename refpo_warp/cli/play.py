@@ -1,16 +1,10 @@
-"""``tools/play.py``: a video of what a trained policy (or a zero / random agent) does in its task.
+"""``refpo play``: a video of what a trained policy (or a zero / random agent) does in its task.
 
-    python tools/play.py run_dir=runs/dmc_cheetah_run/refpo_seed1 [checkpoint=PATH] [flow_steps=[1,10]]
-                         [initial_noise=[random,zero]] [num_envs=4]
-                         [length=300] [width=640] [height=480] [camera=track] [format=mp4|gif|both] [fps=30]
-                         [seed=3] [name=NAME] [shadows=false] [reference=true] [device=cpu]
-    python tools/play.py task=dmc_cheetah_run agent=zero|random [env options ...] [out=DIR] [video options ...]
-
-A run is loaded as ``tools/eval.py`` loads it (its saved config, the newest usable checkpoint or ``checkpoint=``,
+A run is loaded as ``refpo eval`` loads it (its saved config, the newest usable checkpoint or ``checkpoint=``,
 read with ``weights_only``) and plays its evaluation protocol (``eval.env``, ``eval.initial_noise``,
-``eval.perturbation``; ``initial_noise=`` replaces the run's protocols, one panel per N and protocol); the video goes to ``<run dir>/videos/``, without a run to ``out=`` (default
-``runs/videos``). Every option is checked before anything is built; the video options are
-``refpo_warp/render/options.py``'s.
+``eval.perturbation``; ``initial_noise=`` replaces the run's protocols, one panel per N and protocol); the video goes
+to ``<run dir>/videos/``, without a run to ``out=`` (default ``runs/videos``). Every option is checked before anything
+is built; the video options are ``refpo_warp/render/options.py``'s.
 """
 
 from __future__ import annotations
@@ -18,10 +12,24 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from refpo_warp.cli.arguments import Arguments
 from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.render.options import VideoOptions
 from refpo_warp.utils.errors import ConfigError, unknown
 
+SUMMARY = "a video of a trained policy (one flow step beside ten) or of a zero / random agent"
+USAGE = """A video of a policy: refpo play run_dir=PATH [checkpoint=PATH] [flow_steps=[1,10]]
+                   [initial_noise=[random,zero]] [num_envs=4] [...]
+                   or: refpo play task=<task id> agent=zero|random [env options] [out=DIR] [...]
+
+Writes <run dir>/videos/<name>.mp4 (format=gif or both for a GIF) and prints its path. flow_steps=[1,10] shows the
+1-step and the 10-step policy side by side from the same initial states; initial_noise=[random,zero] each N under
+both initial-noise protocols (the run's eval.initial_noise by default). Video options: [length=300] [width=640]
+[height=480] [camera=track] [format=mp4|gif|both] [fps=30] [seed=3] [name=NAME] [shadows=false] [reference=true]
+[device=cpu] (refpo_warp/render/options.py, docs/videos.md).
+"""
+FLAGS = ()
+SUBJECTS = 0
 AGENTS = ("zero", "random")
 RUN_KEYS = ("run_dir", "checkpoint", "device", "initial_noise")
 AGENT_KEYS = ("task", "agent", "device", "out")
@@ -33,7 +41,7 @@ def split_arguments(args: list[str]) -> tuple[dict[str, Any], VideoOptions, dict
     video_keys = set(VideoOptions.__dataclass_fields__) - {"at_end", "interval"}
     has_run, has_task = "run_dir" in flat, "task" in flat
     if has_run == has_task:
-        raise ConfigError("tools/play.py needs run_dir=PATH (a trained run) or task=ID agent=zero|random, not both")
+        raise ConfigError("refpo play needs run_dir=PATH (a trained run) or task=ID agent=zero|random, not both")
     own = RUN_KEYS if has_run else AGENT_KEYS
     picked = {k: flat.pop(k) for k in list(flat) if k in own}
     video = VideoOptions.from_dict({k: flat.pop(k) for k in list(flat) if k in video_keys}, prefix="")
@@ -56,6 +64,14 @@ def split_arguments(args: list[str]) -> tuple[dict[str, Any], VideoOptions, dict
                               [*own, *sorted(video_keys), *cfg_class.defaults()])  # fmt: skip
         cfg_class(**{**get_task(str(picked["task"])).cfg_overrides, **flat})  # the env options' rules
     return picked, video, flat
+
+
+def run(args: Arguments) -> None:
+    from refpo_warp.utils.device import set_torch_threads
+
+    set_torch_threads(cuda_cap=4)
+    for path in play(args.options):
+        print(f"{path}  ({path.stat().st_size / 1024:.0f} KiB)", flush=True)
 
 
 def play(args: list[str]) -> list[Path]:

@@ -1,9 +1,10 @@
 """Where a run's option got its value:
-``python tools/train.py task=gridworld algo=fpo --explain algorithm.reflow_coef``.
+``refpo train task=gridworld algo=fpo --explain algorithm.reflow_coef``.
 
 For each key: the resolved value, the layer that set it (a file and section, the command line, a constructor's or an
-env cfg's default, or the task id) and what the earlier layers had set. A section (``--explain algorithm``) lists
-every option of it, the ones only a constructor sets included.
+env cfg's default, or the task id), what the earlier layers had set, and what the option means where its class
+declares it in an ``Options`` dataclass. A section (``--explain algorithm``) lists every option of it, the ones only a
+constructor sets included.
 """
 
 from __future__ import annotations
@@ -11,11 +12,12 @@ from __future__ import annotations
 import inspect
 from typing import Any
 
-from refpo_warp.config.classes import CLASS_SECTIONS, POSITIONAL, class_defaults
+from refpo_warp.config.classes import CLASS_SECTIONS, POSITIONAL, class_defaults, resolve_class
 from refpo_warp.config.dotted import LEAF_KEYS, flatten
-from refpo_warp.config.layers import shown
+from refpo_warp.utils.paths import shown
 from refpo_warp.config.resolve import Resolution
 from refpo_warp.utils.errors import unknown
+from refpo_warp.utils.options import declared_options
 
 
 def _class_default(cfg: dict, section: str, name: str) -> tuple[Any, str] | None:
@@ -89,6 +91,15 @@ def all_keys(cfg: dict) -> list[str]:
     return list(dict.fromkeys(k for k in keys if not k.endswith(".") and k not in ("env", "eval.env", "video")))
 
 
+def _meaning(cfg: dict, key: str) -> str:
+    """The one-line doc of a class option (its ``Options`` field's), or ``""``."""
+    section, _, name = key.partition(".")
+    if section not in CLASS_SECTIONS or not name or "." in name:
+        return ""
+    found = declared_options(resolve_class(cfg[section]["class_name"])).get(name)
+    return found.doc if found else ""
+
+
 def _value(cfg: dict, key: str) -> tuple[bool, Any]:
     node: Any = cfg
     for part in key.split("."):
@@ -114,6 +125,9 @@ def explain_key(res: Resolution, key: str) -> list[str]:
         lines.append(f"  set by  {source}")
         for earlier, old in reversed(history[:-1]):
             lines.append(f"  over    {old!r} from {earlier}")
+    meaning = _meaning(cfg, key)
+    if meaning:
+        lines.append(f"  means   {meaning}")
     return lines
 
 

@@ -15,6 +15,9 @@ its file. A derived algorithm is its base with its own file's changes, on every 
 with ``reflow_coef: 0``, so FPO takes whatever a task sets for ReFPO (``by_algo.refpo``) except the coefficient.
 An option no layer sets takes its constructor's default (for ``actor``, ``critic`` and ``algorithm``) or its env
 cfg's default. Top-level keys of a task file that start with ``_`` are YAML anchors for reuse inside that file.
+
+Task, algo and base files are looked up along the config path (``refpo_warp/config/config_path.py``): the user's
+folders, then the shipped ``configs/``.
 """
 
 from __future__ import annotations
@@ -22,9 +25,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from refpo_warp.config.config_path import DEFAULT_FILE, ConfigPath
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
-from refpo_warp.utils.paths import CONFIG_DIR, REPO_ROOT
+from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR, shown
 
 PROFILE_KEYS = ("base", "by_device", "by_algo")
 DEVICE_TYPES = ("cpu", "cuda")
@@ -38,32 +42,23 @@ class Layer:
     values: dict
 
 
-def _choices(kind: str) -> list[str]:
-    return sorted(p.stem for p in (CONFIG_DIR / kind).glob("*.yaml") if not p.stem.startswith("_"))
+def algo_names(path: ConfigPath) -> list[str]:
+    """Every ``algo=`` choice: the files ``algo/<algo>.yaml`` of the config path."""
+    return path.names("algo")
 
 
-def algo_names() -> list[str]:
-    """Every ``algo=`` choice: the files ``configs/algo/<algo>.yaml``."""
-    return _choices("algo")
-
-
-def task_config_path(task: str) -> Path:
-    """The training config file of a registered task: its spec's ``config_file``, else ``configs/task/<task>.yaml``."""
+def task_config_path(task: str, path: ConfigPath) -> Path:
+    """The training config file of a registered task: its spec's ``config_file``, else ``task/<task>.yaml`` of the
+    config path (where it is missing: the shipped folder's name for it, for the message)."""
     from refpo_warp.envs.registry import get_task
 
     config_file = get_task(task).config_file
-    return Path(config_file) if config_file is not None else CONFIG_DIR / "task" / f"{task}.yaml"
+    if config_file is not None:
+        return Path(config_file)
+    return path.find("task", task) or PACKAGED_CONFIG_DIR / "task" / f"{task}.yaml"
 
 
-def shown(path: Path) -> str:
-    """A config file's name as layers and messages show it (relative to the repository where it lies inside)."""
-    try:
-        return str(Path(path).resolve().relative_to(REPO_ROOT))
-    except ValueError:
-        return str(path)
-
-
-def _bases(data: dict, path: Path) -> list[str]:
+def _bases(data: dict, file: Path) -> list[str]:
     base = data.get("base")
     if base is None:
         return []
@@ -71,30 +66,33 @@ def _bases(data: dict, path: Path) -> list[str]:
         return [base]
     if isinstance(base, list) and all(isinstance(b, str) for b in base):
         return base
-    raise ConfigError(f"{path}: 'base' must name a file of the same folder or a list of them, got {base!r}")
+    raise ConfigError(f"{shown(file)}: 'base' must name a file of the same kind or a list of them, got {base!r}")
 
 
-def _chain(path: Path, folder: Path, what: str, seen: tuple[str, ...] = ()) -> list[tuple[Path, dict]]:
-    """``path`` and the files it names in ``base`` (recursively, bases first), each read once."""
-    if not path.exists():
-        raise ConfigError(f"{what} {path} does not exist")
-    data = load_yaml(path)
+def file_chain(file: Path, kind: str, path: ConfigPath, seen: tuple[str, ...] = ()) -> list[tuple[Path, dict]]:
+    """``file`` and the files it names in ``base`` (``<kind>/<base>.yaml`` of the config path, recursively, bases
+    first), each read once."""
+    data = load_yaml(file)
     out: list[tuple[Path, dict]] = []
-    for base in _bases(data, path):
+    for base in _bases(data, file):
         if base in seen:
-            raise ConfigError(f"{path}: circular 'base' chain {' -> '.join(seen + (base,))}")
-        out += _chain(folder / f"{base}.yaml", folder, f"base '{base}' of {path}:", seen + (base,))
-    return out + [(path, data)]
+            raise ConfigError(f"{shown(file)}: circular 'base' chain {' -> '.join(seen + (base,))}")
+        found = path.find(kind, base)
+        if found is None:
+            raise unknown(f"base of {shown(file)} (a file {kind}/<name>.yaml of the config folders)", base,
+                          path.files(kind))  # fmt: skip
+        out += file_chain(found, kind, path, seen + (base,))
+    return out + [(file, data)]
 
 
-def task_files(task: str) -> list[tuple[Path, dict]]:
-    """The task's config file after its ``base`` chain (bases are ``configs/task/<base>.yaml``)."""
-    path = task_config_path(task)
-    what = f"task '{task}' is registered, but its config file"
-    if not path.exists():
-        raise ConfigError(f"{what} {path} does not exist (every task needs one; it may hold just a 'base' line)")
-    files = _chain(path, CONFIG_DIR / "task", what, (task,))
-    algos = algo_names()
+def task_files(task: str, path: ConfigPath) -> list[tuple[Path, dict]]:
+    """The task's config file after its ``base`` chain (bases are task files of the config path)."""
+    file = task_config_path(task, path)
+    if not file.exists():
+        raise ConfigError(f"task '{task}' is registered, but its config file {shown(file)} does not exist (every "
+                          f"task needs one; it may hold just a 'base' line)")  # fmt: skip
+    files = file_chain(file, "task", path, (task,))
+    algos = algo_names(path)
     for file, data in files:
         for key in data.get("by_algo") or {}:
             if key not in algos:
@@ -108,36 +106,38 @@ def task_files(task: str) -> list[tuple[Path, dict]]:
     return files
 
 
-def algo_files(algo: str) -> list[tuple[str, Path, dict]]:
+def algo_files(algo: str, path: ConfigPath) -> list[tuple[str, Path, dict]]:
     """(name, file, data) of the algorithm and the algorithms its file derives from, base first."""
-    folder = CONFIG_DIR / "algo"
-    files = _chain(folder / f"{algo}.yaml", folder, f"algorithm '{algo}':", (algo,))
-    for path, data in files:
+    file = path.find("algo", algo)
+    if file is None:
+        raise unknown("algo", algo, algo_names(path))
+    files = file_chain(file, "algo", path, (algo,))
+    for found, data in files:
         extra = [k for k in data if k in PROFILE_KEYS[1:]]
         if extra:
-            raise ConfigError(f"{path}: an algo file holds run options (and 'base'), not {extra}; a task's settings "
-                              f"for an algorithm go under by_algo in the task's file")  # fmt: skip
-    return [(path.stem, path, data) for path, data in files]
+            raise ConfigError(f"{shown(found)}: an algo file holds run options (and 'base'), not {extra}; a task's "
+                              f"settings for an algorithm go under by_algo in the task's file")  # fmt: skip
+    return [(found.stem, found, data) for found, data in files]
 
 
 def _without_profiles(data: dict) -> dict:
     return {k: v for k, v in data.items() if k not in PROFILE_KEYS and not k.startswith("_")}
 
 
-def generic_layers(task: str) -> list[Layer]:
+def generic_layers(task: str, path: ConfigPath) -> list[Layer]:
     """Layers 1 and 2: the defaults and what the task sets for every algorithm and device."""
-    layers = [Layer(shown(CONFIG_DIR / "default.yaml"), load_yaml(CONFIG_DIR / "default.yaml"))]
-    return layers + [Layer(shown(path), _without_profiles(data)) for path, data in task_files(task)]
+    layers = [Layer(shown(DEFAULT_FILE), load_yaml(DEFAULT_FILE))]
+    return layers + [Layer(shown(file), _without_profiles(data)) for file, data in task_files(task, path)]
 
 
-def specific_layers(task: str, algo: str, device_type: str) -> list[Layer]:
+def specific_layers(task: str, algo: str, device_type: str, path: ConfigPath) -> list[Layer]:
     """Layers 3 and 4: the task's device profile, then each algorithm of the chain with the task's settings for it."""
-    files = task_files(task)
-    profiles = [(path, dict((data.get("by_device") or {}).get(device_type) or {})) for path, data in files]
-    layers = [Layer(f"{shown(path)} by_device.{device_type}", {k: v for k, v in p.items() if k != "by_algo"})
-              for path, p in profiles]  # fmt: skip
-    for name, path, data in algo_files(algo):
-        layers.append(Layer(shown(path), _without_profiles(data)))
+    files = task_files(task, path)
+    profiles = [(file, dict((data.get("by_device") or {}).get(device_type) or {})) for file, data in files]
+    layers = [Layer(f"{shown(file)} by_device.{device_type}", {k: v for k, v in p.items() if k != "by_algo"})
+              for file, p in profiles]  # fmt: skip
+    for name, file, data in algo_files(algo, path):
+        layers.append(Layer(shown(file), _without_profiles(data)))
         layers += [Layer(f"{shown(file)} by_algo.{name}", (d.get("by_algo") or {}).get(name) or {})
                    for file, d in files]  # fmt: skip
         layers += [Layer(f"{shown(file)} by_device.{device_type}.by_algo.{name}",

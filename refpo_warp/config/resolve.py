@@ -1,9 +1,10 @@
 """A run's config: the YAML layers (``refpo_warp/config/layers.py``) and the command line's ``key=value``
 overrides merged into one config and validated key by key (``refpo_warp/config/validate.py``), before anything
-is built or written.
+is built or written. The task, algo and base files are found along the config path: the folder of the run option
+``config_dir`` and those of ``REFPO_CONFIG_PATH``, then the shipped ``configs/`` (``refpo_warp/config/config_path.py``).
 
 ``resolve_config(["task=dmc_cheetah_run", "algo=fpo", "algorithm.learning_rate=1e-4"])`` returns the config as a
-nested dict; ``resolve(...)`` also says which layer set each key (``python tools/train.py ... --explain KEY``).
+nested dict; ``resolve(...)`` also says which layer set each key (``refpo train ... --explain KEY``).
 Env options may be given without their ``env.`` prefix (``motion_file=...``). A key given twice (on the command line
 or in one YAML mapping) is an error.
 """
@@ -11,10 +12,14 @@ or in one YAML mapping) is an error.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
+from refpo_warp.config.config_path import DEFAULT_FILE, ConfigPath, config_path
+from refpo_warp.config.config_tasks import register_config_tasks
 from refpo_warp.config.dotted import flatten, merge, parse_overrides, set_dotted
 from refpo_warp.config.layers import PROFILE_KEYS, Layer, algo_names, generic_layers, specific_layers
+from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.config.run_options import check_combinations
 from refpo_warp.config.validate import validate
 from refpo_warp.utils.errors import ConfigError, unknown
@@ -31,18 +36,26 @@ class Resolution:
     layers: list[Layer] = field(default_factory=list)
 
 
-def identity(flat: dict[str, Any]) -> tuple[str, str]:
-    """The task and algo a flat override dict asks for (default.yaml's when not given), each checked by name."""
-    from refpo_warp.config.yaml_files import load_yaml
-    from refpo_warp.envs.registry import list_tasks
-    from refpo_warp.utils.paths import CONFIG_DIR
+def run_config_path(flat: dict[str, Any]) -> ConfigPath:
+    """The config path of a run (its ``config_dir`` option and ``REFPO_CONFIG_PATH``), its user tasks registered."""
+    config_dir = flat.get("config_dir")
+    if config_dir is not None and not isinstance(config_dir, str):
+        raise ConfigError(f"config_dir={config_dir!r} is invalid; expected the path of a folder")
+    path = config_path(config_dir)
+    register_config_tasks(path)
+    return path
 
-    defaults = load_yaml(CONFIG_DIR / "default.yaml")
+
+def identity(flat: dict[str, Any], path: ConfigPath) -> tuple[str, str]:
+    """The task and algo a flat override dict asks for (default.yaml's when not given), each checked by name."""
+    from refpo_warp.envs.registry import list_tasks
+
+    defaults = load_yaml(DEFAULT_FILE)
     task, algo = str(flat.get("task", defaults["task"])), str(flat.get("algo", defaults["algo"]))
     if task not in list_tasks():
         raise unknown("task", task, list_tasks())
-    if algo not in algo_names():
-        raise unknown("algo", algo, algo_names())
+    if algo not in algo_names(path):
+        raise unknown("algo", algo, algo_names(path))
     return task, algo
 
 
@@ -67,12 +80,15 @@ def resolve(overrides: list[str] | dict[str, Any] | None = None, device_type: st
         device_type: ``"cpu"`` or ``"cuda"`` profile to apply; default: from the resolved ``device``.
     """
     flat = parse_overrides(overrides) if isinstance(overrides, list) else dict(overrides or {})
-    task, algo = identity(flat)
+    path = run_config_path(flat)
+    if flat.get("config_dir"):  # saved with the run as an absolute path: its evaluation finds it from anywhere
+        flat["config_dir"] = str(Path(flat["config_dir"]).expanduser().resolve())
+    task, algo = identity(flat, path)
     flat = {k: v for k, v in flat.items() if k not in ("task", "algo")}
     for key in flat:
         if key.split(".")[0] in PROFILE_KEYS:
             raise ConfigError(f"'{key}' is a config-file key, not a run option")
-    layers = generic_layers(task)
+    layers = generic_layers(task, path)
     defaults = layers[0].values
     flat = _with_env_prefix(flat, task, defaults)
     if device_type is None:
@@ -80,7 +96,7 @@ def resolve(overrides: list[str] | dict[str, Any] | None = None, device_type: st
 
         device = flat.get("device", _merged(layers).get("device", "auto"))
         device_type = resolve_device(str(device)).split(":")[0]
-    layers += specific_layers(task, algo, device_type)
+    layers += specific_layers(task, algo, device_type, path)
     layers.append(Layer(COMMAND_LINE, {}))
     cfg: dict = {}
     sources: dict[str, list[tuple[str, Any]]] = {}

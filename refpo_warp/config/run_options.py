@@ -66,6 +66,7 @@ RUN_RULES = {
     "run_dir": Text(optional=True),
     "resume": Flag(),
     "verbose": Flag(),
+    "config_dir": Text(optional=True),  # the folder itself is checked when the config path is built
     "notice": Check(_check_notice, "null or a text ({task} and {algo} are filled in)", optional=True),
     "runner.num_steps_per_env": Int(1, 1_000_000),
     "runner.save_interval": Int(1, 10**8),

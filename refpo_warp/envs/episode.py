@@ -16,9 +16,7 @@ every env:
 
 from __future__ import annotations
 
-from refpo_warp.utils.device import configure_warp
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 
 @wp.func

@@ -8,9 +8,7 @@ resets (and only their resets) from the stream; after a reset, ``next_episode`` 
 
 from __future__ import annotations
 
-from refpo_warp.utils.device import configure_warp
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 
 class RandomStreams:

@@ -24,11 +24,12 @@ _TASKS: dict[str, TaskSpec] = {}
 _FAMILIES: list[str] = []
 
 
-def register_task(spec: TaskSpec) -> None:
-    """Add a task (a family's ``TASKS`` entries are added this way when the family is discovered)."""
+def register_task(spec: TaskSpec, replace: bool = False) -> None:
+    """Add a task (a family's ``TASKS`` entries are added this way when the family is discovered); ``replace``: a
+    different spec of the same id gives way (a user's task file read again from another config folder)."""
     if not isinstance(spec, TaskSpec):
         raise TypeError(f"register_task takes a TaskSpec, got {type(spec).__name__}")
-    if spec.task_id in _TASKS and _TASKS[spec.task_id] != spec:
+    if spec.task_id in _TASKS and _TASKS[spec.task_id] != spec and not replace:
         raise ValueError(f"Task id '{spec.task_id}' is already registered by {_TASKS[spec.task_id].entry_point}")
     _TASKS[spec.task_id] = spec
 

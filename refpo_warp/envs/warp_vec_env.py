@@ -30,9 +30,8 @@ from tensordict import TensorDict
 from refpo_warp.envs.env_cfg import EnvCfg
 from refpo_warp.envs.episode import finish_reward_terms, finish_step, restart_episodes
 from refpo_warp.envs.random_streams import RandomStreams
-from refpo_warp.utils.device import configure_warp, init_warp, resolve_device
-
-wp = configure_warp()
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.warp_setup import init_warp, wp
 
 
 @dataclass

@@ -1,6 +1,6 @@
 """FlowActor: a flow-matching policy that plugs into rsl_rl wherever an actor ``class_name`` is accepted.
 
-Convention (DESIGN.md): tau in [0, 1], tau = 0 is noise eps ~ N(0, I), tau = 1 is the action a;
+Convention (the whole project's): tau in [0, 1], tau = 0 is noise eps ~ N(0, I), tau = 1 is the action a;
 x_tau = (1 - tau) eps + tau a; the target velocity is a - eps; actions are sampled by integrating
 dx/dtau = v(x, tau; o) with N Euler steps from tau = 0 (``refpo_warp.models.velocity_field`` for the network).
 

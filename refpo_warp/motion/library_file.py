@@ -111,7 +111,7 @@ def _metadata(path: Path, raw: np.ndarray) -> dict:
     if meta.get("version") != FORMAT_VERSION:
         raise MotionDataError(
             f"{path}: library format version {meta.get('version')} is not supported (this code reads version "
-            f"{FORMAT_VERSION}); convert the AMASS files again with tools/convert_amass.py"
+            f"{FORMAT_VERSION}); convert the AMASS files again with `refpo convert-amass`"
         )
     if meta.get("body_names") != list(BODY_NAMES):
         raise MotionDataError(f"{path}: the library's body list differs from the skeleton's {list(BODY_NAMES)}")

@@ -18,10 +18,9 @@ from refpo_warp.motion.library_file import FRAME_ARRAYS, is_library_file, load_l
 from refpo_warp.motion.limits import check_fps_argument
 from refpo_warp.motion.skeleton import NUM_BODIES, NUM_DOFS
 from refpo_warp.motion.sources import load_amass_clips
-from refpo_warp.utils.device import configure_warp, init_warp, resolve_device
+from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.errors import MotionDataError
-
-wp = configure_warp()  # before this module defines kernels
+from refpo_warp.utils.warp_setup import init_warp, wp
 
 _WARP_DTYPES = {"body_pos": wp.vec3, "body_rot": wp.quat, "body_vel": wp.vec3, "body_angvel": wp.vec3,
                 "dof_pos": float, "dof_vel": float}  # fmt: skip

@@ -1,5 +1,5 @@
 """The options of a recorded video, one home for their defaults and rules (Warp-free: a config resolves without a
-simulator). ``tools/play.py`` takes them as ``key=value``; a training run takes them as ``video.<key>``, with
+simulator). ``refpo play`` takes them as ``key=value``; a training run takes them as ``video.<key>``, with
 ``video.at_end`` and ``video.interval`` saying when it records."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Multi-process training with torchrun: this process's rank, its device and seed, and the process group.
 
-``torchrun --nproc_per_node=K tools/train.py ...`` starts K processes and sets ``WORLD_SIZE``, ``RANK`` and
+``torchrun --nproc_per_node=K -m refpo_warp train ...`` starts K processes and sets ``WORLD_SIZE``, ``RANK`` and
 ``LOCAL_RANK`` in each. Every rank steps its own envs (``num_envs`` per rank) on its own device, with its own seed
 (``seed + RANK``), and rsl_rl averages the gradients across ranks; rank 0 alone writes logs, checkpoints, the
 config and the evaluation. See docs/multi_gpu.md.

@@ -28,7 +28,7 @@ def read_rows(run_dir: str | Path) -> list[dict]:
     """All complete rows; a torn last line is skipped, any other bad line raises ``DataFileError``."""
     path = progress_path(run_dir)
     if not path.is_file():
-        raise DataFileError(f"{path}: not found (train with tools/train.py first)")
+        raise DataFileError(f"{path}: not found (train with `refpo train` first)")
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as err:

@@ -1,14 +1,10 @@
 """Generic Newton helpers for Warp environments: N-world MJCF models on SolverMuJoCo, per-world views, resets."""
 
-from refpo_warp.utils.device import configure_warp
-
-configure_warp()  # Warp options must be set before Newton's kernel modules are imported
-
-from refpo_warp.sim.body_kinematics import world_com_velocity  # noqa: E402
-from refpo_warp.sim.health import world_state_finite  # noqa: E402
-from refpo_warp.sim.mjcf_worlds import build_mjcf_worlds, mjcf_timestep  # noqa: E402
-from refpo_warp.sim.mujoco_worlds import MuJoCoWorlds  # noqa: E402
-from refpo_warp.sim.world_views import WorldViews, make_world_views  # noqa: E402
+from refpo_warp.sim.body_kinematics import world_com_velocity
+from refpo_warp.sim.health import world_state_finite
+from refpo_warp.sim.mjcf_worlds import build_mjcf_worlds, mjcf_timestep
+from refpo_warp.sim.mujoco_worlds import MuJoCoWorlds
+from refpo_warp.sim.world_views import WorldViews, make_world_views
 
 __all__ = [
     "MuJoCoWorlds",

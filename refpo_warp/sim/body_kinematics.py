@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import warp as wp
+from refpo_warp.utils.warp_setup import wp
 
 
 @wp.func

@@ -13,10 +13,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import warp as wp
 
 from refpo_warp.sim.mjcf_worlds import build_mjcf_worlds, mjcf_timestep
 from refpo_warp.sim.world_views import make_world_views
+from refpo_warp.utils.warp_setup import wp
 
 
 @wp.kernel

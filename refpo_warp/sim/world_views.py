@@ -10,7 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import warp as wp
+
+from refpo_warp.utils.warp_setup import wp
 
 
 @dataclass

@@ -2,7 +2,7 @@
 seeds), Figure 4 (training return vs proxy-ratio spikes per update) and Figure 5b (action latency, N = 1 vs N = 10).
 
 Curves come from each run's ``progress.jsonl`` (``eval/return_N10``, ``eval/return_N1``, ``eval/return``,
-``reward_mean``, ``Flow/ratio_max``); latency from the JSON of ``tools/bench.py latency --json``.
+``reward_mean``, ``Flow/ratio_max``); latency from the JSON of ``refpo bench latency --json``.
 """
 
 from __future__ import annotations
@@ -133,7 +133,7 @@ def latency_bars(latency: dict, path: Path, names: dict[str, str] | None = None)
 
 
 def sweep_curves(sweep_dir: str | Path, out_dir: str | Path | None = None, window: int = 5) -> list[Path]:
-    """Per task of a sweep dir (``<task>/<method>/seed<k>``, as tools/sweep.py writes it): ``<task>_curves.png``
+    """Per task of a sweep dir (``<task>/<method>/seed<k>``, as refpo sweep writes it): ``<task>_curves.png``
     with one line per method (mean over seeds, band: their range). Prints each seed's training episode length and
     return at the start and the end (means over the first and the last ``window`` iterations)."""
     sweep_dir = Path(sweep_dir)

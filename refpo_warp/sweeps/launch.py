@@ -1,4 +1,5 @@
-"""One run's training process, the same on every backend: the ``tools/train.py`` command line, its environment, its
+"""One run's training process, the same on every backend: the ``python -m refpo_warp train`` command line (the
+installed package, wherever it is: a node needs the package, not a checkout), its environment, its
 log (``train.log``; an earlier attempt's run dir cleared, its logs kept) and how it is stopped. The local backend
 starts it from the sweep process, the Ray backend from a Ray task on the node that trains it.
 
@@ -19,23 +20,21 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from refpo_warp.sweeps.state import LOG_FILE, clear_run_dir
-from refpo_warp.utils.paths import REPO_ROOT, TOOLS_DIR
 
 STOP_GRACE_S = 30.0  # a run's time to exit after SIGINT (checkpoint, summary) before it is killed
 PR_SET_PDEATHSIG = 1
 
 
-def train_command(args: Sequence[str], device: str, launcher: Sequence[str] = (), python: str = sys.executable,
-                  tools_dir: str | Path = TOOLS_DIR) -> list[str]:  # fmt: skip
-    """``[launcher...] python tools/train.py <run args> device=<device>``: what every backend runs for a run."""
-    return [*launcher, python, str(Path(tools_dir) / "train.py"), *args, f"device={device}"]
+def train_command(args: Sequence[str], device: str, launcher: Sequence[str] = (),
+                  python: str = sys.executable) -> list[str]:  # fmt: skip
+    """``[launcher...] python -m refpo_warp train <run args> device=<device>``: what every backend runs for a run."""
+    return [*launcher, python, "-m", "refpo_warp", "train", *args, f"device={device}"]
 
 
-def train_env(base: Mapping[str, str], threads: int | None, repo_root: str | Path = REPO_ROOT) -> dict[str, str]:
-    """``base`` with unbuffered output (the log is live), the repository first on PYTHONPATH and, for a CPU run,
-    ``threads`` torch threads (several runs share the cores)."""
-    path = [str(repo_root)] + ([base["PYTHONPATH"]] if base.get("PYTHONPATH") else [])
-    env = dict(base, PYTHONUNBUFFERED="1", PYTHONPATH=os.pathsep.join(path))
+def train_env(base: Mapping[str, str], threads: int | None) -> dict[str, str]:
+    """``base`` with unbuffered output (the log is live) and, for a CPU run, ``threads`` torch threads (several runs
+    share the cores)."""
+    env = dict(base, PYTHONUNBUFFERED="1")
     if threads is not None:
         env.update(OMP_NUM_THREADS=str(threads), MKL_NUM_THREADS=str(threads))
     return env
@@ -88,7 +87,7 @@ def _signal(proc: subprocess.Popen, sig: int) -> None:
     if proc.poll() is not None:
         return
     try:
-        if os.getpgid(proc.pid) == proc.pid:  # its own group (detached): the launcher prefix and train.py alike
+        if os.getpgid(proc.pid) == proc.pid:  # its own group (detached): the launcher prefix and the run alike
             os.killpg(proc.pid, sig)
         else:
             proc.send_signal(sig)

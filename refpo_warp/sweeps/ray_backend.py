@@ -1,5 +1,6 @@
-"""The Ray backend of a sweep (``tools/sweep.py <sweep> --backend ray``): every run is one Ray task that runs the same
-``tools/train.py`` process as the local backend, on a node and GPU Ray picks (``ray_node.py``); the queue, retries,
+"""The Ray backend of a sweep (``refpo sweep <sweep> --backend ray``): every run is one Ray task that runs the same
+``python -m refpo_warp train`` process as the local backend, on a node and GPU Ray picks (``ray_node.py``); every
+node needs the package installed (not a checkout); the queue, retries,
 records and report stay the executor's (``executor.py``). Ray Tune is not used: it would duplicate them.
 
 - Where: ``address`` (``auto``, ``HOST:PORT``), else ``RAY_ADDRESS``, else a new local Ray on this machine (which
@@ -8,8 +9,7 @@ records and report stay the executor's (``executor.py``). Ray Tune is not used: 
   runs on a GPU) and ``cpus_per_run`` CPUs (default 1; a CPU run trains with that many torch threads). ``jobs``
   defaults to the runs the alive nodes fit at once.
 - Before the first run every node that can take one must see the sweep dir (it reads a token this machine wrote
-  there), ``tools/train.py`` and the working directory, at the paths this machine sees: a cluster needs a shared
-  filesystem.
+  there) and the working directory, at the paths this machine sees: a cluster needs a shared filesystem for them.
 - A lost worker or node is Ray's to retry (``SYSTEM_RETRIES`` times), on any node, without counting as one of the
   run's own ``--retries``; ``status.json`` counts those re-runs (``ray_reruns``) and names the node (``node``,
   ``ray_node_id``).
@@ -38,14 +38,19 @@ from refpo_warp.sweeps.ray_node import TrainTask, see_paths, train_run
 from refpo_warp.sweeps.spec import Run, Sweep, device_type
 from refpo_warp.utils.atomic_files import write_text
 from refpo_warp.utils.errors import ConfigError
-from refpo_warp.utils.paths import REPO_ROOT, TOOLS_DIR
 
-INSTALL = 'pip install -e ".[ray]"'
+INSTALL = 'pip install "refpo-warp[ray]" (from a checkout: pip install -e ".[ray]")'
 SYSTEM_RETRIES = 3  # Ray's re-runs of a task whose worker or node was lost (Ray's own default, stated)
 NODE_CHECK_TIMEOUT_S = 120.0  # a node's first task may have to start a worker
 NODE_CHECK_FILE = ".ray_node_check"
 CONNECT_TIMEOUT_S = 10.0
 NODE_WATCH_S = 2.0  # how often the sweep looks for nodes lost or joined, to say so when it happens
+
+
+def shared_paths() -> list[str]:
+    """What every node must see at the head's paths besides the sweep dir: the working directory (relative run dirs
+    and config folders are read from there)."""
+    return [os.getcwd()]
 
 
 @dataclass(frozen=True)
@@ -171,14 +176,14 @@ class RayLauncher(Launcher):
         return f"{node.get('NodeManagerHostname', '?')} ({node.get('NodeManagerAddress', '?')}, node {node_id[:8]})"
 
     def prepare(self, sweep: Sweep) -> None:
-        """Every node that can take a run sees the sweep dir, ``tools/train.py`` and the working directory."""
+        """Every node that can take a run sees the sweep dir and the working directory and imports the package."""
         ray = self.ray
         from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 
         out = sweep.out_dir.resolve()
         token_file, token = out / NODE_CHECK_FILE, secrets.token_hex(16)
         write_text(token_file, token)
-        paths = [str(TOOLS_DIR / "train.py"), os.getcwd()]
+        paths = shared_paths()
         check = ray.remote(see_paths)
         refs = {}
         for node in (node for node, room in self.room.items() if room):  # a zero-CPU task runs beside busy runs
@@ -205,17 +210,17 @@ class RayLauncher(Launcher):
         finally:
             token_file.unlink(missing_ok=True)
         if problems:
-            raise ConfigError("Ray: " + "; ".join(problems) + ". A Ray sweep needs the sweep dir and the repository on"
-                              " a filesystem that every node shares, at the same paths (docs/results/README.md, 'On a "
-                              "cluster')")  # fmt: skip
-        self.echo(f"[sweep] Ray: {len(refs)} node(s) see the sweep dir and the repository: "
+            raise ConfigError("Ray: " + "; ".join(problems) + ". A Ray sweep needs the package installed on every "
+                              "node, and the sweep dir and the working directory on a filesystem that every node "
+                              "shares, at the same paths (docs/results/README.md, 'On a cluster')")  # fmt: skip
+        self.echo(f"[sweep] Ray: {len(refs)} node(s) see the sweep dir and the working directory: "
                   + ", ".join(self._name(node) for node in refs))  # fmt: skip
 
     # ------------------------------------------------------------------------------------------------ the runs
     def start(self, run: Run, attempt: int, slot: int):
         cwd = os.getcwd()
         task = TrainTask(self.sweep.name, run.key, attempt, tuple(run.args), os.path.join(cwd, run.run_dir), self.cuda,
-                         max(1, int(self.cpus)), self.prefix, cwd, str(REPO_ROOT), str(TOOLS_DIR))  # fmt: skip
+                         max(1, int(self.cpus)), self.prefix, cwd)  # fmt: skip
         return self.train.options(num_gpus=self.gpus, num_cpus=self.cpus, max_retries=SYSTEM_RETRIES,
                                   retry_exceptions=False, name=f"train {run.key}").remote(task)  # fmt: skip
 

@@ -1,6 +1,7 @@
-"""What the Ray backend runs on a node (``ray_backend.py`` submits these as Ray tasks): one run's ``tools/train.py``
-process, started exactly as the local backend starts it, on the GPU Ray assigned (the run sees it as ``cuda:0``);
-and the check that a node sees the sweep dir and the repository at the paths the head sees.
+"""What the Ray backend runs on a node (``ray_backend.py`` submits these as Ray tasks): one run's
+``python -m refpo_warp train`` process (the package installed on the node), started exactly as the local backend
+starts it, on the GPU Ray assigned (the run sees it as ``cuda:0``); and the check that a node sees the sweep dir and
+the working directory at the paths the head sees.
 
 Ray imports this module on its workers by name: it imports ``ray`` only inside the tasks and nothing heavy at all
 (a fresh worker starts a run in a fraction of a second instead of loading torch first).
@@ -30,8 +31,6 @@ class TrainTask:
     threads: int  # torch threads of a CPU run
     launcher: tuple[str, ...]
     cwd: str
-    repo_root: str
-    tools_dir: str
 
 
 def missing_paths(paths: list[str]) -> list[str]:
@@ -81,8 +80,7 @@ def train_run(task: TrainTask) -> dict:
     ctx = ray.get_runtime_context()
     host, task_id = hostname(), ctx.get_task_id()
     result = {"exit_code": None, "seconds": 0.0, "host": host, "node_id": ctx.get_node_id(), "reruns": 0, "error": ""}
-    train_py = str(Path(task.tools_dir) / "train.py")
-    missing = missing_paths([train_py, task.cwd])
+    missing = missing_paths([task.cwd])
     if missing:
         return {**result, "error": f"node {host} does not see {missing[0]} (a Ray sweep needs a shared filesystem)"}
     gpus = ray.get_gpu_ids()
@@ -90,8 +88,8 @@ def train_run(task: TrainTask) -> dict:
         return {**result, "error": f"Ray assigned no GPU on {host} to a CUDA run (--gpus-per-run)"}
     run_dir = Path(task.run_dir)
     result["reruns"] = _earlier_executions(run_dir, task_id)
-    cmd = train_command(task.args, "cuda:0" if task.cuda else "cpu", task.launcher, tools_dir=task.tools_dir)
-    env = train_env(os.environ, None if task.cuda else task.threads, task.repo_root)
+    cmd = train_command(task.args, "cuda:0" if task.cuda else "cpu", task.launcher)
+    env = train_env(os.environ, None if task.cuda else task.threads)
     header = f"sweep {task.sweep}, attempt {task.attempt} on {host} (Ray task {task_id})"
     start = time.monotonic()
     proc = None

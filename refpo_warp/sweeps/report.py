@@ -1,10 +1,10 @@
 """The report of a sweep dir: the paper's DMC tables as Markdown and CSV, the Appendix C table and the figures.
 
-``write_report(sweep_dir)`` reads ``sweep.yaml`` (runs, methods, figure choices; written by ``tools/sweep.py``) and
+``write_report(sweep_dir)`` reads ``sweep.yaml`` (runs, methods, figure choices; written by ``refpo sweep``) and
 ``status.json``, then every run's ``eval.json`` and ``progress.jsonl``, and writes into ``<sweep dir>/report/``:
 ``report.md`` (all tables, the figures, the missing runs), ``main.csv``, ``per_task.csv``, ``appendix_c.csv``,
 ``runs.csv`` (one row per run), ``fig3_reward_curves.png``, ``fig4_ratio_spikes.png`` and, when a latency JSON
-from ``tools/bench.py latency --json`` is there, ``fig5b_latency.png``. A directory without ``sweep.yaml`` is
+from ``refpo bench latency --json`` is there, ``fig5b_latency.png``. A directory without ``sweep.yaml`` is
 read as ``<task>/<label>/seed<k>/`` run dirs. A run without a (current) ``eval.json`` is listed as missing.
 """
 
@@ -49,6 +49,7 @@ from refpo_warp.sweeps.tables import (
     to_csv,
 )
 from refpo_warp.utils.atomic_files import write_text
+from refpo_warp.utils.errors import ConfigError
 
 REPORT_DIR = "report"
 
@@ -71,7 +72,7 @@ def load_spec(sweep_dir: Path) -> dict:
     path = sweep_dir / "sweep.yaml"
     spec = load_yaml(path) if path.exists() else _scan(sweep_dir)
     if not spec.get("runs"):
-        raise FileNotFoundError(f"{sweep_dir}: no sweep.yaml and no <task>/<label>/seed<k> run dirs")
+        raise ConfigError(f"{sweep_dir}: no sweep.yaml and no <task>/<label>/seed<k> run dirs")
     return spec
 
 
@@ -153,7 +154,7 @@ def _choice(given: list[str] | None, spec: dict, key: str, default: list[str], v
     chosen = list(given or spec.get("report", {}).get(key) or default)
     unknown = [c for c in chosen if c not in valid]
     if given and unknown:
-        raise ValueError(f"Unknown {what} {unknown}; the sweep has {valid}")
+        raise ConfigError(f"Unknown {what} {unknown}; the sweep has {valid}")
     return [c for c in chosen if c in valid]
 
 
@@ -217,7 +218,7 @@ def write_report(sweep_dir: str | Path, out_dir: str | Path | None = None, laten
         figures.append((f"Figure 5b: action latency, N = 1 vs N = 10 ({latency_path})",
                         latency_bars(data, out / "fig5b_latency.png", names)))  # fmt: skip
     else:
-        notes.append(f"Figure 5b: no {latency_path}; write it with `python tools/bench.py latency "
+        notes.append(f"Figure 5b: no {latency_path}; write it with `refpo bench latency "
                      f"--tasks <task> --json {latency_path}`.")  # fmt: skip
     written += [path for _, path in figures]
     _write(out / "report.md", report_markdown(spec, records, mrows, trows, figures, notes, sweep_dir, out))
@@ -231,7 +232,7 @@ def report_markdown(spec, records, mrows, trows, figures, notes, sweep_dir: Path
         lines += [spec["description"], ""]
     lines += [f"Sweep dir `{sweep_dir}` (device profile: {spec.get('device', '?')}); {len(records)} runs, "
               f"{len(ok)} finished, {len(records) - len(ok)} missing. Written by "
-              f"`python tools/report.py {sweep_dir}`.", "",
+              f"`refpo report {sweep_dir}`.", "",
               "## DMC table (the paper's \"MuJoCo Playground results\")", "", main_markdown(mrows), AGGREGATION, "",
               SOURCES_MAIN, "", "## Per task", "", task_markdown(trows),
               "## Run health: runs that fell 30 % or more below their peak", "", cliffs_markdown(records),

@@ -1,4 +1,4 @@
-"""Run a sweep: every run of the grid as its own ``tools/train.py`` process, several at a time, resumable.
+"""Run a sweep: every run of the grid as its own ``refpo train`` process, several at a time, resumable.
 
 - A run whose ``eval.json`` exists and whose ``config.yaml`` is the run's current config is skipped.
 - A run that is unfinished (interrupted earlier) or stale (its config changed) is trained again from scratch; only
@@ -72,7 +72,7 @@ def run_sweep(sweep: Sweep, jobs: int | None = None, retries: int = 1, launcher:
         echo("[sweep] " + ", ".join(f"{len(v)} {words[k]}" for k, v in states.items()))
         for run in sweep.runs:
             state = next(k for k, v in states.items() if run.key in v)
-            echo(f"  {state:10s} {run.key}: python tools/train.py {shlex.join(run.args)}")
+            echo(f"  {state:10s} {run.key}: refpo train {shlex.join(run.args)}")
         return Summary(total=len(sweep.runs), skipped=[r.key for r in done])
     runner = make_launcher(backend, sweep, jobs, launcher, ray, echo)
     try:
@@ -96,5 +96,5 @@ def run_sweep(sweep: Sweep, jobs: int | None = None, retries: int = 1, launcher:
         echo(f"  failed {key}: {why}")
     for key in summary.interrupted:
         echo(f"  interrupted {key} (rerun the sweep to train it again)")
-    echo(f"[sweep] report: python tools/report.py {sweep.out_dir}")
+    echo(f"[sweep] report: refpo report {sweep.out_dir}")
     return summary

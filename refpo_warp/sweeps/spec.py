@@ -1,6 +1,7 @@
 """Sweep specifications: a grid of tasks x methods x seeds (x list-valued overrides), expanded into runs.
 
-A sweep file (``configs/sweep/<name>.yaml``, or any YAML path) holds::
+A sweep file (``sweep/<name>.yaml`` of the config folders: a user's ``config_dir=`` or ``REFPO_CONFIG_PATH`` folders,
+then the shipped ``configs/``; or any YAML path) holds::
 
     device: cpu                      # cpu | cuda | auto: which by_device profile every run uses
     tasks: [dmc_point_mass, ...]
@@ -31,19 +32,17 @@ from typing import Any
 
 import yaml
 
+from refpo_warp.config.config_path import ConfigPath, config_path
 from refpo_warp.config.dotted import LEAF_KEYS, parse_overrides
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
-from refpo_warp.utils.paths import CONFIG_DIR
-
-SWEEP_CONFIG_DIR = CONFIG_DIR / "sweep"
 SPEC_KEYS = ("name", "description", "device", "tasks", "seeds", "overrides", "methods", "report", "out")
 METHOD_KEYS = ("label", "algo", "name", "overrides")
 REPORT_KEYS = ("curve_methods", "ratio_tasks", "ratio_methods")
 # Run options the sweep sets itself; on the command line use the sweep-level key instead.
 MANAGED = {"task": "tasks=", "algo": "methods=", "seed": "seeds=", "run_dir": "out=", "resume": None}
 # Config keys that do not change what a run computes: a finished run whose config differs only here is kept.
-FINGERPRINT_IGNORED = ("device", "resume", "run_dir", "verbose")
+FINGERPRINT_IGNORED = ("device", "resume", "run_dir", "verbose", "config_dir")
 
 
 @dataclass(frozen=True)
@@ -62,7 +61,7 @@ class Run:
     method: Method
     seed: int
     run_dir: Path
-    args: tuple[str, ...]  # tools/train.py arguments, device excluded (chosen at launch)
+    args: tuple[str, ...]  # refpo train arguments, device excluded (chosen at launch)
 
     @property
     def key(self) -> str:
@@ -83,20 +82,16 @@ class Sweep:
     runs: list[Run] = field(default_factory=list)
 
 
-def sweep_names() -> list[str]:
-    return sorted(p.stem for p in SWEEP_CONFIG_DIR.glob("*.yaml"))
-
-
-def sweep_file(source: str) -> Path:
-    """A named sweep (``configs/sweep/<name>.yaml``) or a path to a sweep YAML file."""
+def sweep_file(source: str, folders: ConfigPath) -> Path:
+    """A named sweep (``sweep/<name>.yaml`` of the config folders) or a path to a sweep YAML file."""
     path = Path(source)
     if path.suffix in (".yaml", ".yml") or path.exists():
         if not path.is_file():
             raise ConfigError(f"Sweep file '{source}' not found")
         return path
-    named = SWEEP_CONFIG_DIR / f"{source}.yaml"
-    if not named.exists():
-        raise unknown("sweep", source, sweep_names())
+    named = folders.find("sweep", source)
+    if named is None:
+        raise unknown("sweep", source, folders.names("sweep"))
     return named
 
 
@@ -247,13 +242,13 @@ def load_sweep(source: str, args: list[str] | None = None) -> Sweep:
     """
     from refpo_warp.config.resolve import resolve_config  # here: a Ray worker imports this module without torch
 
-    path = sweep_file(source)
+    cli = parse_overrides(args or [])
+    path = sweep_file(source, config_path(cli.get("config_dir")))  # the runs' config folders
     spec = load_yaml(path)
     where = str(path)
     for key in spec:
         if key not in SPEC_KEYS:
             raise unknown(f"key in sweep file {where}", key, SPEC_KEYS)
-    cli = parse_overrides(args or [])
     for key, hint in MANAGED.items():
         if key in cli:
             raise ConfigError(f"'{key}=' is set by the sweep for each run" + (f"; use '{hint}...'" if hint else ""))
@@ -272,8 +267,10 @@ def load_sweep(source: str, args: list[str] | None = None) -> Sweep:
     dtype = device_type(device)
     methods: list[tuple[str, Method]] = []  # (entry label, variant), the file's grid
     probes: dict[str, dict] = {}
+    folders = {"config_dir": cli["config_dir"]} if "config_dir" in cli else {}
     for entry in entries:
-        probes[entry["algo"]] = probe = resolve_config({"task": tasks[0], "algo": entry["algo"]}, device_type=dtype)
+        probe = resolve_config({"task": tasks[0], "algo": entry["algo"], **folders}, device_type=dtype)
+        probes[entry["algo"]] = probe
         methods += [(entry["label"], m) for m in expand_method(entry, {**base, **entry["overrides"]}, probe)]
     if keep is not None:  # a method entry's label keeps all its variants; a variant label keeps that one
         keep = _as_list(keep, "methods", str)
@@ -309,7 +306,7 @@ def fingerprint(cfg: dict) -> str:
 
 
 def validate(sweep: Sweep) -> dict[str, str]:
-    """Resolve every run's config (as ``tools/train.py`` will); returns run key -> config fingerprint.
+    """Resolve every run's config (as ``refpo train`` will); returns run key -> config fingerprint.
 
     All failures are collected and raised together, naming the runs, so a typo fails before anything starts.
     Seeds differ only in the plain ``seed`` key, so each (task, method) is resolved once and its seeds share it.

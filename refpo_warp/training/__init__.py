@@ -1,4 +1,4 @@
-"""Train a run from a resolved config: ``train(["task=gridworld", "algo=refpo"])`` (behind ``tools/train.py``)."""
+"""Train a run from a resolved config: ``train(["task=gridworld", "algo=refpo"])`` (behind ``refpo train``)."""
 
 from refpo_warp.training.train_run import train
 

@@ -1,4 +1,4 @@
-"""Train a policy from a resolved config: the implementation behind ``tools/train.py``.
+"""Train a policy from a resolved config: the implementation behind ``refpo train``.
 
 ``train(["task=gridworld", "algo=refpo", "seed=1"])`` builds the env and rsl_rl's runner (extended in
 ``refpo_warp.runner.runner``), writes the resolved config next to the checkpoints, trains (or resumes), evaluates at the
@@ -18,8 +18,9 @@ import math
 from pathlib import Path
 from typing import Any
 
+from refpo_warp.config.config_path import DEFAULT_FILE
 from refpo_warp.config.dotted import parse_overrides
-from refpo_warp.config.resolve import identity, resolve_config
+from refpo_warp.config.resolve import identity, resolve_config, run_config_path
 from refpo_warp.config.run_options import RUN_RULES
 from refpo_warp.config.saved import RUN_CONFIG, load_run_config
 from refpo_warp.config.yaml_files import dump_config, load_yaml
@@ -35,7 +36,6 @@ from refpo_warp.runner.run_dir import RUN_FILES, check_new_run_dir, check_writab
 from refpo_warp.runner.runner import Runner
 from refpo_warp.utils.atomic_files import remove_stale_temp_files
 from refpo_warp.utils.errors import ConfigError, NonFiniteLossError, tag_run_dir
-from refpo_warp.utils.paths import CONFIG_DIR
 
 
 def default_run_dir(task: str, algo: str, seed: int) -> Path:
@@ -50,8 +50,8 @@ def resolve_run(flat: dict[str, Any]) -> dict:
     elif flat.get("run_dir"):
         cfg = load_run_config(Path(flat["run_dir"]), flat)
     else:
-        seed = RUN_RULES["seed"].check("seed", flat.get("seed", load_yaml(CONFIG_DIR / "default.yaml")["seed"]))
-        run_dir = default_run_dir(*identity(flat), seed)
+        seed = RUN_RULES["seed"].check("seed", flat.get("seed", load_yaml(DEFAULT_FILE)["seed"]))
+        run_dir = default_run_dir(*identity(flat, run_config_path(flat)), seed)
         cfg = load_run_config(run_dir, {**flat, "run_dir": str(run_dir)})
     cfg["run_dir"] = str(cfg["run_dir"] or default_run_dir(cfg["task"], cfg["algo"], cfg["seed"]))
     return cfg

@@ -1,16 +1,11 @@
-"""Device resolution and the one-time Warp configuration shared by every environment and tool."""
+"""Device resolution and torch's CPU threads, shared by every environment and tool (Warp's set-up:
+``refpo_warp/utils/warp_setup.py``)."""
 
 from __future__ import annotations
-
-import os
-import sys
-import tempfile
 
 import torch
 
 from refpo_warp.utils.errors import ConfigError
-
-_CONFIGURED = False
 
 
 def check_device_name(device: str) -> str:
@@ -52,66 +47,3 @@ def set_torch_threads(cuda_cap: int | None = None) -> int:
     n = max(1, n)
     torch.set_num_threads(n)
     return n
-
-
-def configure_warp():
-    """Set Warp's global options; must run before any module defining kernels (ours, Newton's) is imported."""
-    global _CONFIGURED
-    import warp as wp
-
-    if not _CONFIGURED:
-        # Module options are frozen when a Python module first defines a kernel, so set them up front.
-        # RL needs no kernel adjoints; skipping them halves cold compile times.
-        wp.config.enable_backward = False
-        wp.config.log_level = wp.LOG_WARNING
-        wp.config.quiet = True
-        if os.environ.get("REFPO_WARP_PORTABLE_CACHE"):
-            # A generic CPU target keeps a restored kernel cache valid on another CPU model.
-            wp.config.cpu_compiler_flags = ""
-        _CONFIGURED = True
-    return wp
-
-
-# Printed by Warp's native library (C stderr, no option turns it off) on every machine without a CUDA driver: on a
-# CPU-only machine it is noise, and a requested CUDA device fails with its own clear error (resolve_device).
-NO_DRIVER_WARNING = "Could not find or load the NVIDIA CUDA driver"
-
-
-def init_warp():
-    """Configure and initialise Warp (idempotent); returns the ``warp`` module.
-
-    Warp's "no CUDA driver" warning is dropped; anything else the initialisation writes to stderr is passed on.
-    """
-    wp = configure_warp()
-    try:
-        from warp._src.context import runtime
-    except ImportError:  # another Warp layout: initialise through the filter every time (cheap when done)
-        runtime = None
-    if runtime is not None:  # initialised already: nothing would be printed
-        return wp
-    with _stderr_without(NO_DRIVER_WARNING):
-        wp.init()
-    return wp
-
-
-class _stderr_without:
-    """Capture file descriptor 2 (native code writes there directly) and re-emit every line but ``message``'s."""
-
-    def __init__(self, message: str) -> None:
-        self.message = message
-
-    def __enter__(self) -> None:
-        sys.stderr.flush()
-        self.saved = os.dup(2)
-        self.capture = tempfile.TemporaryFile()
-        os.dup2(self.capture.fileno(), 2)
-
-    def __exit__(self, *exc) -> None:
-        sys.stderr.flush()
-        os.dup2(self.saved, 2)
-        os.close(self.saved)
-        self.capture.seek(0)
-        text = self.capture.read().decode("utf-8", errors="replace")
-        self.capture.close()
-        sys.stderr.write("".join(line for line in text.splitlines(keepends=True) if self.message not in line))
-        sys.stderr.flush()

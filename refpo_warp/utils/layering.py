@@ -1,7 +1,7 @@
 """The layers of the project (``docs/architecture.md``): each folder of ``refpo_warp/`` belongs to one layer, and a
 module's layer is its folder's. A module may import its own layer and the layers below, never above;
 ``tests/utils/test_layering.py`` checks this and that the import graph has no circles, on every run.
-``tools/draw_layers.py`` draws it.
+``docs/figures/draw_layers.py`` draws it.
 """
 
 from __future__ import annotations
@@ -13,9 +13,10 @@ from refpo_warp.utils.paths import REPO_ROOT as ROOT
 
 PACKAGE = "refpo_warp"
 
-# Top to bottom: the folders (first name below refpo_warp) of each layer. refpo_warp.tasks is the repository's tasks/.
+# Top to bottom: the folders (first name below refpo_warp) of each layer. refpo_warp.tasks is the repository's tasks/;
+# refpo_warp/__main__.py (python -m refpo_warp) is the command line too.
 LAYERS = {
-    "cli": ["cli"],
+    "cli": ["cli", "__main__"],
     "app": ["training", "evaluation", "sweeps", "benchmarks", "integrations"],
     "run": ["config", "runner"],
     "core": ["algorithms", "models", "envs", "sim", "motion", "render", "tasks"],

@@ -33,15 +33,18 @@ without a rule, so a new option cannot be forgotten.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import functools
 import inspect
 import math
 from collections.abc import Callable
+from enum import Enum
 from typing import Any
 
 from refpo_warp.utils.errors import ConfigError
 
 _EXTERNAL_RULES: dict[type, dict[str, Rule]] = {}
+OPTIONS = "Options"  # a class's dataclass of options, each field with its rule (refpo_warp/utils/options.py)
 
 
 class Rule:
@@ -130,17 +133,23 @@ def Real(lo: float | None = None, hi: float | None = None, **kwargs) -> Num:  # 
 
 
 class OneOf(Rule):
-    """One of the listed values (an enum option); ``None`` among the choices makes it optional."""
+    """One of the listed values, or of an ``Enum``'s values (kept plain: a config holds the string); ``None`` among the
+    choices makes it optional."""
 
     def __init__(self, *choices: Any, fixed: bool | None = None) -> None:
-        flat = [c for group in choices for c in (group if isinstance(group, (tuple, list)) else [group])]
+        def values(group: Any) -> list:
+            if isinstance(group, type) and issubclass(group, Enum):
+                return [member.value for member in group]
+            return list(group) if isinstance(group, (tuple, list)) else [group]
+
+        flat = [c for group in choices for c in values(group)]
         super().__init__(optional=None in flat, fixed=fixed)
         self.choices = tuple(c for c in flat if c is not None)
 
     def _check(self, key: str, value: Any) -> Any:
         if isinstance(value, bool) or value not in self.choices:
             raise self.error(key, value)
-        return value
+        return value.value if isinstance(value, Enum) else value
 
     def describe(self) -> str:
         return "one of " + ", ".join(_show(c) for c in self.choices)
@@ -219,11 +228,16 @@ def register_rules(cls: type, rules: dict[str, Rule]) -> None:
 
 
 def rules_for(cls: type) -> dict[str, Rule]:
-    """The option rules of ``cls`` and its bases (a subclass's rule for an option replaces its base's)."""
+    """The option rules of ``cls`` and its bases (a subclass's rule for an option replaces its base's): registered,
+    in an ``option_rules`` dict, or in the fields of an ``Options`` dataclass (``refpo_warp/utils/options.py``)."""
     rules: dict[str, Rule] = {}
     for klass in reversed(inspect.getmro(cls) if inspect.isclass(cls) else (cls,)):
         rules.update(_EXTERNAL_RULES.get(klass, {}))
         rules.update(getattr(klass, "__dict__", {}).get("option_rules", {}))
+        options = getattr(klass, "__dict__", {}).get(OPTIONS)
+        for f in dataclasses.fields(options) if dataclasses.is_dataclass(options) else ():
+            if f.metadata.get("rule") is not None:
+                rules[f.name] = f.metadata["rule"]
     return rules
 
 

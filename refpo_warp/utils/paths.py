@@ -1,11 +1,27 @@
-"""Where the repository's folders are: its root, ``configs/`` (``REFPO_WARP_CONFIGS`` points elsewhere) and
-``tools/`` (the training command a sweep launches)."""
+"""Where the installed package keeps its files: the shipped configs (the repository's ``configs/``, installed as
+``refpo_warp.configs``), found through the package wherever it is installed, and the source tree of a checkout
+(the layering checks and the tests read it).
+
+A user's own config folders come on top of the shipped one: ``refpo_warp.config.config_path``.
+"""
 
 from __future__ import annotations
 
-import os
+import importlib.util
 from pathlib import Path
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
-CONFIG_DIR = Path(os.environ.get("REFPO_WARP_CONFIGS", REPO_ROOT / "configs"))
-TOOLS_DIR = REPO_ROOT / "tools"
+PACKAGE_DIR = Path(__file__).resolve().parents[1]
+# The package data folder itself, not an import of it: find_spec locates it in a wheel and in an editable install.
+PACKAGED_CONFIG_DIR = Path(importlib.util.find_spec("refpo_warp.configs").submodule_search_locations[0]).resolve()
+# The checkout the package was installed from in editable mode (in a wheel: the site-packages folder).
+REPO_ROOT = PACKAGE_DIR.parent
+
+
+def shown(path: str | Path) -> str:
+    """A file's name as messages show it: ``configs/...`` for a shipped config, relative to the installation for the
+    package's own files (``refpo_warp/algorithms/refpo.py``), else the path as it is."""
+    path = Path(path).resolve()
+    for base, prefix in ((PACKAGED_CONFIG_DIR, Path("configs")), (REPO_ROOT, Path())):
+        if path.is_relative_to(base):
+            return str(prefix / path.relative_to(base))
+    return str(path)

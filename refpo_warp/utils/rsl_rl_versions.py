@@ -46,6 +46,7 @@ HAS_COMPILE = hasattr(RslPPO, "compile")
 # Constructor arguments of newer PPOs, with the value that means "off" (what older versions effectively do).
 NEWER_PPO_ARGS = {"use_mixed_precision": False, "grad_reduce_bucket_mb": 25}
 _PPO_PARAMETERS = frozenset(inspect.signature(RslPPO.__init__).parameters)
+PPO_ARGUMENTS = _PPO_PARAMETERS | frozenset(NEWER_PPO_ARGS)  # rsl_rl's PPO arguments on some supported version
 GAUSSIAN_HAS_LEARN_STD = "learn_std" in inspect.signature(GaussianDistribution.__init__).parameters
 
 

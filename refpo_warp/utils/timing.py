@@ -1,4 +1,4 @@
-"""Timing helpers shared by the per-family benchmarks behind ``tools/bench.py``."""
+"""Timing helpers shared by the per-family benchmarks behind ``refpo bench``."""
 
 from __future__ import annotations
 

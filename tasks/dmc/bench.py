@@ -1,6 +1,6 @@
 """DMC benchmark: env steps per second of every task vs the MuJoCo C library stepping the same model.
 
-    python tools/bench.py dmc [--num-envs N] [--device auto] [--tasks cartpole_balance,walker_walk] [--seconds 3]
+    refpo bench dmc [--num-envs N] [--device auto] [--tasks cartpole_balance,walker_walk] [--seconds 3]
 
 Ours: the task's Warp env (Newton + MuJoCo Warp), uniform random actions in [-1, 1], timed after warm-up steps (the
 step is replayed as a captured graph: a CUDA graph on GPU, a Warp CPU graph on CPU); one env step = the task's
@@ -88,7 +88,7 @@ def main(argv: list[str]) -> None:
 
     TASKS = task_names()
 
-    parser = argparse.ArgumentParser(prog="tools/bench.py dmc", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="refpo bench dmc", description=__doc__.split("\n\n")[0])
     parser.add_argument("--device", default="auto")
     parser.add_argument("--num-envs", type=int, default=None, help="default: 256 on CPU, 4096 on CUDA")
     parser.add_argument("--tasks", default=",".join(TASKS), help="comma-separated suite names")

@@ -16,10 +16,8 @@ from refpo_warp.envs.warp_vec_env import WarpVecEnv
 from refpo_warp.sim import MuJoCoWorlds, world_state_finite
 from refpo_warp.tasks.dmc import suite
 from refpo_warp.tasks.dmc.cfg import DmcCfg
-from refpo_warp.utils.device import configure_warp
 from refpo_warp.utils.errors import unknown
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 
 @wp.kernel

@@ -19,7 +19,7 @@ Bounds may be infinite (``wp.inf``). dm_control's default ``value_at_margin`` is
 
 from __future__ import annotations
 
-import warp as wp
+from refpo_warp.utils.warp_setup import wp
 
 GAUSSIAN = wp.constant(0)
 HYPERBOLIC = wp.constant(1)

@@ -12,9 +12,9 @@ from pathlib import Path
 from typing import ClassVar
 
 import numpy as np
-import warp as wp
 
 from refpo_warp.sim import MuJoCoWorlds
+from refpo_warp.utils.warp_setup import wp
 
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 

@@ -1,9 +1,9 @@
 """GridWorld benchmark: the Warp env against the same dynamics in numpy under gymnasium's SyncVectorEnv.
 
-    python tools/bench.py gridworld [--envs 4096] [--device auto]
+    refpo bench gridworld [--envs 4096] [--device auto]
 
-Action latency and update time on the GridWorld config: ``tools/bench.py latency --tasks gridworld`` and
-``tools/bench.py algorithms --task gridworld``.
+Action latency and update time on the GridWorld config: ``refpo bench latency --tasks gridworld`` and
+``refpo bench algorithms --task gridworld``.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ def gym_steps_per_second(num_envs: int, steps: int) -> float:
 
 
 def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="bench.py gridworld", description=__doc__)
+    parser = argparse.ArgumentParser(prog="refpo bench gridworld", description=__doc__)
     parser.add_argument("--envs", type=int, default=4096)
     parser.add_argument("--device", default="auto")
     parser.add_argument("--gym-steps", type=int, default=20)

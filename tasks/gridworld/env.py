@@ -15,9 +15,7 @@ import torch
 from refpo_warp.envs.episode import finish_env_step
 from refpo_warp.envs.warp_vec_env import WarpVecEnv
 from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
-from refpo_warp.utils.device import configure_warp
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 
 @wp.func

@@ -1,6 +1,6 @@
 """The same GridWorld as a plain single-env gymnasium ``Env`` in numpy.
 
-It is the independent reference the Warp kernel is tested against, and the baseline of ``tools/bench.py
+It is the independent reference the Warp kernel is tested against, and the baseline of ``refpo bench
 gridworld`` (run inside gymnasium's ``SyncVectorEnv``). Written from the task definition, not from the kernel.
 """
 

@@ -1,4 +1,4 @@
-"""Env-stepping throughput of the humanoid tracking env: ``python tools/bench.py humanoid [--num-envs N] ...``.
+"""Env-stepping throughput of the humanoid tracking env: ``refpo bench humanoid [--num-envs N] ...``.
 
 Ours: timed with ``refpo_warp.utils.timing.env_steps_per_second``: uniform random actions in [-1, 1] drawn ahead of
 time, after warm-up steps (the first step compiles kernels and captures the step graph). One env step is the whole
@@ -104,7 +104,7 @@ def key_value_option(item: str) -> tuple[str, object]:
 
 
 def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="tools/bench.py humanoid", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="refpo bench humanoid", description=__doc__.split("\n\n")[0])
     parser.add_argument("--task", default="humanoid_all")
     parser.add_argument("--device", default="auto")
     parser.add_argument("--num-envs", type=int, default=None, help="default: 64 on CPU, 4096 on CUDA")

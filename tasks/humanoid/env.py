@@ -27,9 +27,7 @@ from refpo_warp.tasks.humanoid.tracking_kernels import (
     start_episodes_kernel,
     write_reference_state_kernel,
 )
-from refpo_warp.utils.device import configure_warp
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 
 class HumanoidTrackingEnv(WarpVecEnv):

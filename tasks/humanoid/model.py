@@ -19,9 +19,7 @@ import numpy as np
 from refpo_warp.motion import skeleton as sk
 from refpo_warp.sim import MuJoCoWorlds
 from refpo_warp.tasks.humanoid.mjcf_builder import MJCF_PATH
-from refpo_warp.utils.device import configure_warp
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 FREE_COORDS = 7  # root position (3) + quaternion xyzw (4)
 FREE_DOFS = 6  # root linear (COM) velocity (3) + angular velocity (3), world frame

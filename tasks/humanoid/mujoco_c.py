@@ -1,6 +1,6 @@
 """The humanoid's MuJoCo C twin: the model ``HumanoidSim`` compiled, stepped by the MuJoCo C library.
 
-Used as the speed anchor of ``tools/bench.py humanoid`` and by the agreement test. The MjModel is the one Newton's
+Used as the speed anchor of ``refpo bench humanoid`` and by the agreement test. The MjModel is the one Newton's
 ``SolverMuJoCo`` compiled from ``smpl_humanoid.xml`` for MuJoCo Warp (one world: the humanoid and the ground plane),
 so both libraries see the same bodies, geoms, contact filtering, joint limits, PD actuators (Newton exports each
 hinge's joint target gains as a MuJoCo position actuator ``kp``/``kv`` with the 500 N m effort limit as the joint's

@@ -8,9 +8,7 @@ from __future__ import annotations
 
 from refpo_warp.tasks.humanoid.obs_layout import OFFSET
 from refpo_warp.tasks.humanoid.rotation_funcs import heading_inverse, normal, origin_velocity, tangent
-from refpo_warp.utils.device import configure_warp
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 O_BODY_POS = wp.constant(OFFSET["body_pos"])
 O_BODY_ROT = wp.constant(OFFSET["body_rot"])

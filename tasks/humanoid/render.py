@@ -8,11 +8,11 @@ from __future__ import annotations
 import copy
 
 import numpy as np
-import warp as wp
 
 from refpo_warp.motion import skeleton as sk
 from refpo_warp.render.mujoco_scene import Marker, MujocoScene
 from refpo_warp.tasks.humanoid.mujoco_c import newton_to_mujoco
+from refpo_warp.utils.warp_setup import wp
 
 REFERENCE_RGBA = (0.15, 0.75, 1.0, 0.45)
 JOINT_RADIUS, BONE_RADIUS = 0.045, 0.025

@@ -10,9 +10,7 @@ each step's weighted terms add up to the reward; the base env sums them over eac
 
 from __future__ import annotations
 
-from refpo_warp.utils.device import configure_warp
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 TERMS = ("pos", "rot", "vel", "angvel", "power")
 NUM_TERMS = wp.constant(len(TERMS))

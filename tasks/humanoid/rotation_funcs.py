@@ -7,9 +7,7 @@ Tangent-normal ("tan-norm") 6D: a rotation written as its images of the x axis a
 
 from __future__ import annotations
 
-from refpo_warp.utils.device import configure_warp
-
-wp = configure_warp()  # before this module defines Warp functions
+from refpo_warp.utils.warp_setup import wp
 
 
 @wp.func

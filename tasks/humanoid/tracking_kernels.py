@@ -13,9 +13,7 @@ from refpo_warp.motion import skeleton as sk
 from refpo_warp.tasks.humanoid.model import FREE_COORDS, FREE_DOFS
 from refpo_warp.tasks.humanoid.reward_terms import RewardParams, imitation_term, term_vector, write_terms
 from refpo_warp.tasks.humanoid.rotation_funcs import com_velocity, origin_velocity, quat_angle
-from refpo_warp.utils.device import configure_warp
-
-wp = configure_warp()
+from refpo_warp.utils.warp_setup import wp
 
 NB = wp.constant(sk.NUM_BODIES)
 NDOF = wp.constant(sk.NUM_DOFS)

@@ -11,9 +11,9 @@ from tensordict import TensorDict
 
 from refpo_warp.algorithms import ReFPO
 from refpo_warp.algorithms.on_policy import soft_bound_loss, value_regression_loss
-from refpo_warp.algorithms.refpo import sample_tau
+from refpo_warp.algorithms.refpo import TauSampling, sample_tau
 from refpo_warp.models import FlowActor
-from refpo_warp.utils.errors import NonFiniteLossError
+from refpo_warp.utils.errors import ConfigError, NonFiniteLossError
 
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
 
@@ -49,6 +49,15 @@ def test_defaults_are_the_projects_tuned_values():
     assert (alg.entropy_coef, alg.use_clipped_value_loss) == (0.0, False)
     with pytest.warns(UserWarning, match="adaptive"):
         make_refpo(schedule="adaptive")
+
+
+def test_the_constructor_sets_every_option_and_checks_the_given_ones():
+    alg, _ = make_refpo(reflow_coef=0.3, reward_scale=10, tau_sampling=TauSampling.DISCRETE)
+    assert (alg.reflow_coef, alg.reward_scale, alg.tau_sampling) == (0.3, 10.0, "discrete")
+    assert type(alg.reward_scale) is float and type(alg.tau_sampling) is str  # the rules normalise
+    assert (alg.explosion_threshold, alg.value_clip_param, alg.one_step_states) == (3.0, 0.05, 256)  # defaults
+    with pytest.raises(ConfigError, match=r"ReFPO.reflow_coef=-1 is invalid"):
+        make_refpo(reflow_coef=-1)
 
 
 def test_log_ratio_modes_hand_worked():

@@ -9,10 +9,9 @@ from refpo_warp.algorithms.refpo import ReFPO
 from refpo_warp.envs.env_cfg import EnvCfg
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.envs.warp_vec_env import WarpVecEnv
-from refpo_warp.utils.device import configure_warp
 from refpo_warp.utils.option_rules import Real
-
-wp = configure_warp()
+from refpo_warp.utils.options import option
+from refpo_warp.utils.warp_setup import wp
 
 
 # --- 1. the task: options (tasks/line/cfg.py)
@@ -69,11 +68,9 @@ class LineEnv(WarpVecEnv):
 class CappedReflowReFPO(ReFPO):
     """ReFPO whose Reflow term averages min(l_i, reflow_cap) over the actions' CFM losses l_i."""
 
-    option_rules = {"reflow_cap": Real(0, 1e6, lo_open=True)}  # checked by the resolver and the constructor
-
-    def __init__(self, actor, critic, storage, reflow_cap: float = 1.0, **kwargs):
-        super().__init__(actor, critic, storage, **kwargs)
-        self.reflow_cap = reflow_cap
+    @dataclass(frozen=True)
+    class Options:  # each option once: its default, its rule, its meaning
+        reflow_cap: float = option(1.0, Real(0, 1e6, lo_open=True), "the cap on each action's CFM loss")
 
     def reflow_loss(self, new_loss, batch):
         return new_loss.mean(dim=-1).clamp(max=self.reflow_cap).mean()
@@ -141,26 +138,26 @@ algorithm: {class_name: refpo_warp.algorithms:CappedReflowReFPO}
 
 
 def test_an_algo_file_derived_from_refpo_takes_every_tasks_refpo_settings(tmp_path):
-    """The page's algo file in a copy of configs/ (REFPO_WARP_CONFIGS), explained by tools/train.py in a fresh process;
-    the class is this module's, under the name the page gives it."""
+    """The page's algo file in a config folder of one's own (REFPO_CONFIG_PATH), explained by tools/train.py in a
+    fresh process; the class is this module's, under the name the page gives it."""
     import os
-    import shutil
     import subprocess
     import sys
 
-    from refpo_warp.utils.paths import CONFIG_DIR, REPO_ROOT
+    from refpo_warp.utils.paths import REPO_ROOT
 
-    configs = tmp_path / "configs"
-    shutil.copytree(CONFIG_DIR, configs)
+    configs = tmp_path / "my_configs"
+    (configs / "algo").mkdir(parents=True)
     (configs / "algo" / "capped_reflow.yaml").write_text(ALGO_FILE.replace("refpo_warp.algorithms:", f"{__name__}:"))
-    env = {**os.environ, "REFPO_WARP_CONFIGS": str(configs),
+    env = {**os.environ, "REFPO_CONFIG_PATH": str(configs),
            "PYTHONPATH": os.pathsep.join([os.path.dirname(__file__), os.environ.get("PYTHONPATH", "")])}  # fmt: skip
     proc = subprocess.run([sys.executable, "tools/train.py", "task=gridworld", "algo=capped_reflow", "--explain",
                            "algorithm.reflow_cap,algorithm.reflow_coef,algorithm.num_mc_samples"],
                           cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=300)  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout
+    assert f"  5. {configs / 'algo' / 'capped_reflow.yaml'}\n" in out
     assert f"algorithm.reflow_cap = 1.0\n  set by  the default of {__name__}.CappedReflowReFPO" in out
-    assert "algorithm.reflow_coef = 0.1\n  set by  configs/task/gridworld.yaml by_algo.refpo" in out.replace(
-        str(configs) + "/", "configs/")  # fmt: skip
+    assert "  means   the cap on each action's CFM loss" in out
+    assert "algorithm.reflow_coef = 0.1\n  set by  configs/task/gridworld.yaml by_algo.refpo" in out
     assert "algorithm.num_mc_samples = 50" in out

@@ -187,11 +187,11 @@ def test_bad_arguments_are_named():
 
 
 def test_gymnasium_example_improves_the_return():
-    """tools/example_gymnasium.py (PPO on the gymnasium API only) learns GridWorld within a few seconds."""
+    """examples/gymnasium_ppo.py (PPO on the gymnasium API only) learns GridWorld within a few seconds."""
     import importlib.util
 
-    path = REPO_ROOT / "tools" / "example_gymnasium.py"
-    spec = importlib.util.spec_from_file_location("example_gymnasium", path)
+    path = REPO_ROOT / "examples" / "gymnasium_ppo.py"
+    spec = importlib.util.spec_from_file_location("gymnasium_ppo", path)
     example = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(example)
     history = example.train(iterations=12, quiet=True)

@@ -3,9 +3,9 @@ different groups (and successive episodes) from different ones, in every task fa
 
 import pytest
 import torch
-import warp as wp
 
 from refpo_warp.envs.registry import make_env
+from refpo_warp.utils.warp_setup import wp
 
 GROUP, GROUPS = 2, 4
 

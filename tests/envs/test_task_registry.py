@@ -4,6 +4,7 @@ import dataclasses
 
 import pytest
 
+from refpo_warp.config.config_path import config_path
 from refpo_warp.config.layers import task_config_path
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.envs.registry import _TASKS, get_task, list_tasks, register_task, task_families
@@ -11,16 +12,16 @@ from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.tasks.dmc import suite
 from refpo_warp.tasks.gridworld.cfg import GridWorldCfg
 from refpo_warp.utils.errors import ConfigError
-from refpo_warp.utils.paths import CONFIG_DIR
+from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR
 
 
 def test_every_registered_task_has_a_config_file():
-    missing = [t for t in list_tasks() if not task_config_path(t).is_file()]
+    missing = [t for t in list_tasks() if not task_config_path(t, config_path()).is_file()]
     assert not missing, f"registered tasks without a config file: {missing}"
 
 
 def test_every_task_config_file_names_a_registered_task():
-    files = sorted(p.stem for p in (CONFIG_DIR / "task").glob("*.yaml") if not p.stem.startswith("_"))
+    files = sorted(p.stem for p in (PACKAGED_CONFIG_DIR / "task").glob("*.yaml") if not p.stem.startswith("_"))
     assert files, "no task config files found"
     unregistered = sorted(set(files) - set(list_tasks()))
     assert not unregistered, f"configs/task/*.yaml without a registered task id: {unregistered}"

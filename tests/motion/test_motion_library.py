@@ -9,7 +9,6 @@ import json
 import mujoco
 import numpy as np
 import pytest
-import warp as wp
 from test_motion_kinematics import skeleton_mjcf  # noqa: E402  (tests/ is on sys.path under pytest)
 
 from refpo_warp.motion import rotations as rot
@@ -19,6 +18,7 @@ from refpo_warp.motion.motion_library import MotionLibrary
 from refpo_warp.motion.skeleton import BODY_NAMES
 from refpo_warp.motion.synthetic import DEFAULT_CLIP_SPECS, generate_amass, with_fps
 from refpo_warp.utils.errors import MotionDataError
+from refpo_warp.utils.warp_setup import wp
 
 SPECS = {s.name: s for s in DEFAULT_CLIP_SPECS}
 
@@ -243,18 +243,17 @@ def test_shipped_default_set_loads(tmp_path):
         np.testing.assert_allclose(sole_heights(lib.clip(i)["body_pos"][:31]).min(), 0.0, atol=1e-5)
 
 
-def test_convert_amass_tool(amass_dir, library, tmp_path, capsys):
-    from test_motion_synthetic import load_tool
+def test_convert_amass_command(amass_dir, library, tmp_path, capsys):
+    from refpo_warp.cli.main import main
 
-    tool = load_tool("convert_amass")
     out = tmp_path / "three.motionlib.npz"
-    assert tool.main([str(amass_dir), str(out), "--fps", "30"]) == 0
+    assert main(["convert-amass", str(amass_dir), str(out), "--fps", "30"]) == 0
     converted = MotionLibrary.load(out)
     assert converted.clip_names == library.clip_names
     np.testing.assert_array_equal(converted.frames["dof_pos"], library.frames["dof_pos"])
     (tmp_path / "bad").mkdir()
     (tmp_path / "bad" / "x_poses.npz").write_text("garbage")
-    assert tool.main([str(tmp_path / "bad"), str(tmp_path / "no.motionlib.npz")]) == 4  # a bad input file
+    assert main(["convert-amass", str(tmp_path / "bad"), str(tmp_path / "no.motionlib.npz")]) == 4  # a bad input file
     assert "x_poses.npz: cannot be read as an npz archive" in capsys.readouterr().err
     assert not (tmp_path / "no.motionlib.npz").exists()
 

@@ -4,7 +4,6 @@ what the tool generates, and it loads."""
 
 from __future__ import annotations
 
-import importlib.util
 
 import numpy as np
 import pytest
@@ -94,16 +93,11 @@ def test_shipped_default_set_is_the_generated_one():
         np.testing.assert_allclose(motion.trans, want["trans"], atol=1e-9)
 
 
-def load_tool(name):
-    spec = importlib.util.spec_from_file_location(name, REPO / "tools" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def test_make_clips_command(tmp_path, capsys):
+    from refpo_warp.cli.main import main
 
-
-def test_make_synthetic_clips_tool(tmp_path, capsys):
-    tool = load_tool("make_synthetic_clips")
-    assert tool.main([str(tmp_path / "x"), "--random", "3", "--seed", "1", "--schema", "smplx", "--fps", "50"]) == 0
+    out = str(tmp_path / "x")
+    assert main(["make-clips", out, "--random", "3", "--seed", "1", "--schema", "smplx", "--fps", "50"]) == 0
     files = sorted((tmp_path / "x").glob("*_stageii.npz"))
     assert len(files) == 3 and all(read_amass(f).schema == "smplx" and read_amass(f).fps == 50 for f in files)
     assert "wrote 3 clips" in capsys.readouterr().out

@@ -25,12 +25,14 @@ TINY = ["task=gridworld", "algo=refpo", "device=cpu", "seed=3", "num_envs=8", "r
         "actor.obs_normalization=true", "critic.obs_normalization=true"]  # fmt: skip
 
 
-def torchrun(script: Path, args: list[str], nproc: int = 2) -> subprocess.CompletedProcess:
+def torchrun(script: Path | str, args: list[str], nproc: int = 2) -> subprocess.CompletedProcess:
+    """``torchrun ... <script> args``; a script named ``-m <module>`` is a module, as in torchrun's own command."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
            "OMP_NUM_THREADS": "1"}  # fmt: skip
     for name in ("WORLD_SIZE", "RANK", "LOCAL_RANK"):
         env.pop(name, None)
-    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", f"--nproc_per_node={nproc}", str(script)]
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", f"--nproc_per_node={nproc}",
+           *str(script).split()]
     proc = subprocess.run(cmd + args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, f"torchrun failed ({proc.returncode}):\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}"
     return proc
@@ -77,7 +79,7 @@ def test_observation_normalisers_are_all_reduced(two_rank_runs):
 
 
 def test_train_cli_under_torchrun_writes_run_dir_from_rank_zero(tmp_run_dir):
-    proc = torchrun(ROOT / "tools" / "train.py", TINY + [f"run_dir={tmp_run_dir}", "eval.num_envs=8",
+    proc = torchrun("-m refpo_warp", ["train"] + TINY + [f"run_dir={tmp_run_dir}", "eval.num_envs=8",
                                                         "eval.flow_steps=[1]"])  # fmt: skip
     progress_lines = [line for line in proc.stdout.splitlines() if line.startswith("[it ")]
     # one line per iteration, from rank 0 only, numbered from 0 like the checkpoints

@@ -4,11 +4,11 @@ import math
 
 import numpy as np
 import pytest
-import warp as wp
 
 from refpo_warp.sim import MuJoCoWorlds, mjcf_timestep, world_com_velocity, world_state_finite
 from refpo_warp.sim.mjcf_worlds import build_mjcf_worlds
 from refpo_warp.tasks.dmc.task import MODELS_DIR
+from refpo_warp.utils.warp_setup import wp
 
 PENDULUM = MODELS_DIR / "pendulum.xml"
 CHEETAH = MODELS_DIR / "cheetah.xml"

@@ -1,10 +1,10 @@
-"""A stand-in for ``tools/train.py`` in the sweep backend tests, a few seconds instead of a training run.
+"""A stand-in for ``refpo train`` in the sweep backend tests, a few seconds instead of a training run.
 
-The tests pass it as the sweep's ``--launcher``, so each run executes ``python stand_in_train.py <python>
-tools/train.py <run args> device=<device>``: the real command line, with this script in front. It appends what it saw
+The tests pass it as the sweep's ``--launcher``, so each run executes ``python stand_in_train.py <python> -m
+refpo_warp train <run args> device=<device>``: the real command line, with this script in front. It appends what it saw
 (pid, parent, start and end times, host, ``CUDA_VISIBLE_DEVICES``, ``OMP_NUM_THREADS``, the device argument) as one
 JSON line to ``<sweep dir>/stand_in.jsonl``, sleeps ``STAND_IN_SECONDS`` (default 1), and then writes what a finished
-run leaves: ``config.yaml`` (the config ``tools/train.py`` would resolve from these arguments) and ``eval.json``.
+run leaves: ``config.yaml`` (the config ``refpo train`` would resolve from these arguments) and ``eval.json``.
 
 The run's method label picks a behaviour, for the first execution only (no ``train.attempt1.log`` beside it yet):
 ``crash`` exits 3 with an error line; ``lost`` kills its parent, the Ray worker (SIGKILL), as a lost node would;
@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 started = time.time()
-args = sys.argv[3:]  # after <python> tools/train.py
+args = sys.argv[sys.argv.index("train") + 1 :]  # after <python> -m refpo_warp train
 options = dict(a.split("=", 1) for a in args)
 run_dir = Path(options["run_dir"])
 label = run_dir.parent.name
@@ -37,12 +37,12 @@ def record(event: str) -> None:
 
 
 def finish() -> None:
-    """Write what a finished ``tools/train.py`` run leaves (imports here: the timing before them is the run's)."""
+    """Write what a finished ``refpo train`` run leaves (imports here: the timing before them is the run's)."""
     from refpo_warp.config.dotted import parse_overrides
     from refpo_warp.config.resolve import resolve_config
     from refpo_warp.config.yaml_files import dump_config
 
-    # As tools/train.py on a machine with that device (a CUDA run resolves its CUDA profile here, with no GPU).
+    # As refpo train on a machine with that device (a CUDA run resolves its CUDA profile here, with no GPU).
     cfg = resolve_config(parse_overrides(args), device_type=options["device"].split(":")[0])
     dump_config(cfg, run_dir / "config.yaml")
     results = {"N=1": {"return_mean": float(cfg["seed"])}}

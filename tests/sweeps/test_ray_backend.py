@@ -1,8 +1,8 @@
 """The Ray backend of a sweep (``--backend ray``) on a real local Ray, started once for the module with 2 CPUs and 2
 declared GPUs: runs see their own GPU, a crash is retried with its first log kept, a killed worker is re-run by Ray
 without using the run's retry, finished runs are skipped, ``status.json`` matches the local backend's, a node that
-lacks the repository stops the sweep before anything starts, Ctrl-C leaves no training process behind, and one real
-tiny ``tools/train.py`` run. The training command is the stand-in ``stand_in_train.py`` where speed demands it (the
+lacks the working directory stops the sweep before anything starts, Ctrl-C leaves no training process behind, and one
+real tiny ``refpo train`` run. The training command is the stand-in ``stand_in_train.py`` where speed demands it (the
 real command line, with it in front: ``--launcher``)."""
 
 import itertools
@@ -134,14 +134,14 @@ def test_status_agrees_with_the_local_backend(local_ray, tmp_path):
     assert local["gridworld/crash/seed1"]["exit_codes"] == [3, 0] and local["gridworld/ppo/seed1"]["node"]
 
 
-def test_a_node_without_the_repository_stops_the_sweep_before_it_starts(local_ray, tmp_path, monkeypatch):
+def test_a_node_without_the_working_directory_stops_the_sweep_before_it_starts(local_ray, tmp_path, monkeypatch):
     spec = write_spec(tmp_path / "grid.yaml", methods=[{"label": "ppo", "algo": "ppo"}])
-    elsewhere = tmp_path / "not_shared" / "tools"  # as the head sees it; the node (really) does not have it
-    monkeypatch.setattr(ray_backend, "TOOLS_DIR", elsewhere)
+    elsewhere = tmp_path / "not_shared"  # as the head sees it; the node (really) does not have it
+    monkeypatch.setattr(ray_backend, "shared_paths", lambda: [str(elsewhere)])
     out = tmp_path / "out"
     node = rf"node {re.escape(socket.gethostname())} \(.*, node {local_ray[:8]}\)"
-    missing = re.escape(str(elsewhere / "train.py"))
-    with pytest.raises(ConfigError, match=rf"{node} does not see {missing}.*needs the sweep dir and the repository"):
+    missing = re.escape(str(elsewhere))
+    with pytest.raises(ConfigError, match=rf"{node} does not see {missing}.*needs the package installed on every"):
         run_sweep(load_sweep(str(spec), [f"out={out}"]), launcher=STAND_IN, backend="ray", echo=lambda line: None)
     assert not records(out) and not (out / "status.json").exists() and not (out / ".ray_node_check").exists()
 
@@ -171,18 +171,19 @@ import sys
 sys.modules["ray"] = None  # as if Ray were not installed: `import ray` raises ImportError
 import refpo_warp.sweeps.ray_node  # what a Ray worker imports to run a task: no torch (seconds per fresh worker)
 print("TORCH", "torch" in sys.modules)
-sys.path.insert(0, {str(REPO_ROOT / "tools")!r})
-import sweep
-local = sweep.main([{str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "--dry-run"])
-flag = sweep.main([{str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "--cpus-per-run", "2", "--dry-run"])
-print("RESULT", local, flag, sweep.main([{str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "--backend", "ray"]))
+from refpo_warp.cli.main import main
+local = main(["sweep", {str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "--dry-run"])
+flag = main(["sweep", {str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "--cpus-per-run", "2", "--dry-run"])
+ray = main(["sweep", {str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "--backend", "ray"])
+print("RESULT", local, flag, ray)
 """
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=REPO_ROOT, timeout=120,
                             check=False)  # fmt: skip
     assert result.stdout.splitlines()[-1] == "RESULT 0 2 2", result.stdout + result.stderr
     assert "TORCH False" in result.stdout.splitlines()
     assert "Ray options (--ray-address, --gpus-per-run, --cpus-per-run) need --backend ray" in result.stderr
-    assert 'error: --backend ray needs Ray, an optional extra of this project: pip install -e ".[ray]"' in result.stderr
+    assert 'error: --backend ray needs Ray, an optional extra of this project: pip install "refpo-warp[ray]"' in (
+        result.stderr)
     # A head that is not there fails at once (ray.init would wait for it forever).
     with pytest.raises(ConfigError, match=r"No Ray cluster at '127.0.0.1:1' \(.*\): `ray start --head` prints"):
         ray_backend.check_reachable("127.0.0.1:1")
@@ -196,7 +197,7 @@ def test_ctrl_c_stops_every_run_and_leaves_no_training_process(tmp_path):
     force-cancelled and its training process killed with it (both are the documented stop)."""
     spec = write_spec(tmp_path / "grid.yaml", seeds=[1, 2, 3], methods=[{"label": "sleepy", "algo": "ppo"}])
     out = tmp_path / "out"
-    cmd = [sys.executable, str(REPO_ROOT / "tools" / "sweep.py"), str(spec), f"out={out}", "--backend", "ray",
+    cmd = [sys.executable, "-m", "refpo_warp", "sweep", str(spec), f"out={out}", "--backend", "ray",
            "--jobs", "2", "--launcher", STAND_IN]  # fmt: skip
     env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"} | RAY_ENV  # the sweep starts its own Ray
     proc = subprocess.Popen(cmd, cwd=REPO_ROOT, env=env, start_new_session=True, stdout=subprocess.PIPE,
@@ -237,7 +238,7 @@ def test_a_real_training_run_on_ray(local_ray, tmp_path, quick_run):
     run_dir = out / "gridworld" / "refpo" / "seed1"
     log = (run_dir / "train.log").read_text()
     assert summary.ok and summary.finished == ["gridworld/refpo/seed1"], "\n".join(lines) + log
-    assert f"{REPO_ROOT / 'tools' / 'train.py'} task=gridworld algo=refpo seed=1" in log.splitlines()[0]
+    assert f"{sys.executable} -m refpo_warp train task=gridworld algo=refpo seed=1" in log.splitlines()[0]
     assert log.splitlines()[0].endswith("device=cpu")
     report = json.loads((run_dir / "eval.json").read_text())
     assert (report["task"], report["algo"]) == ("gridworld", "refpo") and "N=1" in report["results"]

@@ -59,7 +59,7 @@ def test_a_run_on_a_lost_node_finishes_on_another(tmp_path, monkeypatch):
         cluster.shutdown()
     text = "\n".join(lines)
     assert result["summary"].ok and result["summary"].finished == ["gridworld/ppo/seed1"], text
-    checked = next(line for line in lines if "see the sweep dir and the repository" in line)
+    checked = next(line for line in lines if "see the sweep dir and the working directory" in line)
     assert "Ray: 1 node(s)" in checked and f"node {first.node_id[:8]})" in checked  # the nodes with room: GPU nodes
     status = json.loads((out / "status.json").read_text())["gridworld/ppo/seed1"]
     assert (status["attempts"], status["exit_codes"], status["ray_reruns"]) == (1, [0], 1)

@@ -415,8 +415,8 @@ def test_bad_motion_library_given_to_train_is_named(damage, tmp_path):
 _PATCHED_RUN = """
 import sys
 {patch}
-from refpo_warp.cli.commands import main
-sys.exit(main("train", {args!r}, ""))
+from refpo_warp.cli.main import main
+sys.exit(main(["train", *{args!r}]))
 """
 
 
@@ -470,7 +470,7 @@ def test_non_finite_loss_advice_works(tmp_path):
     proc = run_python(_PATCHED_RUN.format(patch=_NAN_AT_UPDATE.format(n=3),
                                           args=tiny("max_iterations=4", f"run_dir={run_dir}")))  # fmt: skip
     assert_refused(proc, NONFINITE, "iteration 2", str(run_dir / "model_1.pt"), "resume=true")
-    command = proc.stderr.split("python tools/train.py ", 1)[1].split("\n")[0]
+    command = proc.stderr.split("refpo train ", 1)[1].split("\n")[0]
     args = command.replace("<value>", "1e-4").split() + ["max_iterations=4", "eval.at_end=false"]
     resumed = run_tool("train", *args)
     assert resumed.returncode == 0, resumed.stderr[-3000:]

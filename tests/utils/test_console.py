@@ -20,7 +20,7 @@ def test_quiet_stdout_replays_what_it_hid_when_the_block_fails(capsys):
 def test_only_warps_no_driver_warning_is_dropped(capfd):
     import os
 
-    from refpo_warp.utils.device import NO_DRIVER_WARNING, _stderr_without
+    from refpo_warp.utils.warp_setup import NO_DRIVER_WARNING, _stderr_without
 
     with _stderr_without(NO_DRIVER_WARNING):  # native code writes to file descriptor 2, as Warp's library does
         os.write(2, f"Warp CUDA warning: {NO_DRIVER_WARNING}. GPU execution will not be available.\n".encode())

@@ -7,6 +7,8 @@ import json
 import subprocess
 import sys
 
+from fresh_imports import import_each_alone  # tests/utils is on sys.path under pytest
+
 from refpo_warp.utils.layering import (
     ROOT,
     first_party_modules,
@@ -37,32 +39,7 @@ def test_each_module_imports_alone_in_a_fresh_interpreter():
         return framework is None or importlib.util.find_spec(framework) is not None
 
     names = [m for m in first_party_modules() if not m.endswith("__main__") and importable(m)]
-    script = f"""
-import json, os, sys, traceback
-import numpy, torch, yaml, rsl_rl.runners  # third-party only
-failed = {{}}
-for name in {names!r}:
-    r, w = os.pipe()
-    pid = os.fork()
-    if pid == 0:
-        os.close(r)
-        try:
-            __import__(name)
-            code, msg = 0, b""
-        except BaseException:
-            code, msg = 1, traceback.format_exc().encode()[-2000:]
-        os.write(w, msg)
-        os._exit(code)
-    os.close(w)
-    msg = os.read(r, 4000).decode()
-    os.close(r)
-    if os.waitpid(pid, 0)[1] != 0:
-        failed[name] = msg
-print(json.dumps(failed))
-"""
-    out = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=600)
-    assert out.returncode == 0, out.stderr[-3000:]
-    failed = json.loads(out.stdout.strip().splitlines()[-1])
+    failed = import_each_alone(names, "import numpy, torch, yaml, rsl_rl.runners  # third-party only")
     assert not failed, "\n".join(f"{k}:\n{v}" for k, v in failed.items())
 
 

@@ -2,34 +2,26 @@
 one."""
 
 import dataclasses
-import inspect
 
 import pytest
 import yaml
 
-from refpo_warp.config.classes import POSITIONAL, resolve_class
+from refpo_warp.config.classes import POSITIONAL, class_defaults, resolve_class
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.config.run_options import NOT_RULED, RUN_RULES
 from refpo_warp.config.saved import fixed_changes
 from refpo_warp.envs.registry import get_task, list_tasks
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real, checks_options, rules_for
-from refpo_warp.utils.paths import CONFIG_DIR
+from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR as CONFIG_DIR
 
 # Constructor arguments rsl_rl passes itself (never a config option).
 _PASSED_BY_RSL_RL = {"device", "multi_gpu_cfg"}
 
 
 def _constructor_options(cls) -> set[str]:
-    names = set()
-    for klass in inspect.getmro(cls):
-        if klass is object or "__init__" not in vars(klass):
-            continue
-        params = inspect.signature(klass.__init__).parameters
-        names |= {n for n, p in params.items() if n != "self" and p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
-        if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
-            break
-    return names
+    """The options of a class: its Options fields and its constructor chain's keyword parameters."""
+    return set(class_defaults(f"{cls.__module__}:{cls.__qualname__}"))
 
 
 def _selected_classes():

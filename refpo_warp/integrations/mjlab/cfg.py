@@ -1,19 +1,21 @@
 """mjlab config classes for the flow actor and ReFPO, and the ReFPO variant of a task's PPO runner config.
 
-Each default has one home, the constructor (``FlowActor``, ``ReFPO`` and its shared update loop): the two dataclasses
-are made from the constructors' signatures, so every option is a flag of mjlab's ``train``
-(``--agent.algorithm.reflow-coef 0.1``, ``--agent.actor.num-flow-steps 5``) with the constructor's default, and a
-new option needs no edit here.
+Each default has one home, the class (``FlowActor``'s constructor; ``ReFPO``'s and its shared update loop's
+``Options``): the two dataclasses are made from them, so every option is a flag of mjlab's ``train``
+(``--agent.algorithm.reflow-coef 0.1``, ``--agent.actor.num-flow-steps 5``) with the class's default, and a new option
+needs no edit here. A choice enum is a plain string flag (a config holds the string).
 """
 
 from __future__ import annotations
 
 import typing
 from dataclasses import field, fields, make_dataclass, replace
+from enum import Enum
 
 from mjlab.rl import RslRlModelCfg, RslRlOnPolicyRunnerCfg, RslRlPpoAlgorithmCfg
 
 from refpo_warp.config.classes import POSITIONAL, class_defaults
+from refpo_warp.utils.option_rules import OPTIONS
 
 ACTOR_CLASS = "refpo_warp.models:FlowActor"
 ALGORITHM_CLASS = "refpo_warp.algorithms:ReFPO"
@@ -28,8 +30,22 @@ def _own_options(class_name: str, section: str, base: type) -> dict[str, tuple[o
     for name, (default, owner) in class_defaults(class_name).items():
         if name in POSITIONAL[section] or not owner.__module__.startswith("refpo_warp."):
             continue
-        options[name] = (default, base_types.get(name) or typing.get_type_hints(owner.__init__)[name])
+        options[name] = (default, base_types.get(name) or _hint(owner, name))
     return options
+
+
+def _hint(owner: type, name: str) -> typing.Any:
+    """The declared type of an option: its ``Options`` field's or its constructor parameter's; a choice enum's is
+    ``str``."""
+    declared = owner.__dict__.get(OPTIONS)
+    in_options = declared is not None and name in getattr(declared, "__dataclass_fields__", {})
+    hint = typing.get_type_hints(declared if in_options else owner.__init__)[name]
+    args = typing.get_args(hint)
+    if isinstance(hint, type) and issubclass(hint, Enum):
+        return str
+    if any(isinstance(a, type) and issubclass(a, Enum) for a in args):
+        return str | None
+    return hint
 
 
 def _config_class(name: str, base: type, class_name: str, options: dict, doc: str) -> type:

@@ -11,10 +11,9 @@ from __future__ import annotations
 
 import math
 
-import warp as wp
-
 from refpo_warp.tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.utils.warp_setup import wp
 
 TARGET = wp.constant(wp.vec3(0.0, 0.0, 4.0))  # target site (world frame)
 TARGET_RADIUS = wp.constant(0.2)

@@ -8,9 +8,8 @@ Reset: the model's default pose at rest (Playground does not randomise this task
 
 from __future__ import annotations
 
-import warp as wp
-
 from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.utils.warp_setup import wp
 
 TARGET_OFFSET = wp.constant(wp.vec3(0.0, 0.0, -0.05))  # target site in the cup frame
 INSIDE_HALF_WIDTH = wp.constant(0.05 - 0.025)  # target box half-size (x and z) minus the ball radius

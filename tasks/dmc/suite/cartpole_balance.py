@@ -12,10 +12,9 @@ both - velocities 0.01 N(0,1).
 
 from __future__ import annotations
 
-import warp as wp
-
 from refpo_warp.tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, small_control, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.utils.warp_setup import wp
 
 
 @wp.func

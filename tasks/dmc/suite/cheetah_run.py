@@ -13,11 +13,11 @@ from __future__ import annotations
 import math
 
 import torch
-import warp as wp
 
 from refpo_warp.sim import world_com_velocity
 from refpo_warp.tasks.dmc.rewards import LINEAR, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.utils.warp_setup import wp
 
 RUN_SPEED = wp.constant(10.0)
 SETTLE_STEPS = 200

@@ -14,9 +14,8 @@ from __future__ import annotations
 
 import math
 
-import warp as wp
-
 from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.utils.warp_setup import wp
 
 SPIN_VELOCITY = wp.constant(15.0)
 TIP = wp.constant(wp.vec3(0.0, 0.0, 0.13))  # tip site in the spinner frame

@@ -10,10 +10,9 @@ from __future__ import annotations
 
 import math
 
-import warp as wp
-
 from refpo_warp.tasks.dmc.rewards import GAUSSIAN, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.utils.warp_setup import wp
 
 COS_8_DEG = wp.constant(math.cos(math.radians(8.0)))
 

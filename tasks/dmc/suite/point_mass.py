@@ -8,10 +8,9 @@ Reset: x, y U(-0.29, 0.29) (the joint ranges), zero velocity.
 
 from __future__ import annotations
 
-import warp as wp
-
 from refpo_warp.tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, small_control, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.utils.warp_setup import wp
 
 TARGET_RADIUS = wp.constant(0.015)  # the target geom; it sits at the origin, at the point mass's height
 

@@ -9,10 +9,10 @@ position radius * (sin, cos). The target is a mocap body in the file; each env k
 from __future__ import annotations
 
 import numpy as np
-import warp as wp
 
 from refpo_warp.tasks.dmc.rewards import GAUSSIAN, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.utils.warp_setup import wp
 
 TARGET_RADIUS = 0.05  # easy; hard would be 0.015
 FINGER_RADIUS = 0.01

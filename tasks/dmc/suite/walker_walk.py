@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import math
 
-import warp as wp
-
 from refpo_warp.sim import world_com_velocity
 from refpo_warp.tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, LINEAR, tolerance
 from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.utils.warp_setup import wp
 
 STAND_HEIGHT = wp.constant(1.2)
 WALK_SPEED = wp.constant(1.0)

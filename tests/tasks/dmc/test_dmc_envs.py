@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 import torch
-import warp as wp
 
 from refpo_warp.envs.registry import get_task, make_env
 from refpo_warp.tasks.dmc import suite
+from refpo_warp.utils.warp_setup import wp
 
 N = 4
 TASKS = tuple(suite.task_names())  # every module of tasks/dmc/suite/: a new task must be added below too

@@ -4,14 +4,12 @@ import math
 
 import numpy as np
 import pytest
-import warp as wp
 
-from refpo_warp.utils.device import init_warp
+from refpo_warp.tasks.dmc import rewards
+from refpo_warp.tasks.dmc.rewards import SIGMOIDS, small_control, tolerance
+from refpo_warp.utils.warp_setup import init_warp, wp
 
 init_warp()
-
-from refpo_warp.tasks.dmc import rewards  # noqa: E402
-from refpo_warp.tasks.dmc.rewards import SIGMOIDS, small_control, tolerance  # noqa: E402
 
 
 @wp.kernel

@@ -4,11 +4,11 @@ independent numpy implementation, heading invariance, termination, eval mode and
 import numpy as np
 import pytest
 import torch
-import warp as wp
 
 from refpo_warp.envs.registry import make_env
 from refpo_warp.motion import skeleton as sk
 from refpo_warp.motion.rotations import quat_conjugate, quat_mul, quat_rotate, quat_to_axis_angle
+from refpo_warp.utils.warp_setup import wp
 
 DT = 1.0 / 30.0
 

@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 import torch
-import warp as wp
 
 from refpo_warp.envs.registry import make_env
 from refpo_warp.tasks.humanoid.cfg import HumanoidTrackingCfg
 from refpo_warp.tasks.humanoid.reward_terms import TERMS, reward_params
+from refpo_warp.utils.warp_setup import wp
 
 NB, NDOF = 24, 69
 

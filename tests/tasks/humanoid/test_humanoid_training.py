@@ -64,7 +64,7 @@ def test_cpu_profile_is_small_and_evaluates_every_clip_with_the_reference_protoc
     cfg = resolve_config(["task=humanoid_root"], device_type="cpu")
     assert cfg["num_envs"] <= 32 and cfg["total_env_steps"] <= 50_000
     assert cfg["eval"]["num_envs"] is None and cfg["eval"]["env"] == {"eval_mode": True}
-    assert cfg["eval"]["initial_noise"] == "random" and cfg["eval"]["perturbation"] is False
+    assert cfg["eval"]["initial_noise"] == ["random"] and cfg["eval"]["perturbation"] is False
     assert cfg["eval"]["flow_steps"] == [10, 1]
     assert "toy scale" in cfg["notice"] and "device=cuda:0" in cfg["notice"]
 
@@ -74,7 +74,7 @@ def test_train_and_evaluate_humanoid_root(tmp_run_dir, capsys):
     results = train(["task=humanoid_root", "device=cpu", "num_envs=4", "runner.num_steps_per_env=8",
                      "max_iterations=2", f"run_dir={tmp_run_dir}"])  # fmt: skip
     saved = json.loads((tmp_run_dir / "eval.json").read_text())
-    assert saved["eval_envs"] == 12 and saved["protocol"] == {"initial_noise": "random", "perturbation": False}
+    assert saved["eval_envs"] == 12 and saved["protocol"] == {"initial_noise": ["random"], "perturbation": False}
     for n in ("N=10", "N=1"):
         summary = saved["results"][n]
         assert summary["episodes"] == 12 and summary["unfinished"] == 0

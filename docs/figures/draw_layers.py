@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The layers as a picture: python tools/draw_layers.py [out=docs/figures/architecture_layers.png]
+"""The layers as a picture: python docs/figures/draw_layers.py [out=docs/figures/architecture_layers.png]
 
 One band per layer of ``refpo_warp/utils/layering.py`` (top: cli), with its folders and their module counts; an arrow
 from a band to a lower one carries the number of imports between them, measured from the code (lazy imports

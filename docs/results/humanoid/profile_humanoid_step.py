@@ -1,6 +1,7 @@
-"""Where the humanoid env step's time goes: ``python tools/profile_humanoid_step.py [--num-envs 64] [--solver K=V]``.
+"""Where the humanoid env step's time goes (docs/humanoid.md, "Where the time goes"):
+``python docs/results/humanoid/profile_humanoid_step.py [--num-envs 64] [--solver K=V]``.
 
-Two measurements on one env (uniform random actions in [-1, 1], as ``tools/bench.py humanoid``):
+Two measurements on one env (uniform random actions in [-1, 1], as ``refpo bench humanoid``):
 
 1. env steps per second of the captured step, in process CPU time (less sensitive to other jobs than wall time);
 2. a per-kernel profile of eager steps: every Warp launch is recorded (``record_cmd``) and then timed on its own, so
@@ -45,7 +46,7 @@ def cpu_rate(env, steps: int, seed: int = 0) -> float:
 
 def kernel_profile(env, steps: int) -> dict[str, list]:
     """{kernel: [launches, seconds, threads]} over ``steps`` eager steps (graph replay turned off)."""
-    import warp as wp
+    from refpo_warp.utils.warp_setup import wp
     from warp._src import context
 
     stats = collections.defaultdict(lambda: [0, 0.0, 0])
@@ -77,7 +78,8 @@ def kernel_profile(env, steps: int) -> dict[str, list]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="python tools/profile_humanoid_step.py", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python docs/results/humanoid/profile_humanoid_step.py",
+                                     description=__doc__.split("\n")[0])
     parser.add_argument("--num-envs", type=int, default=64)
     parser.add_argument("--steps", type=int, default=30, help="timed graph steps")
     parser.add_argument("--profile-steps", type=int, default=8, help="profiled eager steps")

@@ -1,5 +1,5 @@
-"""How long untrained training episodes last: ``python tools/humanoid_episode_lengths.py [--num-envs 32]
-[--steps 120]``.
+"""How long untrained training episodes last (docs/humanoid.md, "Residual actions"):
+``python docs/results/humanoid/humanoid_episode_lengths.py [--num-envs 32] [--steps 120]``.
 
 ``humanoid_all`` training episodes (reference-state initialisation, 0.25 m termination) under zero actions and under
 N(0, 0.05^2) actions (the start of a reference-initialised policy), with ``residual_actions`` off and on, on the
@@ -41,7 +41,7 @@ def probe(motion_file: str, residual: bool, action_std: float, num_envs: int, st
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="python tools/humanoid_episode_lengths.py",
+    parser = argparse.ArgumentParser(prog="python docs/results/humanoid/humanoid_episode_lengths.py",
                                      description=__doc__.split("\n")[0])
     parser.add_argument("--num-envs", type=int, default=32)
     parser.add_argument("--steps", type=int, default=120)

@@ -1,9 +1,10 @@
 #!/usr/bin/env python
-"""What ReFPO's one-step sampler does: python tools/one_step_analysis.py SWEEP_DIR [out=DIR] [task=ID] [seed=K]
-                     [states=256] [noises=16] [every=1] [intervene=ITERATION] [intervene_iterations=5] [device=cpu]
-                     [curves_only=false]
+"""What ReFPO's one-step sampler does (the investigation behind this folder's README):
 
-Reads a tools/sweep.py dir whose runs logged the one-step diagnostic and kept checkpoints (configs/sweep/
+    python docs/results/one_step/one_step_analysis.py SWEEP_DIR [out=DIR] [task=ID] [seed=K] [states=256] [noises=16]
+        [every=1] [intervene=ITERATION] [intervene_iterations=5] [device=cpu] [curves_only=false]
+
+Reads a refpo sweep dir whose runs logged the one-step diagnostic and kept checkpoints (configs/sweep/
 cpu_reflow_pairs.yaml) and writes into out= (default SWEEP_DIR/one_step):
 
 - <task>_one_step.png for every task: per method (mean over seeds, their range as a band) the periodic N = 10 and
@@ -425,7 +426,7 @@ def main(argv: list[str]) -> int:
     def analyse() -> None:
         sweep = Path(argv[0])
         if not sweep.is_dir():
-            raise ConfigError(f"{sweep}: no such sweep directory (a tools/sweep.py output dir)")
+            raise ConfigError(f"{sweep}: no such sweep directory (a refpo sweep output dir)")
         options = dict(OPTIONS)
         for key, value in parse_overrides(argv[1:]).items():
             if key not in OPTIONS:

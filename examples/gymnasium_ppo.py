@@ -1,8 +1,8 @@
 #!/usr/bin/env python
 """Train a gymnasium-API agent on a Warp env: a small PPO in plain torch that sees only gymnasium's vector API.
 
-    python tools/example_gymnasium.py                     # GridWorld, 64 envs, 30-step episodes: ~7 s on one CPU core
-    python tools/example_gymnasium.py --iterations 100 --num-envs 256
+    python examples/gymnasium_ppo.py                     # GridWorld, 64 envs, 30-step episodes: ~7 s on one CPU core
+    python examples/gymnasium_ppo.py --iterations 100 --num-envs 256
 
 The env is ``refpo_warp.envs.gym_adapter.GymVectorEnv`` (with same-step autoreset) wrapped in gymnasium's
 ``RecordEpisodeStatistics``; the agent uses ``reset``/``step``, the spaces, ``infos["final_obs"]`` (to bootstrap the

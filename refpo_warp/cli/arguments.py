@@ -1,0 +1,89 @@
+"""The one argument convention of every command: ``refpo <command> [SUBJECT ...] [key=value ...] [--flag [VALUE] ...]``.
+
+- ``key=value``: an option of what the command makes (a run's config keys, a video's options, a sweep's grid); the
+  value is YAML (``eval.flow_steps=[1,10]``), parsed by the command (``refpo_warp/config/dotted.py``).
+- ``--flag``, ``--flag VALUE`` or ``--flag=VALUE``: how the command itself works (``--dry-run``, ``--jobs 2``).
+- a subject: the one or two things a command acts on, where it has them (``refpo sweep cpu_dmc``,
+  ``refpo report runs/sweeps/cpu_dmc``, ``refpo bench dmc``).
+
+A command declares its subjects and flags; anything else is an error naming the argument and the valid flags.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from refpo_warp.utils.errors import ConfigError, unknown
+
+HELP = ("-h", "--help", "help")
+
+
+@dataclass(frozen=True)
+class Flag:
+    """A ``--flag`` of a command: a switch (``kind=None``) or a flag with a value of ``kind``."""
+
+    name: str
+    kind: type | None = None
+    doc: str = ""
+    optional_value: bool = False  # --explain [KEYS]: the next argument is its value unless it is an option or flag
+
+    def convert(self, text: str) -> Any:
+        try:
+            return self.kind(text)
+        except ValueError:
+            raise ConfigError(f"{self.name} {text!r} is invalid; expected {self.kind.__name__} ({self.doc})") from None
+
+
+@dataclass
+class Arguments:
+    """A command line split by the convention (see the module docstring)."""
+
+    subjects: list[str] = field(default_factory=list)
+    options: list[str] = field(default_factory=list)  # key=value, in the order given
+    flags: dict[str, Any] = field(default_factory=dict)  # given flags only: name -> value (True for a switch)
+
+    def flag(self, name: str, default: Any = None) -> Any:
+        return self.flags.get(name, default)
+
+
+def wants_help(argv: list[str]) -> bool:
+    return any(a in HELP for a in argv)
+
+
+def parse_arguments(command: str, argv: list[str], flags: tuple[Flag, ...] = (), subjects: int = 0) -> Arguments:
+    """Split ``argv``; a flag not declared, a missing flag value or an extra subject raises ``ConfigError``."""
+    declared = {flag.name: flag for flag in flags}
+    out = Arguments()
+    i = 0
+    while i < len(argv):
+        arg = argv[i]
+        i += 1
+        if arg.startswith("--"):
+            name, has_value, value = arg.partition("=")
+            if name not in declared:
+                raise unknown(f"flag of refpo {command}", name, declared) if declared else ConfigError(
+                    f"refpo {command} takes no flags, got {name}")  # fmt: skip
+            flag = declared[name]
+            if flag.kind is None:
+                if has_value:
+                    raise ConfigError(f"{name} takes no value, got {arg!r}")
+                out.flags[name] = True
+                continue
+            if not has_value and flag.optional_value:
+                taken = i < len(argv) and "=" not in argv[i] and not argv[i].startswith("-")
+                value, i = (argv[i], i + 1) if taken else ("", i)
+            elif not has_value:
+                if i >= len(argv):
+                    raise ConfigError(f"{name} needs a value ({flag.doc})")
+                value, i = argv[i], i + 1
+            out.flags[name] = flag.convert(value) if value or not flag.optional_value else ""
+        elif "=" in arg:
+            out.options.append(arg)
+        elif len(out.subjects) < subjects:
+            out.subjects.append(arg)
+        else:
+            raise ConfigError(f"unexpected argument {arg!r}: refpo {command} takes key=value options"
+                              + (f" and the flags {', '.join(declared)}" if declared else "")
+                              + "; see refpo " + command + " --help")  # fmt: skip
+    return out

@@ -1,0 +1,79 @@
+"""``refpo train``: train a policy (and evaluate it), list the tasks, or explain a run's config."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from refpo_warp.cli.arguments import Arguments, Flag
+from refpo_warp.utils.errors import ConfigError
+
+SUMMARY = "train a policy and evaluate it; --tasks lists the task ids, --explain KEY says who set an option"
+USAGE = """Train a policy: refpo train task=<task id> [algo=<algo: refpo, fpo, ppo, ...>] [key=value ...]
+
+Examples:
+    refpo train task=gridworld algo=refpo seed=1 run_dir=runs/grid
+    refpo train task=dmc_cheetah_run algo=fpo num_envs=2048 device=cuda:0
+    refpo train task=humanoid_root
+    refpo train run_dir=runs/grid resume=true                   # continue from the last checkpoint
+    refpo train task=gridworld algo=fpo --explain algorithm.reflow_coef   # the value and the layer that set it
+    refpo train --tasks [config_dir=DIR]                        # the task ids (those of your config folder too)
+
+Any config key can be overridden (the run options: configs/default.yaml, installed as refpo_warp/configs/);
+config_dir=DIR (or REFPO_CONFIG_PATH) adds your own task, algo and sweep files (docs/cli.md).
+Flags: --tasks, --explain [KEY,KEY,...] (without keys: every option; nothing is trained).
+"""
+EXPLAIN = Flag("--explain", str, "the keys to explain, comma-separated; none: every option", optional_value=True)
+FLAGS = (Flag("--tasks", doc="list the task ids"), EXPLAIN)
+SUBJECTS = 0
+
+
+def run(args: Arguments) -> None:
+    if args.flag("--tasks"):
+        list_tasks(args.options)
+    elif "--explain" in args.flags:
+        explain_run("train", args.options, args.flag("--explain"))
+    else:
+        train(args.options)
+
+
+def train(options: list[str]) -> None:
+    from refpo_warp.runner.distributed import close_process_group, main_rank_stdout, process_rank
+    from refpo_warp.training import train
+    from refpo_warp.utils.device import set_torch_threads
+
+    set_torch_threads(cuda_cap=4)
+    # Under torchrun only rank 0 prints progress; every rank leaves the process group when done.
+    try:
+        with main_rank_stdout(process_rank()):
+            train(options)
+    finally:
+        close_process_group()
+
+
+def list_tasks(options: list[str]) -> None:
+    """Every task id with its description, those of the config folders the options name included."""
+    from refpo_warp.config.dotted import parse_overrides
+    from refpo_warp.config.resolve import run_config_path
+    from refpo_warp.envs.registry import get_task, list_tasks
+
+    run_config_path(parse_overrides(options))
+    for task in list_tasks():
+        print(f"{task:28s} {get_task(task).description}")
+
+
+def explain_run(command: str, options: list[str], keys: str) -> None:
+    """Print where each option of the run the options describe gets its value (a resumed or evaluated run: its
+    saved config with the options over it)."""
+    from refpo_warp.config.dotted import flatten, parse_overrides
+    from refpo_warp.config.explain import explain
+    from refpo_warp.config.resolve import resolve
+    from refpo_warp.config.saved import read_saved_config
+
+    flat = parse_overrides(options)
+    flat.pop("checkpoint", None)
+    if command == "eval" or flat.get("resume") is True:
+        if not flat.get("run_dir"):
+            raise ConfigError("--explain of a saved run needs run_dir=PATH")
+        flat = {**flatten(read_saved_config(Path(str(flat["run_dir"])))), **flat}
+    chosen = [k.strip() for k in keys.split(",") if k.strip()]
+    print(explain(resolve(flat), chosen or None), flush=True)

@@ -1,0 +1,73 @@
+"""The option tables of the docs, made from the classes' ``Options`` (default, valid values, meaning), so a page cannot
+state another default than the code. A table stands in a page between two markers naming the class::
+
+    <!-- options refpo_warp.algorithms:ReFPO -->
+    | option | default | valid values | meaning |
+    ...
+    <!-- end options -->
+
+``python -m refpo_warp.config.option_docs docs/algorithms.md`` rewrites every table of a page;
+``tests/docs/test_option_tables.py`` fails when a page's table is not the one its class makes.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+from typing import Any
+
+from refpo_warp.config.classes import resolve_class
+from refpo_warp.utils.atomic_files import write_text
+from refpo_warp.utils.option_rules import OPTIONS
+from refpo_warp.utils.options import declared_options
+
+BLOCK = re.compile(r"(<!-- options (?P<name>\S+) -->\n)(?P<table>.*?)(<!-- end options -->)", re.S)
+
+
+def shown_value(value: Any) -> str:
+    """A default as a config file writes it."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(shown_value(v) for v in value) + "]"
+    if isinstance(value, float):
+        short = f"{value:g}"
+        return short if "e" in short else repr(value)
+    return f"`{value}`" if isinstance(value, str) else str(value)
+
+
+def options_table(class_name: str) -> str:
+    """The Markdown table of the options ``class_name``'s own ``Options`` declares (not its bases')."""
+    cls = resolve_class(class_name)
+    declared = declared_options(cls)
+    own = getattr(cls.__dict__.get(OPTIONS), "__dataclass_fields__", {})
+    rows = ["| option | default | valid values | meaning |", "|---|---|---|---|"]
+    for name in own:
+        found = declared[name]
+        rule = found.rule
+        valid = ("null or " if rule.optional else "") + rule.describe() if rule is not None else "any value"
+        cells = [f"`{name}`", shown_value(found.default), valid, found.doc]
+        rows.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+    return "\n".join(rows) + "\n"
+
+
+def with_tables(text: str) -> str:
+    """``text`` with every marked table made again from its class."""
+    return BLOCK.sub(lambda m: m.group(1) + options_table(m.group("name")) + m.group(4), text)
+
+
+def main(argv: list[str]) -> int:
+    for path in map(Path, argv):
+        text = path.read_text(encoding="utf-8")
+        new = with_tables(text)
+        if new != text:
+            write_text(path, new)
+            print(f"rewrote the option tables of {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,39 @@
+"""The option tables of the docs are made from the classes' Options (refpo_warp/config/option_docs.py): a page states
+the defaults, rules and meanings the code has, and every algorithm that declares options has a table."""
+
+import inspect
+
+import refpo_warp.algorithms as algorithms
+from refpo_warp.config.classes import resolve_class
+from refpo_warp.config.option_docs import BLOCK, main, with_tables
+from refpo_warp.utils.option_rules import OPTIONS
+from refpo_warp.utils.paths import REPO_ROOT
+
+DOCS = REPO_ROOT / "docs"
+
+
+def test_every_table_is_the_one_its_class_makes():
+    stale = [str(page.relative_to(REPO_ROOT)) for page in sorted(DOCS.rglob("*.md"))
+             if with_tables(page.read_text(encoding="utf-8")) != page.read_text(encoding="utf-8")]  # fmt: skip
+    assert not stale, f"rewrite them: python -m refpo_warp.config.option_docs {' '.join(stale)}"
+
+
+def test_every_algorithm_with_options_has_a_table():
+    tabled = {resolve_class(m.group("name")) for page in DOCS.rglob("*.md")
+              for m in BLOCK.finditer(page.read_text(encoding="utf-8"))}  # fmt: skip
+    declaring = {cls for cls in vars(algorithms).values() if inspect.isclass(cls) and OPTIONS in cls.__dict__}
+    declaring |= {base for cls in declaring for base in cls.__mro__ if OPTIONS in base.__dict__}
+    assert len(declaring) >= 5 and not declaring - tabled, f"without a table: {declaring - tabled}"
+
+
+def test_a_changed_default_is_written_into_the_page(tmp_path, monkeypatch):
+    from refpo_warp.algorithms import ReFPO
+
+    page = tmp_path / "page.md"
+    page.write_text("text\n<!-- options refpo_warp.algorithms:ReFPO -->\n| old |\n<!-- end options -->\nmore\n")
+    assert main([str(page)]) == 0
+    written = page.read_text()
+    assert "| `reflow_coef` | 0.04 | a number in [0, 1e+06] | lambda, the weight of" in written
+    assert "| old |" not in written and written.startswith("text\n") and written.endswith("more\n")
+    monkeypatch.setattr(ReFPO.Options.__dataclass_fields__["reflow_coef"], "default", 0.5)
+    assert "| `reflow_coef` | 0.5 |" in with_tables(written)
