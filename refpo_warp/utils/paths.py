@@ -11,8 +11,19 @@ import importlib.util
 from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
-# The package data folder itself, not an import of it: find_spec locates it in a wheel and in an editable install.
-PACKAGED_CONFIG_DIR = Path(importlib.util.find_spec("refpo_warp.configs").submodule_search_locations[0]).resolve()
+
+
+def _packaged_config_dir() -> Path:
+    # The package data folder itself, not an import of it: find_spec locates it in a wheel and in an editable install.
+    spec = importlib.util.find_spec("refpo_warp.configs")
+    if spec is None or not spec.submodule_search_locations:
+        raise ImportError("refpo_warp's shipped configs (refpo_warp.configs) are not installed beside it: install the "
+                          "package again (pip install -e . in a checkout; an editable install from before the configs "
+                          "moved into the package lacks them)")
+    return Path(spec.submodule_search_locations[0]).resolve()
+
+
+PACKAGED_CONFIG_DIR = _packaged_config_dir()
 # The checkout the package was installed from in editable mode (in a wheel: the site-packages folder).
 REPO_ROOT = PACKAGE_DIR.parent
 
