@@ -46,7 +46,12 @@ from refpo_warp.models.ema import ActorEMA
 from refpo_warp.utils.errors import NonFiniteLossError
 from refpo_warp.utils.option_rules import Flag, Int, Real, checks_options
 from refpo_warp.utils.options import option, option_values
-from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP, PPO_ARGUMENTS, split_newer_ppo_args, uncompiled
+from refpo_warp.utils.rsl_rl_versions import (
+    NORMALIZERS_UPDATE_PER_STEP,
+    PPO_ARGUMENTS,
+    split_newer_ppo_args,
+    uncompiled,
+)
 
 
 @dataclass
@@ -105,8 +110,8 @@ class OnPolicyAlgorithm(RslPPO):
                                                       "the predicted action; 0 turns it off (Puffer-PHC: 10)")
         bound: float = option(0.9, Real(0, None), "the bound of that loss, in the action range (Puffer-PHC: 0.9)")
         ema_decay: float | None = option(None, Real(0, 1, lo_open=True, hi_open=True, optional=True),
-                                         "an EMA of the actor's weights, which evaluation and export use (FPO++: 0.95); "
-                                         "null: off")
+                                         "an EMA of the actor's weights, which evaluation and export use "
+                                         "(FPO++: 0.95); null: off")
         ema_warmup: int = option(500, Int(0, 10**9), "updates after which the EMA restarts from the live weights "
                                                      "(FPO++: 500)")
 
@@ -279,7 +284,7 @@ class OnPolicyAlgorithm(RslPPO):
             lr = lr_tensor.item()
         self._set_learning_rate(lr)
 
-    # ------------------------------------------------------------------------------------------------ policy, checkpoints
+    # ---------------------------------------------------------------------------------------------- policy, checkpoints
     def get_policy(self) -> nn.Module:
         """The policy evaluation, inference and export use: the EMA actor when ``ema_decay`` is set."""
         return self.ema.model if self.ema is not None else uncompiled(self, "actor")

@@ -8,10 +8,10 @@ computes L_new,k on the same pairs and
     L     = -min(rho A, clip(rho, 1 - e, 1 + e) A) + c_v L_value + reflow_coef * mean_k L_new,k [+ bound loss]
 
 ``reflow_coef = 0`` is FPO. ``trust_region`` replaces PPO's clip by SPO's penalty or FPO++'s asymmetric mix
-(``refpo_warp.algorithms.trust_region``). With ``ratio_mode="per_sample"`` each pair has its own ratio and the surrogate is
-averaged over pairs; ``log_ratio_clip`` clamps each pair's log-ratio L_old,k - L_new,k to [-c, c] (their mean, the
-"mean" log-ratio, then lies in [-c, c] as well). The CFM loss (its output mode and scale) is the actor's
-(``refpo_warp.models.flow_actor``), so the ratio and the Reflow term always use the same numbers.
+(``refpo_warp.algorithms.trust_region``). With ``ratio_mode="per_sample"`` each pair has its own ratio and the
+surrogate is averaged over pairs; ``log_ratio_clip`` clamps each pair's log-ratio L_old,k - L_new,k to [-c, c]
+(their mean, the "mean" log-ratio, then lies in [-c, c] as well). The CFM loss (its output mode and scale) is the
+actor's (``refpo_warp.models.flow_actor``), so the ratio and the Reflow term always use the same numbers.
 
 Reflow pairs (``reflow_pairs``): ``independent`` (the paper's, the default) computes the Reflow term on the ratio's
 own pairs; ``coupled`` (ours, ``docs/algorithms.md``) pairs each action a with the initial noise eps_0 its rollout

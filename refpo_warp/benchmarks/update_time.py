@@ -22,10 +22,11 @@ import torch
 from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.timing import print_table, synchronize
 
-ORDER = ("fpo", "refpo", "refpo_aw", "fpo_pp", "refpo_pp", "flow_grpo", "reinflow", "ppo")  # table order; other algos follow, sorted
+# table order; other algos follow, sorted
+ORDER = ("fpo", "refpo", "refpo_aw", "fpo_pp", "refpo_pp", "flow_grpo", "reinflow", "ppo")
 NAMES = {"fpo": "FPO", "refpo": "ReFPO", "refpo_aw": "ReFPO (adv.-weighted)", "flow_grpo": "Flow-GRPO",
-         "reinflow": "ReinFlow", "ppo": "PPO", "fpo_pp": "FPO++", "refpo_pp": "ReFPO on FPO++", "refpo_coupled": "ReFPO, coupled pairs",
-         "refpo_adaptive": "ReFPO, adaptive λ"}  # fmt: skip
+         "reinflow": "ReinFlow", "ppo": "PPO", "fpo_pp": "FPO++", "refpo_pp": "ReFPO on FPO++",
+         "refpo_coupled": "ReFPO, coupled pairs", "refpo_adaptive": "ReFPO, adaptive λ"}  # fmt: skip
 VARIANTS = {"refpo_coupled": ("refpo", ["algorithm.reflow_pairs=coupled"]),
             "refpo_adaptive": ("refpo", ["algorithm.reflow_schedule=adaptive"])}  # fmt: skip
 """name -> (algo, overrides): options of an algorithm timed as a row of their own (only when asked: --algos)."""

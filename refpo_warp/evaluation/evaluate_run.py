@@ -18,7 +18,6 @@ from pathlib import Path
 
 from refpo_warp.config.saved import load_run_config
 from refpo_warp.evaluation import curves
-from refpo_warp.evaluation.run_health import run_health
 from refpo_warp.evaluation.evaluate_policy import (
     evaluate_actor,
     family_evaluation,
@@ -26,6 +25,7 @@ from refpo_warp.evaluation.evaluate_policy import (
     is_flow,
     make_eval_envs,
 )
+from refpo_warp.evaluation.run_health import run_health
 from refpo_warp.runner.build import build_runner, env_steps_per_iteration
 from refpo_warp.runner.checkpoints import latest_checkpoint, load_latest
 from refpo_warp.runner.progress import progress_path, read_rows

@@ -1,6 +1,7 @@
 """Evaluation during training, between the runner's chunks (``refpo_warp/training/train_run.py``): every
 ``eval.interval`` iterations the returns at ``eval.interval_flow_steps`` under each ``eval.initial_noise`` protocol
-(``eval/return_N<n>``, ``eval/return_N<n>_zero``, or ``eval/return`` for a Gaussian actor) and, for flows, the Jacobian statistics (``Flow/jacobian_*``) on the visited observations."""
+(``eval/return_N<n>``, ``eval/return_N<n>_zero``, or ``eval/return`` for a Gaussian actor) and, for flows, the
+Jacobian statistics (``Flow/jacobian_*``) on the visited observations."""
 
 from __future__ import annotations
 

@@ -36,6 +36,7 @@ def run_health(rows: list[dict]) -> dict[str, dict]:
         final_iteration, final = series[-1]
         drop = (peak - final) / abs(peak) if peak else 0.0
         out[setting_of(key)] = {"peak": peak, "peak_iteration": peak_iteration, "final": final,
-                                "final_iteration": final_iteration, "drop": drop, "cliff": drop >= CLIFF_DROP}  # fmt: skip
+                                "final_iteration": final_iteration, "drop": drop,
+                                "cliff": drop >= CLIFF_DROP}  # fmt: skip
     return out
 

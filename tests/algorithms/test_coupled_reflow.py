@@ -5,9 +5,7 @@ import copy
 
 import pytest
 import torch
-from rollouts import random_rollout  # tests/algorithms/rollouts.py
-from rsl_rl.models import MLPModel
-from rsl_rl.storage import RolloutStorage
+from rollouts import random_rollout, small_flow_algorithm  # tests/algorithms/rollouts.py
 from tensordict import TensorDict
 
 from refpo_warp.algorithms import ReFPO
@@ -19,13 +17,8 @@ N, T, OBS, ACT = 6, 3, 4, 2
 
 
 def build(**kwargs) -> ReFPO:
-    torch.manual_seed(0)
-    obs = TensorDict({"policy": torch.randn(N, OBS)}, batch_size=[N])
-    groups = {"actor": ["policy"], "critic": ["policy"]}
-    actor = FlowActor(obs, groups, "actor", ACT, hidden_dims=[16, 16], num_flow_steps=5)
-    critic = MLPModel(obs, groups, "critic", 1, hidden_dims=[16])
-    return ReFPO(actor, critic, RolloutStorage("rl", N, T, obs, [ACT]), num_mc_samples=3, num_learning_epochs=1,
-                 num_mini_batches=1, **kwargs)  # fmt: skip
+    return small_flow_algorithm(ReFPO, N, T, OBS, ACT, num_mc_samples=3, num_learning_epochs=1, num_mini_batches=1,
+                                **kwargs)[0]
 
 
 def test_the_coupled_term_on_a_batch_is_the_cfm_error_of_the_rollouts_own_pairs():

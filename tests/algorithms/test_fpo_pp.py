@@ -5,16 +5,13 @@ import math
 
 import pytest
 import torch
-from rsl_rl.models import MLPModel
-from rsl_rl.storage import RolloutStorage
-from tensordict import TensorDict
+from rollouts import small_flow_algorithm  # tests/algorithms/rollouts.py
 
 from refpo_warp.algorithms import FPOPlusPlus, ReFPO
 from refpo_warp.algorithms.fpo_pp import straight_through_max
 from refpo_warp.algorithms.on_policy import Minibatch
 from refpo_warp.algorithms.refpo import sample_tau
 from refpo_warp.algorithms.trust_region import surrogate
-from refpo_warp.models import FlowActor
 from refpo_warp.utils.errors import ConfigError
 
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
@@ -23,14 +20,8 @@ N, T, OBS, ACT = 6, 3, 4, 2
 
 
 def make(cls=FPOPlusPlus, **kwargs):
-    torch.manual_seed(0)
-    obs = TensorDict({"policy": torch.randn(N, OBS)}, batch_size=[N])
-    groups = {"actor": ["policy"], "critic": ["policy"]}
-    actor = FlowActor(obs, groups, "actor", ACT, hidden_dims=[16, 16], num_flow_steps=5)
-    critic = MLPModel(obs, groups, "critic", 1, hidden_dims=[16])
-    storage = RolloutStorage("rl", N, T, obs, [ACT])
     defaults = dict(num_mc_samples=4, num_learning_epochs=1, num_mini_batches=1, max_grad_norm=1e9)
-    return cls(actor, critic, storage, **{**defaults, **kwargs}), obs
+    return small_flow_algorithm(cls, N, T, OBS, ACT, **{**defaults, **kwargs})
 
 
 # ---------------------------------------------------------------------------------------------------- trust regions

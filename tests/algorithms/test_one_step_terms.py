@@ -3,14 +3,10 @@ the Reflow term weighted towards small flow times, against hand-worked values an
 
 import pytest
 import torch
-from rollouts import random_rollout  # tests/algorithms/rollouts.py
-from rsl_rl.models import MLPModel
-from rsl_rl.storage import RolloutStorage
-from tensordict import TensorDict
+from rollouts import random_rollout, small_flow_algorithm  # tests/algorithms/rollouts.py
 
 from refpo_warp.algorithms import ReFPO
 from refpo_warp.algorithms.on_policy import Minibatch
-from refpo_warp.models import FlowActor
 from refpo_warp.utils.errors import ConfigError
 
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
@@ -19,13 +15,8 @@ N, T, OBS, ACT = 6, 3, 4, 2
 
 
 def build(**kwargs) -> ReFPO:
-    torch.manual_seed(0)
-    obs = TensorDict({"policy": torch.randn(N, OBS)}, batch_size=[N])
-    groups = {"actor": ["policy"], "critic": ["policy"]}
-    actor = FlowActor(obs, groups, "actor", ACT, hidden_dims=[16, 16], num_flow_steps=5)
-    critic = MLPModel(obs, groups, "critic", 1, hidden_dims=[16])
-    return ReFPO(actor, critic, RolloutStorage("rl", N, T, obs, [ACT]), num_mc_samples=3, num_learning_epochs=1,
-                 num_mini_batches=1, **kwargs)  # fmt: skip
+    return small_flow_algorithm(ReFPO, N, T, OBS, ACT, num_mc_samples=3, num_learning_epochs=1, num_mini_batches=1,
+                                **kwargs)[0]
 
 
 def test_the_one_step_term_is_the_one_step_samplers_error_against_the_rollout_action():

@@ -5,6 +5,7 @@ import math
 
 import pytest
 import torch
+from rollouts import small_flow_algorithm  # tests/algorithms/rollouts.py
 from rsl_rl.models import MLPModel
 from rsl_rl.storage import RolloutStorage
 from tensordict import TensorDict
@@ -21,15 +22,9 @@ N, T, OBS, ACT = 6, 3, 4, 2
 
 
 def make_refpo(actor_kwargs=None, **kwargs):
-    torch.manual_seed(0)
-    obs = TensorDict({"policy": torch.randn(N, OBS)}, batch_size=[N])
-    groups = {"actor": ["policy"], "critic": ["policy"]}
-    actor = FlowActor(obs, groups, "actor", ACT, hidden_dims=[16, 16], num_flow_steps=5, **(actor_kwargs or {}))
-    critic = MLPModel(obs, groups, "critic", 1, hidden_dims=[16])
-    storage = RolloutStorage("rl", N, T, obs, [ACT])
     defaults = dict(num_mc_samples=4, num_learning_epochs=1, num_mini_batches=1, max_grad_norm=1e9,
                     value_loss_coef=0.0)  # fmt: skip
-    return ReFPO(actor, critic, storage, **{**defaults, **kwargs}), obs
+    return small_flow_algorithm(ReFPO, N, T, OBS, ACT, actor_kwargs, **{**defaults, **kwargs})
 
 
 def fill_storage(alg, advantages: float | None = 0.0):

@@ -39,7 +39,8 @@ def test_one_step_beside_ten_from_a_trained_run(tmp_path):
     frames = read_video(video)
     assert frames.shape[1:] == (48, 2 * 2 * 64, 3)  # two panels side by side, two envs tiled in each
     # both initial-noise protocols: one panel per (protocol, N)
-    proc = play(f"run_dir={run_dir}", "flow_steps=[1]", "initial_noise=[random, zero]", "num_envs=1", "length=3", *SMALL)
+    proc = play(f"run_dir={run_dir}", "flow_steps=[1]", "initial_noise=[random, zero]", "num_envs=1", "length=3",
+                *SMALL)
     assert proc.returncode == 0, proc.stderr
     video = run_dir / "videos" / "model_0_N1_random-zero.mp4"
     assert read_video(video).shape[1:] == (48, 2 * 64, 3)

@@ -22,7 +22,7 @@ cpu_reflow_pairs.yaml) and writes into out= (default SWEEP_DIR/one_step):
   sampler's paths and the returns after them, <task>_intervention_seed<k>.png;
 - one_step.json with every number behind the figures.
 
-screen=<sweep> (with intervene=<iteration>) screens the sweep's candidates instead (e.g. configs/sweep/cpu_onestep.yaml):
+screen=<sweep> (with intervene=<iteration>) screens the sweep's candidates instead (configs/sweep/cpu_onestep.yaml):
 from that checkpoint of the "refpo" run of every seed, intervene_iterations iterations under each candidate's
 overrides and under ReFPO's own rule, the same first rollout for all, then the one-step error on the checkpoint's
 N-step states and the N = 10 and N = 1 returns; <task>_screen.md and screen.json.
@@ -218,7 +218,7 @@ def screen(seeds: dict[str, dict[int, Path]], task: str, options: dict, out: Pat
                for seed, run in sorted(runs.items())}  # fmt: skip
     write_numbers({"iteration": iteration, "iterations": iterations, "seeds": results}, out / "screen.json")
     lines = [f"# Screen on {task}: {iterations} iterations from the iteration-{iteration} checkpoint of ReFPO",
-             "", f"One-step error (on the checkpoint's N-step states) and N = 10 / N = 1 returns (32 episodes) per seed "
+             "", "One-step error (on the checkpoint's N-step states) and N = 10 / N = 1 returns (32 episodes) per seed "
              f"{', '.join(map(str, sorted(runs)))}; the checkpoint itself first.", "",
              "| candidate | " + " | ".join(f"seed {s}: error, N=10 / N=1" for s in sorted(runs)) + " |",
              "|---|" + "---|" * len(runs)]  # fmt: skip

@@ -9,7 +9,8 @@ curves of the training episode length and return are summarised (first and last 
 Built as mjlab's ``play`` builds it (the task's play env config, its runner class, the actor's weights), the policy
 acts for ``num_steps`` steps from reset: deterministically (a flow from zero initial noise, what ``play`` and the ONNX
 export do; a Gaussian's mean), or, for a flow policy, from random initial noise (``initial_noise=random``; both:
-``random,zero``, one rate each, the same protocols as ``eval.initial_noise``); the result is the mean reward per second of simulated
+``random,zero``, one rate each, the same protocols as ``eval.initial_noise``); the result is the mean reward per second
+of simulated
 time (mjlab's rewards are per step times the step's dt). Why not the episode length: a task whose only
 termination is the time-out (the cartpoles) has episodes of one length whatever the policy does.
 """
@@ -113,7 +114,10 @@ def main(argv: list[str]) -> int:
         return 2
     task_id, target = positional
     run = Path(target).is_dir()
-    result = summarize_run(task_id, target, protocols, **options) if run else rates(task_id, target, protocols, **options)
+    if run:
+        result = summarize_run(task_id, target, protocols, **options)
+    else:
+        result = rates(task_id, target, protocols, **options)
     print(json.dumps(result))
     return 0
 
