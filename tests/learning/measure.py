@@ -70,7 +70,7 @@ def run_one(check: str, seed: int, threads: int, null: bool) -> None:
         record = run_check(CHECKS[check], seed, Path(tmp) / "run", null=null)
     record.update(threads=threads, wall_s=round(time.monotonic() - start, 1), cpu=cpu_name())
     RECORDS.mkdir(parents=True, exist_ok=True)
-    with open(RECORDS / f"{check}.jsonl", "a", encoding="utf-8") as f:  # one write of one line: appends interleave whole
+    with open(RECORDS / f"{check}.jsonl", "a", encoding="utf-8") as f:  # one write of a line: appends stay whole
         f.write(json.dumps(record) + "\n")
 
 
@@ -91,7 +91,8 @@ def run_many(checks: list[str], seeds: list[int], threads: int, null: bool, jobs
         cmd = [sys.executable, __file__, "one", check, str(seed), str(threads)] + (["--null"] if null else [])
         log = Path(tempfile.gettempdir()) / f"measure_{check}_s{seed}_t{threads}{'_null' if null else ''}.log"
         with open(log, "w") as f:
-            rc = subprocess.call(cmd, stdout=f, stderr=subprocess.STDOUT, env={**os.environ, "OMP_NUM_THREADS": str(threads)})
+            env = {**os.environ, "OMP_NUM_THREADS": str(threads)}
+            rc = subprocess.call(cmd, stdout=f, stderr=subprocess.STDOUT, env=env)
         print(f"{check} seed {seed} threads {threads}{' null' if null else ''}: exit {rc} (log {log})", flush=True)
 
     with ThreadPoolExecutor(jobs) as pool:

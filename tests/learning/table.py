@@ -59,7 +59,8 @@ def standings(check: LearningCheck, records: list[dict]) -> tuple[list[BoundStan
                if (t, s) not in learning]  # fmt: skip
     missing += [f"{check.name} null control, seed {s}" for s in NULL_RUNS if s not in null]
     out = [BoundStanding(b, [(t, s, stats[b.statistic]) for (t, s), stats in sorted(learning.items())],
-                         [(s, stats[b.statistic]) for s, stats in sorted(null.items())]) for b in check.bounds]  # fmt: skip
+                         [(s, stats[b.statistic]) for s, stats in sorted(null.items())])
+           for b in check.bounds]  # fmt: skip
     return out, missing
 
 
