@@ -1,0 +1,95 @@
+#!/usr/bin/env python
+"""The README's learning results, written from the committed data files: python docs/results/measured.py
+
+Rewrites the table between the markers in README.md ("Measured: learning") from
+- docs/results/learning_checks/records/gridworld_refpo.jsonl: ReFPO on GridWorld, the learning check's runs;
+- docs/results/*/per_task.csv of the DMC sweeps below (tools/report.py's output): the CPU profiles' returns per task,
+  mean ± population std over seeds 1-3.
+Each row names its data file; nothing here is typed in by hand.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import statistics
+from pathlib import Path
+
+RESULTS = Path(__file__).resolve().parent
+README = RESULTS.parents[1] / "README.md"
+BEGIN, END = "<!-- measured: begin (python docs/results/measured.py) -->", "<!-- measured: end -->"
+SWEEPS = [  # (per-task CSV, methods in the order shown)
+    ("cpu_dmc/per_task.csv", ["ppo", "fpo", "refpo"]),
+    ("fpo_pp/report/per_task.csv", ["fpo_pp", "refpo_pp"]),
+    ("one_step/search/per_task.csv", None),
+]
+TASKS = {"dmc_cartpole_balance": "cartpole_balance (450k env steps)", "dmc_point_mass": "point_mass (1M)",
+         "dmc_reacher_easy": "reacher_easy (1M)"}  # fmt: skip
+
+
+def number(text: str) -> float | None:
+    return float(text) if text not in ("", None) else None
+
+
+def cell(mean: float | None, std: float | None) -> str:
+    if mean is None:
+        return "--"
+    return f"{mean:.0f}" if std is None else f"{mean:.0f} ± {std:.0f}"
+
+
+def gridworld_row() -> str | None:
+    path = RESULTS / "learning_checks" / "records" / "gridworld_refpo.jsonl"
+    if not path.exists():
+        return None
+    runs = [r for r in map(json.loads, path.read_text().splitlines()) if not r["null"] and r["threads"] == 1]
+    final = [r["final"] for r in runs]
+    success = [min(f[s]["success_rate"] for s in ("N=1", "N=10")) for f in final]
+    length = {s: statistics.fmean(f[s]["length_mean"] for f in final) for s in ("N=1", "N=10")}
+    share = [min(f[s]["top_share"], f[s]["bottom_share"]) for f in final for s in ("N=1", "N=10")]
+    seeds = ", ".join(str(r["seed"]) for r in sorted(runs, key=lambda r: r["seed"]))
+    return (f"| ReFPO on GridWorld, the paper's 260k env steps, seeds {seeds} (`{path.relative_to(README.parent)}`) | "
+            f"success ≥ {min(success):.3f} at N = 1 and 10; episode length {length['N=1']:.1f} / {length['N=10']:.1f} "
+            f"(N = 1 / 10); the smaller goal band's share of successes "
+            f"{min(share):.2f}-{max(share):.2f} |")  # fmt: skip
+
+
+def sweep_rows(relative: str, labels: list[str] | None) -> list[str]:
+    path = RESULTS / relative
+    if not path.exists():
+        return []
+    rows = list(csv.DictReader(path.open()))
+    labels = labels or list(dict.fromkeys(r["label"] for r in rows))
+    out = []
+    for task, title in TASKS.items():
+        cells = []
+        for label in labels:
+            row = next((r for r in rows if r["task"] == task and r["label"] == label), None)
+            if row is None or row["runs_finished"] == "0":
+                continue
+            multi = cell(number(row["return_multi_mean"]), number(row["return_multi_std"]))
+            one = row.get("return_1_mean") and cell(number(row["return_1_mean"]), number(row["return_1_std"]))
+            cells.append(f"{row['method']} {multi}" + (f" / {one}" if one else ""))
+        if cells:
+            out.append(f"| {title}, 10-step / 1-step return, seeds 1-3 (`{path.relative_to(README.parent)}`) | "
+                       + "; ".join(cells) + " |")  # fmt: skip
+    return out
+
+
+def table() -> str:
+    rows = [r for r in [gridworld_row()] if r]
+    for relative, labels in SWEEPS:
+        rows += sweep_rows(relative, labels)
+    return "\n".join([BEGIN, "| Learning result (data file) | Measured |", "|---|---|", *rows, END])
+
+
+def main() -> None:
+    text = README.read_text(encoding="utf-8")
+    if BEGIN not in text or END not in text:
+        raise SystemExit(f"{README}: no '{BEGIN}' ... '{END}' markers")
+    head, rest = text.split(BEGIN, 1)
+    README.write_text(head + table() + rest.split(END, 1)[1], encoding="utf-8")
+    print(f"{README}: measured table written")
+
+
+if __name__ == "__main__":
+    main()
