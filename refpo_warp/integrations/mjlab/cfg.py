@@ -76,10 +76,27 @@ ReFPOAlgorithmCfg = _config_class(
 REFPO_PPO_KEYS = tuple(f.name for f in fields(RslRlPpoAlgorithmCfg) if f.name in _ALGORITHM_OPTIONS)
 
 
-def refpo_runner_cfg(ppo_cfg: RslRlOnPolicyRunnerCfg) -> RslRlOnPolicyRunnerCfg:
+def algo_deltas(algo: str) -> dict:
+    """The algorithm options ``configs/algo/<algo>.yaml`` sets beyond ReFPO's own file (its ``base`` chain after
+    ``refpo``), e.g. ``refpo_onestep``'s one-step term: the one home of a named ReFPO configuration."""
+    from refpo_warp.config.config_path import config_path
+    from refpo_warp.config.layers import algo_files
+
+    chain = algo_files(algo, config_path())
+    if chain[0][0] != "refpo":
+        raise ValueError(f"algo '{algo}' does not derive from refpo: an mjlab ReFPO variant takes a configuration "
+                         f"of ReFPO's")
+    deltas: dict = {}
+    for _, _, data in chain[1:]:
+        deltas.update({k: v for k, v in (data.get("algorithm") or {}).items() if k != "class_name"})
+    return deltas
+
+
+def refpo_runner_cfg(ppo_cfg: RslRlOnPolicyRunnerCfg, algo: str = "refpo") -> RslRlOnPolicyRunnerCfg:
     """The ReFPO variant of a task's PPO runner config: the actor becomes a FlowActor of the task's sizes
     (hidden_dims, activation, obs_normalization), the algorithm ReFPO with the task's PPO keys except
-    ``REFPO_PPO_KEYS``; the critic, the rollout and everything else of the runner config stay the task's."""
+    ``REFPO_PPO_KEYS`` (and the options of ``algo``'s file, a configuration of ReFPO's: ``algo_deltas``); the
+    critic, the rollout and everything else of the runner config stay the task's."""
     if not isinstance(ppo_cfg, RslRlOnPolicyRunnerCfg):
         raise TypeError(f"refpo_runner_cfg needs an RslRlOnPolicyRunnerCfg (an on-policy task), got {type(ppo_cfg)}")
     actor = ppo_cfg.actor
@@ -92,5 +109,6 @@ def refpo_runner_cfg(ppo_cfg: RslRlOnPolicyRunnerCfg) -> RslRlOnPolicyRunnerCfg:
                               obs_normalization=actor.obs_normalization)  # fmt: skip
     task_keys = {f.name: getattr(ppo_cfg.algorithm, f.name) for f in fields(RslRlPpoAlgorithmCfg)
                  if f.name != "class_name" and f.name not in REFPO_PPO_KEYS}  # fmt: skip
-    return replace(ppo_cfg, actor=flow_actor, algorithm=ReFPOAlgorithmCfg(**task_keys),
-                   experiment_name=ppo_cfg.experiment_name + EXPERIMENT_SUFFIX)  # fmt: skip
+    suffix = EXPERIMENT_SUFFIX + ("" if algo == "refpo" else algo.removeprefix("refpo"))
+    return replace(ppo_cfg, actor=flow_actor, algorithm=ReFPOAlgorithmCfg(**task_keys, **algo_deltas(algo)),
+                   experiment_name=ppo_cfg.experiment_name + suffix)  # fmt: skip

@@ -3,7 +3,7 @@ ReFPO's own settings, the task's other PPO keys), runner classes, CLI flags, a u
 
 Needs mjlab (skipped without it): run in the mjlab job's venv, ``.ci/mjlab`` (docs/mjlab.md)."""
 
-from dataclasses import asdict, fields
+from dataclasses import asdict, fields, replace
 
 import pytest
 
@@ -26,6 +26,19 @@ def test_the_entry_point_registers_the_variants():
     tasks = list_tasks()
     assert set(REQUIRED) <= set(VARIANT_BASES)
     assert all(base + REFPO_SUFFIX in tasks for base in VARIANT_BASES), tasks
+
+
+@pytest.mark.parametrize("base", VARIANT_BASES)
+def test_the_one_step_variant_is_the_refpo_variant_with_the_one_step_configurations_options(base):
+    import yaml
+
+    from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR
+
+    refpo, onestep = load_rl_cfg(base + REFPO_SUFFIX), load_rl_cfg(base + REFPO_SUFFIX + "-OneStep")
+    options = yaml.safe_load((PACKAGED_CONFIG_DIR / "algo" / "refpo_onestep.yaml").read_text())["algorithm"]
+    assert options and all(getattr(onestep.algorithm, k) == v for k, v in options.items()), options
+    assert replace(onestep.algorithm, **{k: getattr(refpo.algorithm, k) for k in options}) == refpo.algorithm
+    assert onestep.actor == refpo.actor and onestep.experiment_name == refpo.experiment_name + "_onestep"
 
 
 @pytest.mark.parametrize("base", VARIANT_BASES)
