@@ -23,15 +23,16 @@ from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.timing import print_table, synchronize
 
 # table order; other algos follow, sorted
-ORDER = ("fpo", "refpo", "refpo_aw", "fpo_pp", "refpo_pp", "flow_grpo", "reinflow", "ppo")
+ORDER = ("fpo", "refpo", "refpo_onestep", "refpo_aw", "fpo_pp", "refpo_pp", "flow_grpo", "reinflow", "ppo")
 NAMES = {"fpo": "FPO", "refpo": "ReFPO", "refpo_aw": "ReFPO (adv.-weighted)", "flow_grpo": "Flow-GRPO",
          "reinflow": "ReinFlow", "ppo": "PPO", "fpo_pp": "FPO++", "refpo_pp": "ReFPO on FPO++",
+         "refpo_onestep": "ReFPO, one-step term",
          "refpo_coupled": "ReFPO, coupled pairs", "refpo_adaptive": "ReFPO, adaptive λ"}  # fmt: skip
 VARIANTS = {"refpo_coupled": ("refpo", ["algorithm.reflow_pairs=coupled"]),
             "refpo_adaptive": ("refpo", ["algorithm.reflow_schedule=adaptive"])}  # fmt: skip
 """name -> (algo, overrides): options of an algorithm timed as a row of their own (only when asked: --algos)."""
-PAPER_PASSES = {"fpo": 16, "refpo": 16, "refpo_aw": 16, "fpo_pp": 16, "refpo_pp": 16, "flow_grpo": 8, "reinflow": 8,
-                "ppo": 16}  # FPO++ at the ReFPO family's passes, as it runs in the grid
+PAPER_PASSES = {"fpo": 16, "refpo": 16, "refpo_onestep": 16, "refpo_aw": 16, "fpo_pp": 16, "refpo_pp": 16,
+                "flow_grpo": 8, "reinflow": 8, "ppo": 16}  # FPO++ at the ReFPO family's passes, as it runs in the grid
 """Passes per batch in the paper's DMC tables; an algorithm not in them is scaled with ``--passes``."""
 
 
