@@ -18,12 +18,19 @@ def test_every_table_is_the_one_its_class_makes():
     assert not stale, f"rewrite them: python -m refpo_warp.config.option_docs {' '.join(stale)}"
 
 
+def _tabled() -> set[type]:
+    return {resolve_class(m.group("name")) for page in DOCS.rglob("*.md")
+            for m in BLOCK.finditer(page.read_text(encoding="utf-8"))}  # fmt: skip
+
+
+def _declaring(package) -> set[type]:
+    declaring = {cls for cls in vars(package).values() if inspect.isclass(cls) and OPTIONS in cls.__dict__}
+    return declaring | {base for cls in declaring for base in cls.__mro__ if OPTIONS in base.__dict__}
+
+
 def test_every_algorithm_with_options_has_a_table():
-    tabled = {resolve_class(m.group("name")) for page in DOCS.rglob("*.md")
-              for m in BLOCK.finditer(page.read_text(encoding="utf-8"))}  # fmt: skip
-    declaring = {cls for cls in vars(algorithms).values() if inspect.isclass(cls) and OPTIONS in cls.__dict__}
-    declaring |= {base for cls in declaring for base in cls.__mro__ if OPTIONS in base.__dict__}
-    assert len(declaring) >= 5 and not declaring - tabled, f"without a table: {declaring - tabled}"
+    declaring = _declaring(algorithms)
+    assert len(declaring) >= 5 and not declaring - _tabled(), f"without a table: {declaring - _tabled()}"
 
 
 def test_a_changed_default_is_written_into_the_page(tmp_path, monkeypatch):
@@ -37,3 +44,12 @@ def test_a_changed_default_is_written_into_the_page(tmp_path, monkeypatch):
     assert "| old |" not in written and written.startswith("text\n") and written.endswith("more\n")
     monkeypatch.setattr(ReFPO.Options.__dataclass_fields__["reflow_coef"], "default", 0.5)
     assert "| `reflow_coef` | 0.5 |" in with_tables(written)
+
+
+def test_a_changed_actor_default_is_written_into_the_page(monkeypatch):
+    from refpo_warp.models import FlowActor
+
+    page = (DOCS / "algorithms.md").read_text(encoding="utf-8")
+    assert "| `num_flow_steps` | 10 | an integer in [1, 1000] | N, Euler steps" in page
+    monkeypatch.setattr(FlowActor.Options.__dataclass_fields__["num_flow_steps"], "default", 7)
+    assert "| `num_flow_steps` | 7 |" in with_tables(page)
