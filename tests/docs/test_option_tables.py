@@ -1,9 +1,10 @@
 """The option tables of the docs are made from the classes' Options (refpo_warp/config/option_docs.py): a page states
-the defaults, rules and meanings the code has, and every algorithm that declares options has a table."""
+the defaults, rules and meanings the code has, and every algorithm and model that declares options has a table."""
 
 import inspect
 
 import refpo_warp.algorithms as algorithms
+import refpo_warp.models as models
 from refpo_warp.config.classes import resolve_class
 from refpo_warp.config.option_docs import BLOCK, main, with_tables
 from refpo_warp.utils.option_rules import OPTIONS
@@ -31,6 +32,12 @@ def _declaring(package) -> set[type]:
 def test_every_algorithm_with_options_has_a_table():
     declaring = _declaring(algorithms)
     assert len(declaring) >= 5 and not declaring - _tabled(), f"without a table: {declaring - _tabled()}"
+
+
+def test_every_model_with_options_has_a_table():
+    declaring = _declaring(models)
+    assert {models.FlowActor, models.ReinFlowActor, models.PhcMLPModel} <= declaring
+    assert not declaring - _tabled(), f"without a table: {declaring - _tabled()}"
 
 
 def test_a_changed_default_is_written_into_the_page(tmp_path, monkeypatch):
