@@ -18,17 +18,26 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from enum import Enum
 
 import torch
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.models.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS
+from refpo_warp.models.rsl_rl_rules import HIDDEN_DIMS, Activation
 from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyProtocol
-from refpo_warp.models.velocity_field import DATA_GUARD, PARAMETERIZATIONS, TIME_CONDITIONINGS, VelocityField
+from refpo_warp.models.velocity_field import DATA_GUARD, Parameterization, TimeConditioning, VelocityField
 from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, Real, checks_options, mapping_or_none
+from refpo_warp.utils.options import choices, constructor_options, option
 
-OUTPUT_MODES = ("u", "eps", "data")
+
+class OutputMode(str, Enum):
+    U = "u"  # |e_v|^2, plain velocity regression (ReFPO's)
+    EPS = "eps"  # tau^2 |e_v|^2, the reference FPO's "u_but_supervise_as_eps"
+    DATA = "data"  # |a_hat - a|^2 = (1 - tau)^2 |e_v|^2 (Puffer-PHC)
+
+
+OUTPUT_MODES = choices(OutputMode)
 
 
 @dataclass
@@ -55,73 +64,58 @@ def cfm_loss(terms: CfmTerms, tau: torch.Tensor, output_mode: str, loss_scale: f
 
 @checks_options
 class FlowActor(SampledPolicyProtocol, nn.Module):
-    """Flow-matching actor with the constructor and model protocol of rsl_rl's ``MLPModel``.
+    """Flow-matching actor with the constructor and model protocol of rsl_rl's ``MLPModel``: rsl_rl's ``obs``,
+    ``obs_groups``, ``obs_set`` and ``output_dim``, then the options below by keyword."""
 
-    Args:
-        obs, obs_groups, obs_set, output_dim: As for rsl_rl models (passed by ``construct_algorithm``).
-        hidden_dims, activation, obs_normalization: The velocity MLP and observation normalisation.
-        distribution_cfg: Accepted for config compatibility; a flow policy has no parametric distribution.
-        num_flow_steps: Euler steps N used to sample actions (change it at any time, e.g. N = 1 at deployment).
-        time_embed_dim: Channels of the time embedding (2^k sinusoid for ``concat``, DiT sinusoid for ``adaln``).
-        output_mode: ``"u"``, ``"eps"`` or ``"data"`` CFM loss (see the module docstring).
-        output_scale: Multiplier on the network's head.
-        action_noise_std: Gaussian perturbation added to sampled actions during rollouts (Puffer-PHC: 0.05); the
-            perturbed action is the one stored and trained on.
-        parameterization: ``"velocity"`` or ``"data"`` (the head predicts the clean action).
-        time_conditioning: ``"concat"`` or ``"adaln"``.
-        head_init_gain: Orthogonal init gain of the head with zero bias (Puffer-PHC: 0.01); None keeps PyTorch's.
-        loss_scale: Multiplier on the CFM loss (Puffer-PHC: 200); it scales the ratio's log and the Reflow term alike.
-        obs_clip: Clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); None: no clamp.
-    """
+    @dataclass(frozen=True)
+    class Options:
+        """The flow actor's options (``docs/algorithms.md``, "Flow actor")."""
 
-    option_rules = {  # valid values, checked by the config resolver and this constructor (utils/option_rules.py)
-        "hidden_dims": HIDDEN_DIMS,
-        "activation": OneOf(ACTIVATIONS),
-        "obs_normalization": Flag(),
-        "distribution_cfg": Check(mapping_or_none, "null (ignored: a flow has no distribution)", optional=True),
-        "num_flow_steps": NUM_FLOW_STEPS,  # any N samples the same flow: may change on resume
-        "time_embed_dim": Int(2, 1024, multiple_of=2),
-        "output_mode": OneOf(OUTPUT_MODES),
-        "output_scale": Real(0, 1e6, lo_open=True),
-        "action_noise_std": Real(0, 1e3, fixed=False),
-        "parameterization": OneOf(PARAMETERIZATIONS),
-        "time_conditioning": OneOf(TIME_CONDITIONINGS),
-        "head_init_gain": Real(0, 1e3, lo_open=True, optional=True),
-        "loss_scale": Real(0, 1e6, lo_open=True),
-        "obs_clip": Real(0, 1e6, lo_open=True, optional=True),
-    }
+        hidden_dims: tuple[int, ...] | list[int] = option((256, 256, 256), HIDDEN_DIMS,
+                                                          "hidden layer sizes of the velocity MLP")
+        activation: Activation = option("elu", OneOf(Activation), "activation of the velocity MLP")
+        obs_normalization: bool = option(False, Flag(), "normalise the observation (rsl_rl's EmpiricalNormalization)")
+        distribution_cfg: dict | None = option(None, Check(mapping_or_none, "a mapping (ignored)", optional=True),
+                                               "accepted for config compatibility and ignored: a flow policy has "
+                                               "no parametric distribution")
+        num_flow_steps: int = option(10, NUM_FLOW_STEPS, "N, Euler steps that sample an action; may change at any "
+                                                         "time (train with 10, deploy with 1) and on resume")
+        time_embed_dim: int = option(8, Int(2, 1024, multiple_of=2), "channels of the time embedding: 2^k sinusoid "
+                                     "(concat) or DiT sinusoid (adaln; Puffer-PHC: 256)")
+        output_mode: OutputMode = option("u", OneOf(OutputMode), "the CFM loss: u |e_v|^2, eps tau^2 |e_v|^2 "
+                                         "(Playground), data |a_hat - a|^2 (Puffer-PHC); e_v = v - (a - eps)")
+        output_scale: float = option(1.0, Real(0, 1e6, lo_open=True), "multiplies the head (Playground: 0.25)")
+        action_noise_std: float = option(0.0, Real(0, 1e3, fixed=False), "Gaussian perturbation of rollout actions, "
+                                         "stored with the action (Puffer-PHC: 0.05)")
+        parameterization: Parameterization = option("velocity", OneOf(Parameterization), "the head predicts v, or "
+                                                     "the clean action a_hat with v = (a_hat - x) / (1 - tau) "
+                                                     "(Puffer-PHC)")
+        time_conditioning: TimeConditioning = option("concat", OneOf(TimeConditioning), "tau enters the first layer "
+                                                     "as [cos(tau 2^k), sin(tau 2^k)] (Playground), or the last "
+                                                     "hidden layer through adaLN (Puffer-PHC)")
+        head_init_gain: float | None = option(None, Real(0, 1e3, lo_open=True, optional=True),
+                                              "orthogonal head init with this gain, zero bias (Puffer-PHC: 0.01); "
+                                              "null keeps PyTorch's")
+        loss_scale: float = option(1.0, Real(0, 1e6, lo_open=True), "multiplies the CFM loss, hence the ratio's log "
+                                   "and the Reflow term (Puffer-PHC: 200 = 1 / (2 * 0.05^2))")
+        obs_clip: float | None = option(None, Real(0, 1e6, lo_open=True, optional=True),
+                                        "clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); "
+                                        "null: no clamp")
 
-    def __init__(
-        self,
-        obs: TensorDict,
-        obs_groups: dict[str, list[str]],
-        obs_set: str,
-        output_dim: int,
-        hidden_dims: tuple[int, ...] | list[int] = (256, 256, 256),
-        activation: str = "elu",
-        obs_normalization: bool = False,
-        distribution_cfg: dict | None = None,
-        num_flow_steps: int = 10,
-        time_embed_dim: int = 8,
-        output_mode: str = "u",
-        output_scale: float = 1.0,
-        action_noise_std: float = 0.0,
-        parameterization: str = "velocity",
-        time_conditioning: str = "concat",
-        head_init_gain: float | None = None,
-        loss_scale: float = 1.0,
-        obs_clip: float | None = None,
-    ) -> None:
+    def __init__(self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int,
+                 **options) -> None:  # fmt: skip
         super().__init__()
-        if distribution_cfg is not None:
+        o = constructor_options(type(self), options)
+        if o.distribution_cfg is not None:
             warnings.warn("FlowActor ignores distribution_cfg: actions are sampled by integrating the flow.")
-        self._set_up_observations(obs, obs_groups, obs_set, output_dim, obs_normalization, obs_clip)
-        self.velocity = VelocityField(self.obs_dim, output_dim, hidden_dims, activation, time_embed_dim, output_scale,
-                                      parameterization, time_conditioning, head_init_gain)  # fmt: skip
-        self.num_flow_steps = int(num_flow_steps)
-        self.output_mode = output_mode
-        self.loss_scale = float(loss_scale)
-        self.action_noise_std = float(action_noise_std)
+        self._set_up_observations(obs, obs_groups, obs_set, output_dim, o.obs_normalization, o.obs_clip)
+        self.velocity = VelocityField(self.obs_dim, output_dim, o.hidden_dims, o.activation, o.time_embed_dim,
+                                      o.output_scale, o.parameterization, o.time_conditioning,
+                                      o.head_init_gain)  # fmt: skip
+        self.num_flow_steps = int(o.num_flow_steps)
+        self.output_mode = o.output_mode
+        self.loss_scale = float(o.loss_scale)
+        self.action_noise_std = float(o.action_noise_std)
 
     # ------------------------------------------------------------------------------------------------ sampling
     def sample(self, obs: TensorDict, num_steps: int | None = None, initial_noise: str = "random",
@@ -132,7 +126,8 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
         obs_norm = self.encode(obs)
         if noise is None:
             shape = (obs_norm.shape[0], self.action_dim)
-            noise = torch.randn(shape, device=obs_norm.device) if initial_noise == "random" else obs_norm.new_zeros(shape)
+            random = initial_noise == "random"
+            noise = torch.randn(shape, device=obs_norm.device) if random else obs_norm.new_zeros(shape)
         actions = self.velocity.integrate(self.velocity.project_obs(obs_norm), noise, n)
         if perturbation and self.action_noise_std > 0:
             actions = actions + self.action_noise_std * torch.randn_like(actions)

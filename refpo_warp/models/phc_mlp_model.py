@@ -9,23 +9,37 @@ the JIT/ONNX exports are rsl_rl's.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 from rsl_rl.models import MLPModel
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
 from refpo_warp.utils.option_rules import Real, checks_options
+from refpo_warp.utils.options import option, option_values
 from refpo_warp.utils.rsl_rl_versions import split_learn_std
 
 
 @checks_options
 class PhcMLPModel(MLPModel):
-    """``MLPModel`` plus ``head_init_gain`` and ``obs_clip`` (see the module docstring)."""
+    """``MLPModel`` plus ``head_init_gain`` and ``obs_clip`` (see the module docstring); every other argument is
+    ``MLPModel``'s."""
 
-    option_rules = {"head_init_gain": Real(0, 1e3, lo_open=True, optional=True),
-                    "obs_clip": Real(0, 1e6, lo_open=True, optional=True)}  # fmt: skip  (refpo_warp.utils.option_rules)
+    @dataclass(frozen=True)
+    class Options:
+        """The options it adds to ``MLPModel``'s arguments."""
 
-    def __init__(self, *args, head_init_gain: float | None = None, obs_clip: float | None = None, **kwargs) -> None:
+        head_init_gain: float | None = option(None, Real(0, 1e3, lo_open=True, optional=True),
+                                              "orthogonal init of the output head with this gain, zero bias "
+                                              "(Puffer-PHC: 0.01); null keeps rsl_rl's")
+        obs_clip: float | None = option(None, Real(0, 1e6, lo_open=True, optional=True),
+                                        "clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); "
+                                        "null: no clamp")
+
+    def __init__(self, *args, **kwargs) -> None:
+        options, kwargs = option_values(type(self), kwargs)
+        head_init_gain, obs_clip = options["head_init_gain"], options["obs_clip"]
         kwargs["distribution_cfg"], learn_std = split_learn_std(kwargs.get("distribution_cfg"))
         super().__init__(*args, **kwargs)
         if not learn_std:  # rsl-rl-lib < 5.2: its GaussianDistribution has no learn_std, so fix the std here

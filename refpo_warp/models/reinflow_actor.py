@@ -26,18 +26,28 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import dataclass
+from enum import Enum
 
 import torch
 from rsl_rl.utils import resolve_nn_activation
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.models.rsl_rl_rules import ACTIVATIONS, HIDDEN_DIMS
+from refpo_warp.models.rsl_rl_rules import HIDDEN_DIMS, Activation
 from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyProtocol
 from refpo_warp.models.velocity_field import VelocityField
 from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, Real, checks_options, mapping_or_none
+from refpo_warp.utils.options import choices, constructor_options, option
 
-NOISE_SCHEDULES = ("lin", "vp", "const")
+
+class NoiseSchedule(str, Enum):
+    LIN = "lin"  # 0.1 t (table (d) "Linear")
+    VP = "vp"  # sqrt(0.2 t (1 - t))
+    CONST = "const"  # sigma_min
+
+
+NOISE_SCHEDULES = choices(NoiseSchedule)
 GAUSSIAN_ENTROPY = 0.5 * math.log(2.0 * math.pi * math.e)
 LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
@@ -57,95 +67,75 @@ def fixed_sigma(t: float, schedule: str, sigma_min: float, sigma_max: float) -> 
 
 @checks_options
 class ReinFlowActor(SampledPolicyProtocol, nn.Module):
-    """ReinFlow's noisy flow policy with the constructor and model protocol of rsl_rl's ``MLPModel``.
+    """ReinFlow's noisy flow policy with the constructor and model protocol of rsl_rl's ``MLPModel``: rsl_rl's
+    ``obs``, ``obs_groups``, ``obs_set`` and ``output_dim``, then the options below by keyword."""
 
-    Args (besides rsl_rl's obs, obs_groups, obs_set, output_dim):
-        hidden_dims, activation, obs_normalization, obs_clip: The velocity MLP and observation normalisation.
-        distribution_cfg: Accepted for config compatibility and ignored (the chain defines the distribution).
-        num_flow_steps: K, denoising steps (table (d): 4).
-        time_embed_dim: Channels of the time embedding (table (d): 16).
-        output_scale: Multiplier on the velocity head.
-        noise_hidden_dims, noise_activation: The noise network (ReinFlow gym configs: [64, 64], Tanh).
-        ft_denoising_steps: Steps (the last ones) whose noise is learned (table (d): 2).
-        sigma_min, sigma_max: Bounds of sigma (table (d): [0.08, 0.16]).
-        noise_schedule: Fixed sigma of the other steps: ``lin`` (table (d) "Linear"), ``vp`` or ``const``.
-        min_sampling_std: Floor of the std sampled with (table (d): 0.10).
-        denoised_clip: Clamp of every step mean (ReinFlow: 1).
-        randn_clip: Truncation of the noise in stds (ReinFlow: 3).
-        action_clip: Clamp of the final action (table (d) action range [-1, 1]).
-    """
+    @dataclass(frozen=True)
+    class Options:
+        """ReinFlow's actor options; "table (d)" is the ReFPO paper's ReinFlow table."""
 
-    option_rules = {  # valid values, checked by the config resolver and this constructor (utils/option_rules.py)
-        "hidden_dims": HIDDEN_DIMS,
-        "activation": OneOf(ACTIVATIONS),
-        "obs_normalization": Flag(),
-        "distribution_cfg": Check(mapping_or_none, "null (ignored: the chain defines the distribution)", optional=True),
-        "num_flow_steps": NUM_FLOW_STEPS.with_fixed(None),  # K shapes the noisy chain it trains on
-        "time_embed_dim": Int(2, 1024, multiple_of=2),
-        "output_scale": Real(0, 1e6, lo_open=True),
-        "noise_hidden_dims": HIDDEN_DIMS,
-        "noise_activation": OneOf(ACTIVATIONS),
-        "ft_denoising_steps": Int(0, 1000),
-        "sigma_min": Real(0, 100, lo_open=True, fixed=False),
-        "sigma_max": Real(0, 100, lo_open=True, fixed=False),
-        "noise_schedule": OneOf(NOISE_SCHEDULES, fixed=False),
-        "min_sampling_std": Real(0, 100, fixed=False),
-        "denoised_clip": Real(0, 1e6, lo_open=True, fixed=False),
-        "randn_clip": Real(0, 1e6, lo_open=True, fixed=False),
-        "action_clip": Real(0, 1e6, lo_open=True, fixed=False),
-        "obs_clip": Real(0, 1e6, lo_open=True, optional=True),
-    }
+        hidden_dims: tuple[int, ...] | list[int] = option((256, 256, 256), HIDDEN_DIMS,
+                                                          "hidden layer sizes of the velocity MLP")
+        activation: Activation = option("elu", OneOf(Activation), "activation of the velocity MLP")
+        obs_normalization: bool = option(False, Flag(), "normalise the observation (rsl_rl's EmpiricalNormalization)")
+        distribution_cfg: dict | None = option(None, Check(mapping_or_none, "a mapping (ignored)", optional=True),
+                                               "accepted for config compatibility and ignored: the chain defines "
+                                               "the distribution")
+        num_flow_steps: int = option(4, NUM_FLOW_STEPS.with_fixed(None), "K, denoising steps (table (d): 4); fixed "
+                                     "on resume: K shapes the noisy chain it trains on")
+        time_embed_dim: int = option(16, Int(2, 1024, multiple_of=2), "channels of the time embedding (table (d): 16)")
+        output_scale: float = option(1.0, Real(0, 1e6, lo_open=True), "multiplies the velocity head")
+        noise_hidden_dims: tuple[int, ...] | list[int] = option((64, 64), HIDDEN_DIMS, "hidden layer sizes of the "
+                                                                "noise network (ReinFlow gym configs: [64, 64])")
+        noise_activation: Activation = option("tanh", OneOf(Activation), "activation of the noise network "
+                                              "(ReinFlow: Tanh)")
+        ft_denoising_steps: int = option(2, Int(0, 1000), "the last steps, whose noise is learned (table (d): 2)")
+        sigma_min: float = option(0.08, Real(0, 100, lo_open=True, fixed=False), "lower bound of sigma "
+                                  "(table (d): 0.08)")
+        sigma_max: float = option(0.16, Real(0, 100, lo_open=True, fixed=False), "upper bound of sigma "
+                                  "(table (d): 0.16)")
+        noise_schedule: NoiseSchedule = option("lin", OneOf(NoiseSchedule, fixed=False), "fixed sigma of the other "
+                                               "steps: lin 0.1 t (table (d) \"Linear\"), vp sqrt(0.2 t (1 - t)), "
+                                               "const sigma_min")
+        min_sampling_std: float = option(0.10, Real(0, 100, fixed=False), "floor of the std sampled with "
+                                         "(table (d): 0.10)")
+        denoised_clip: float = option(1.0, Real(0, 1e6, lo_open=True, fixed=False), "clamp of every step mean "
+                                      "(ReinFlow: 1)")
+        randn_clip: float = option(3.0, Real(0, 1e6, lo_open=True, fixed=False), "truncation of the noise, in stds "
+                                   "(ReinFlow: 3)")
+        action_clip: float = option(1.0, Real(0, 1e6, lo_open=True, fixed=False), "clamp of the final action "
+                                    "(table (d) action range [-1, 1])")
+        obs_clip: float | None = option(None, Real(0, 1e6, lo_open=True, optional=True),
+                                        "clamp the normalised observation to [-obs_clip, obs_clip]; null: no clamp")
 
-    def __init__(
-        self,
-        obs: TensorDict,
-        obs_groups: dict[str, list[str]],
-        obs_set: str,
-        output_dim: int,
-        hidden_dims: tuple[int, ...] | list[int] = (256, 256, 256),
-        activation: str = "elu",
-        obs_normalization: bool = False,
-        distribution_cfg: dict | None = None,
-        num_flow_steps: int = 4,
-        time_embed_dim: int = 16,
-        output_scale: float = 1.0,
-        noise_hidden_dims: tuple[int, ...] | list[int] = (64, 64),
-        noise_activation: str = "tanh",
-        ft_denoising_steps: int = 2,
-        sigma_min: float = 0.08,
-        sigma_max: float = 0.16,
-        noise_schedule: str = "lin",
-        min_sampling_std: float = 0.10,
-        denoised_clip: float = 1.0,
-        randn_clip: float = 3.0,
-        action_clip: float = 1.0,
-        obs_clip: float | None = None,
-    ) -> None:
+    def __init__(self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int,
+                 **options) -> None:  # fmt: skip
         super().__init__()
-        if distribution_cfg is not None:
+        o = constructor_options(type(self), options)
+        if o.distribution_cfg is not None:
             warnings.warn("ReinFlowActor ignores distribution_cfg: its noisy Euler chain defines the distribution.")
-        if ft_denoising_steps > num_flow_steps:
-            raise ValueError(f"ft_denoising_steps ({ft_denoising_steps}) must not exceed num_flow_steps "
-                             f"({num_flow_steps})")  # fmt: skip
-        if sigma_min > sigma_max:
-            raise ValueError(f"sigma_min ({sigma_min}) must not exceed sigma_max ({sigma_max})")
-        self._set_up_observations(obs, obs_groups, obs_set, output_dim, obs_normalization, obs_clip)
-        self.velocity = VelocityField(self.obs_dim, self.action_dim, hidden_dims, activation, time_embed_dim,
-                                      output_scale)  # fmt: skip
-        layers, width = [], time_embed_dim + self.obs_dim
-        for hidden in noise_hidden_dims:
-            layers += [nn.Linear(width, hidden), resolve_nn_activation(noise_activation)]
+        if o.ft_denoising_steps > o.num_flow_steps:
+            raise ValueError(f"ft_denoising_steps ({o.ft_denoising_steps}) must not exceed num_flow_steps "
+                             f"({o.num_flow_steps})")  # fmt: skip
+        if o.sigma_min > o.sigma_max:
+            raise ValueError(f"sigma_min ({o.sigma_min}) must not exceed sigma_max ({o.sigma_max})")
+        self._set_up_observations(obs, obs_groups, obs_set, output_dim, o.obs_normalization, o.obs_clip)
+        self.velocity = VelocityField(self.obs_dim, self.action_dim, o.hidden_dims, o.activation, o.time_embed_dim,
+                                      o.output_scale)  # fmt: skip
+        layers, width = [], o.time_embed_dim + self.obs_dim
+        for hidden in o.noise_hidden_dims:
+            layers += [nn.Linear(width, hidden), resolve_nn_activation(o.noise_activation)]
             width = hidden
         self.noise_net = nn.Sequential(*layers, nn.Linear(width, self.action_dim))
-        self.num_flow_steps = int(num_flow_steps)
-        self.ft_denoising_steps = int(ft_denoising_steps)
-        self.sigma_min = float(sigma_min)
-        self.register_buffer("sigma_max", torch.tensor(float(sigma_max)))  # decayed by the algorithm, checkpointed
-        self.noise_schedule = noise_schedule
-        self.min_sampling_std = float(min_sampling_std)
-        self.denoised_clip = float(denoised_clip)
-        self.randn_clip = float(randn_clip)
-        self.action_clip = float(action_clip)
+        self.num_flow_steps = int(o.num_flow_steps)
+        self.ft_denoising_steps = int(o.ft_denoising_steps)
+        self.sigma_min = float(o.sigma_min)
+        self.register_buffer("sigma_max", torch.tensor(float(o.sigma_max)))  # decayed by the algorithm, checkpointed
+        self.noise_schedule = o.noise_schedule
+        self.min_sampling_std = float(o.min_sampling_std)
+        self.denoised_clip = float(o.denoised_clip)
+        self.randn_clip = float(o.randn_clip)
+        self.action_clip = float(o.action_clip)
 
     # ------------------------------------------------------------------------------------------------ the chain
     def step_std(self, obs_norm: torch.Tensor, k: int, num_steps: int) -> torch.Tensor:

@@ -8,6 +8,7 @@ checked there. The rules of rsl_rl's PPO are in ``refpo_warp/algorithms/rsl_rl_r
 
 from __future__ import annotations
 
+from enum import Enum
 from typing import Any
 
 import rsl_rl.modules as rsl_modules
@@ -25,9 +26,27 @@ from refpo_warp.utils.option_rules import (
     register_rules,
     rules_for,
 )
+from refpo_warp.utils.options import choices
 
-ACTIVATIONS = ("elu", "selu", "relu", "crelu", "lrelu", "tanh", "sigmoid", "softplus", "gelu", "swish", "mish",
-               "identity")  # fmt: skip  (rsl_rl.utils.resolve_nn_activation)
+
+class Activation(str, Enum):
+    """The activations of ``rsl_rl.utils.resolve_nn_activation``, by the names a config writes."""
+
+    ELU = "elu"
+    SELU = "selu"
+    RELU = "relu"
+    CRELU = "crelu"
+    LRELU = "lrelu"
+    TANH = "tanh"
+    SIGMOID = "sigmoid"
+    SOFTPLUS = "softplus"
+    GELU = "gelu"
+    SWISH = "swish"
+    MISH = "mish"
+    IDENTITY = "identity"
+
+
+ACTIVATIONS = choices(Activation)
 HIDDEN_DIMS = ListOf(Int(1, 65_536), min_len=1, max_len=64)
 
 
@@ -54,7 +73,7 @@ def check_distribution_cfg(key: str, value: Any) -> dict:
 
 register_rules(MLPModel, {
     "hidden_dims": HIDDEN_DIMS,
-    "activation": OneOf(ACTIVATIONS),
+    "activation": OneOf(Activation),
     "obs_normalization": Flag(),
     "distribution_cfg": Check(check_distribution_cfg, "null or {class_name: <rsl_rl Distribution>, ...}",
                               optional=True),

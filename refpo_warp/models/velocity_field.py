@@ -19,13 +19,27 @@ CFM samples and N Euler steps per action reuse the observation projection.
 from __future__ import annotations
 
 import math
+from enum import Enum
 
 import torch
 from rsl_rl.utils import resolve_nn_activation
 from torch import nn
 
-PARAMETERIZATIONS = ("velocity", "data")
-TIME_CONDITIONINGS = ("concat", "adaln")
+from refpo_warp.utils.options import choices
+
+
+class Parameterization(str, Enum):
+    VELOCITY = "velocity"  # the head predicts v
+    DATA = "data"  # the head predicts the clean action a_hat (Puffer-PHC)
+
+
+class TimeConditioning(str, Enum):
+    CONCAT = "concat"  # emb(tau) concatenated to the first layer's input (Playground)
+    ADALN = "adaln"  # adaptive LayerNorm at the last hidden layer (Puffer-PHC)
+
+
+PARAMETERIZATIONS = choices(Parameterization)
+TIME_CONDITIONINGS = choices(TimeConditioning)
 DATA_GUARD = 1e-2
 
 
@@ -99,8 +113,8 @@ class VelocityField(nn.Module):
         self.parameterization = parameterization
         self.time_conditioning = time_conditioning
         concat = time_conditioning == "concat"
-        self.embedding = SinusoidalEmbedding(time_embed_dim) if concat else TimestepEmbedding(time_embed_dim,
-                                                                                              hidden_dims[-1])  # fmt: skip
+        self.embedding = (SinusoidalEmbedding(time_embed_dim) if concat
+                          else TimestepEmbedding(time_embed_dim, hidden_dims[-1]))  # fmt: skip
         self.obs_proj = nn.Linear(obs_dim, hidden_dims[0])
         self.sample_proj = nn.Linear(action_dim + (time_embed_dim if concat else 0), hidden_dims[0], bias=False)
         layers: list[nn.Module] = []

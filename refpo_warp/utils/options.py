@@ -10,9 +10,11 @@ default, its rule (``refpo_warp.utils.option_rules``) and a one-line doc::
 
 The config resolver checks a value against the field's rule, ``--explain`` shows the field's default and doc,
 ``docs/`` prints its table (``refpo_warp/config/option_docs.py``) and the constructor receives it
-(``OnPolicyAlgorithm``: every option becomes an attribute of the same name). A class's options are the fields of the
-``Options`` of every class in its MRO, a subclass's field replacing its base's; a field without a rule of its own
-(``option(0.05, doc=...)``: another default for a base's option, e.g. rsl_rl's ``clip_param``) keeps the base's rule.
+(``OnPolicyAlgorithm``: every option becomes an attribute of the same name; a model such as ``FlowActor`` takes
+``**options`` after rsl_rl's positional arguments and reads them through ``constructor_options``). A class's options
+are the fields of the ``Options`` of every class in its MRO, a subclass's field replacing its base's; a field without a
+rule of its own (``option(0.05, doc=...)``: another default for a base's option, e.g. rsl_rl's ``clip_param``) keeps
+the base's rule.
 A fixed set of choices is an ``enum.Enum`` of strings: ``OneOf(TauSampling)`` accepts its values, which stay plain
 strings in a config.
 """
@@ -23,6 +25,7 @@ import dataclasses
 import inspect
 from dataclasses import dataclass
 from enum import Enum
+from types import SimpleNamespace
 from typing import Any
 
 from refpo_warp.utils.option_rules import OPTIONS, Rule, rules_for
@@ -67,6 +70,16 @@ def option_values(cls: type, given: dict[str, Any]) -> tuple[dict[str, Any], dic
     declared = declared_options(cls)
     values = {name: given.get(name, found.default) for name, found in declared.items()}
     return values, {k: v for k, v in given.items() if k not in declared}
+
+
+def constructor_options(cls: type, given: dict[str, Any]) -> SimpleNamespace:
+    """The options a constructor taking ``**options`` receives (a model's: rsl_rl passes them by keyword): every
+    declared option of ``cls``, given or its default, as attributes; an argument ``cls`` does not declare is a
+    ``TypeError``, as for a constructor with these parameters."""
+    values, unknown = option_values(cls, given)
+    if unknown:
+        raise TypeError(f"{cls.__name__}.__init__() got an unexpected keyword argument '{next(iter(unknown))}'")
+    return SimpleNamespace(**values)
 
 
 def choices(enum: type[Enum]) -> tuple[str, ...]:

@@ -1,9 +1,10 @@
 """The option tables of the docs are made from the classes' Options (refpo_warp/config/option_docs.py): a page states
-the defaults, rules and meanings the code has, and every algorithm that declares options has a table."""
+the defaults, rules and meanings the code has, and every algorithm and model that declares options has a table."""
 
 import inspect
 
 import refpo_warp.algorithms as algorithms
+import refpo_warp.models as models
 from refpo_warp.config.classes import resolve_class
 from refpo_warp.config.option_docs import BLOCK, main, with_tables
 from refpo_warp.utils.option_rules import OPTIONS
@@ -18,12 +19,25 @@ def test_every_table_is_the_one_its_class_makes():
     assert not stale, f"rewrite them: python -m refpo_warp.config.option_docs {' '.join(stale)}"
 
 
+def _tabled() -> set[type]:
+    return {resolve_class(m.group("name")) for page in DOCS.rglob("*.md")
+            for m in BLOCK.finditer(page.read_text(encoding="utf-8"))}  # fmt: skip
+
+
+def _declaring(package) -> set[type]:
+    declaring = {cls for cls in vars(package).values() if inspect.isclass(cls) and OPTIONS in cls.__dict__}
+    return declaring | {base for cls in declaring for base in cls.__mro__ if OPTIONS in base.__dict__}
+
+
 def test_every_algorithm_with_options_has_a_table():
-    tabled = {resolve_class(m.group("name")) for page in DOCS.rglob("*.md")
-              for m in BLOCK.finditer(page.read_text(encoding="utf-8"))}  # fmt: skip
-    declaring = {cls for cls in vars(algorithms).values() if inspect.isclass(cls) and OPTIONS in cls.__dict__}
-    declaring |= {base for cls in declaring for base in cls.__mro__ if OPTIONS in base.__dict__}
-    assert len(declaring) >= 5 and not declaring - tabled, f"without a table: {declaring - tabled}"
+    declaring = _declaring(algorithms)
+    assert len(declaring) >= 5 and not declaring - _tabled(), f"without a table: {declaring - _tabled()}"
+
+
+def test_every_model_with_options_has_a_table():
+    declaring = _declaring(models)
+    assert {models.FlowActor, models.ReinFlowActor, models.PhcMLPModel} <= declaring
+    assert not declaring - _tabled(), f"without a table: {declaring - _tabled()}"
 
 
 def test_a_changed_default_is_written_into_the_page(tmp_path, monkeypatch):
@@ -37,3 +51,12 @@ def test_a_changed_default_is_written_into_the_page(tmp_path, monkeypatch):
     assert "| old |" not in written and written.startswith("text\n") and written.endswith("more\n")
     monkeypatch.setattr(ReFPO.Options.__dataclass_fields__["reflow_coef"], "default", 0.5)
     assert "| `reflow_coef` | 0.5 |" in with_tables(written)
+
+
+def test_a_changed_actor_default_is_written_into_the_page(monkeypatch):
+    from refpo_warp.models import FlowActor
+
+    page = (DOCS / "algorithms.md").read_text(encoding="utf-8")
+    assert "| `num_flow_steps` | 10 | an integer in [1, 1000] | N, Euler steps" in page
+    monkeypatch.setattr(FlowActor.Options.__dataclass_fields__["num_flow_steps"], "default", 7)
+    assert "| `num_flow_steps` | 7 |" in with_tables(page)
