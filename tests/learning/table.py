@@ -90,7 +90,7 @@ def per_seed_rows(check: LearningCheck, records: list[dict]) -> list[str]:
         passed = all(b.holds(stats) for b in check.bounds)
         values = ", ".join(f"{k} {fmt(v)}" for k, v in stats.items())
         rows.append(f"| {check.name} | {'null control' if r['null'] else 'learning'} | {r['threads']} | {r['seed']} | "
-                    f"{values} | {'pass' if passed else 'fail'} | {r['wall_s']:.0f} |")  # fmt: skip
+                    f"{values} | {'pass' if passed else 'fail'} | {r['cpu']} | {r['wall_s']:.0f} |")  # fmt: skip
     return rows
 
 
@@ -102,10 +102,10 @@ def table_markdown(records: list[dict]) -> str:
         lines += check_rows(check, records)
     lines += ["", "Per run (statistics as the check reads them; wall seconds of the run, the initial evaluation "
               "included, on a shared 2-core machine):", "", "| check | runs | torch threads | seed | statistics | "
-              "bound | wall s |", "|---|---|---|---|---|---|---|"]  # fmt: skip
+              "bound | CPU | wall s |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for check in CHECKS.values():
         lines += per_seed_rows(check, records)
-    lines += ["", f"CPU of these runs: {', '.join(cpus)}.", "", END]
+    lines += ["", f"CPUs of these runs: {'; '.join(cpus)} (2 cores each).", "", END]
     return "\n".join(lines)
 
 
