@@ -66,9 +66,13 @@ def sweep_rows(relative: str, labels: list[str] | None) -> list[str]:
             row = next((r for r in rows if r["task"] == task and r["label"] == label), None)
             if row is None or row["runs_finished"] == "0":
                 continue
-            multi = cell(number(row["return_multi_mean"]), number(row["return_multi_std"]))
-            one = row.get("return_1_mean") and cell(number(row["return_1_mean"]), number(row["return_1_std"]))
-            cells.append(f"{row['method']} {multi}" + (f" / {one}" if one else ""))
+            single = row["runs_finished"] == "1"  # no spread to show
+            multi = cell(number(row["return_multi_mean"]), None if single else number(row["return_multi_std"]))
+            one = row.get("return_1_mean") and cell(number(row["return_1_mean"]),
+                                                    None if single else number(row["return_1_std"]))
+            partial = row["runs_finished"] != row["runs_total"]
+            cells.append(f"{row['method']} {multi}" + (f" / {one}" if one else "")
+                         + (f" ({row['runs_finished']} of {row['runs_total']} seeds)" if partial else ""))
         if cells:
             out.append(f"| {title}, 10-step / 1-step return, seeds 1-3 (`{path.relative_to(README.parent)}`) | "
                        + "; ".join(cells) + " |")  # fmt: skip

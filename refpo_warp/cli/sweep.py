@@ -18,7 +18,8 @@ resolved before anything starts. Finished runs are skipped; a failed run is repo
 from scratch.
 
 Named sweeps (configs/sweep/, and sweep/ of your config_dir=DIR or REFPO_CONFIG_PATH folders): cpu_dmc (the CPU-scale
-DMC reproduction), paper_dmc (the paper's DMC grid, CUDA), cpu_humanoid, cpu_reflow_pairs.
+DMC reproduction), paper_dmc (the paper's DMC grid, CUDA), cpu_humanoid, cpu_reflow_pairs, cpu_fpo_pp (FPO++),
+cpu_onestep (the one-step search).
 
 Examples:
     refpo sweep cpu_dmc                                  # then: refpo report runs/sweeps/cpu_dmc
