@@ -24,10 +24,9 @@ import torch
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.models.rsl_rl_rules import HIDDEN_DIMS, Activation
-from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyProtocol
+from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyOptions, SampledPolicyProtocol
 from refpo_warp.models.velocity_field import DATA_GUARD, Parameterization, TimeConditioning, VelocityField
-from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, Real, checks_options, mapping_or_none
+from refpo_warp.utils.option_rules import Int, OneOf, Real, checks_options
 from refpo_warp.utils.options import choices, constructor_options, option
 
 
@@ -68,16 +67,9 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
     ``obs_groups``, ``obs_set`` and ``output_dim``, then the options below by keyword."""
 
     @dataclass(frozen=True)
-    class Options:
+    class Options(SampledPolicyOptions):
         """The flow actor's options (``docs/algorithms.md``, "Flow actor")."""
 
-        hidden_dims: tuple[int, ...] | list[int] = option((256, 256, 256), HIDDEN_DIMS,
-                                                          "hidden layer sizes of the velocity MLP")
-        activation: Activation = option("elu", OneOf(Activation), "activation of the velocity MLP")
-        obs_normalization: bool = option(False, Flag(), "normalise the observation (rsl_rl's EmpiricalNormalization)")
-        distribution_cfg: dict | None = option(None, Check(mapping_or_none, "a mapping (ignored)", optional=True),
-                                               "accepted for config compatibility and ignored: a flow policy has "
-                                               "no parametric distribution")
         num_flow_steps: int = option(10, NUM_FLOW_STEPS, "N, Euler steps that sample an action; may change at any "
                                                          "time (train with 10, deploy with 1) and on resume")
         time_embed_dim: int = option(8, Int(2, 1024, multiple_of=2), "channels of the time embedding: 2^k sinusoid "

@@ -35,9 +35,9 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.models.rsl_rl_rules import HIDDEN_DIMS, Activation
-from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyProtocol
+from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyOptions, SampledPolicyProtocol
 from refpo_warp.models.velocity_field import VelocityField
-from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, Real, checks_options, mapping_or_none
+from refpo_warp.utils.option_rules import Int, OneOf, Real, checks_options
 from refpo_warp.utils.options import choices, constructor_options, option
 
 
@@ -71,16 +71,9 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
     ``obs``, ``obs_groups``, ``obs_set`` and ``output_dim``, then the options below by keyword."""
 
     @dataclass(frozen=True)
-    class Options:
+    class Options(SampledPolicyOptions):
         """ReinFlow's actor options; "table (d)" is the ReFPO paper's ReinFlow table."""
 
-        hidden_dims: tuple[int, ...] | list[int] = option((256, 256, 256), HIDDEN_DIMS,
-                                                          "hidden layer sizes of the velocity MLP")
-        activation: Activation = option("elu", OneOf(Activation), "activation of the velocity MLP")
-        obs_normalization: bool = option(False, Flag(), "normalise the observation (rsl_rl's EmpiricalNormalization)")
-        distribution_cfg: dict | None = option(None, Check(mapping_or_none, "a mapping (ignored)", optional=True),
-                                               "accepted for config compatibility and ignored: the chain defines "
-                                               "the distribution")
         num_flow_steps: int = option(4, NUM_FLOW_STEPS.with_fixed(None), "K, denoising steps (table (d): 4); fixed "
                                      "on resume: K shapes the noisy chain it trains on")
         time_embed_dim: int = option(16, Int(2, 1024, multiple_of=2), "channels of the time embedding (table (d): 16)")

@@ -8,17 +8,34 @@ statistics; a sampled policy reports those of the last batch it sampled (``_last
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 from rsl_rl.modules import EmpiricalNormalization
 from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
+from refpo_warp.models.rsl_rl_rules import HIDDEN_DIMS, Activation
 from refpo_warp.models.stateless import Stateless
 from refpo_warp.utils.errors import ConfigError
-from refpo_warp.utils.option_rules import Check, Int, OneOf
+from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, mapping_or_none
+from refpo_warp.utils.options import option
 
 NUM_FLOW_STEPS = Int(1, 1000, fixed=False)  # Euler / chain steps N of a sampler; any N samples the same policy
+
+
+@dataclass(frozen=True)
+class SampledPolicyOptions:
+    """The options every sampled policy's velocity MLP shares (the first fields of each actor's ``Options``)."""
+
+    hidden_dims: tuple[int, ...] | list[int] = option((256, 256, 256), HIDDEN_DIMS,
+                                                      "hidden layer sizes of the velocity MLP")
+    activation: Activation = option("elu", OneOf(Activation), "activation of the velocity MLP")
+    obs_normalization: bool = option(False, Flag(), "normalise the observation (rsl_rl's EmpiricalNormalization)")
+    distribution_cfg: dict | None = option(None, Check(mapping_or_none, "a mapping (ignored)", optional=True),
+                                           "accepted for config compatibility and ignored: the sampler, not a "
+                                           "parametric distribution, gives the actions")
 INITIAL_NOISE = ("random", "zero")
 INITIAL_NOISE_RULE = OneOf(INITIAL_NOISE)
 
