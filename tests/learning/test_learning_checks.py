@@ -34,5 +34,6 @@ def test_learning_check(name, tmp_run_dir, null_control):
         return
     assert passed, f"{name}: {shown} against {', '.join(map(str, check.bounds))}"
     assert not check.properties(record), check.properties(record)
-    nonfinite = [s for s, summary in record["final"].items() if summary.get("nonfinite_resets_mean", 0) > 0]
-    assert not nonfinite, f"non-finite env states reset during evaluation: {nonfinite}"
+    if check.runner == "refpo_warp":  # mjlab's evaluation reports one return rate, not per-setting summaries
+        nonfinite = [s for s, summary in record["final"].items() if summary.get("nonfinite_resets_mean", 0) > 0]
+        assert not nonfinite, f"non-finite env states reset during evaluation: {nonfinite}"
