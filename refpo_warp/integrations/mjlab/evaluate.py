@@ -1,7 +1,7 @@
 """A checkpoint's deterministic return rate on a registered mjlab task, for any of its algorithms (PPO or ReFPO):
 
     python -m refpo_warp.integrations.mjlab.evaluate <task id> <model_N.pt | run dir> [num_envs=64] [num_steps=200]
-        [seed=0] [initial_noise=zero|random|random,zero]
+        [seed=0] [initial_noise=zero|random|random,zero] [flow_steps=N]
 
 Given a run directory (``logs/rsl_rl/<experiment>/<run>``), every checkpoint of it is evaluated and its TensorBoard
 curves of the training episode length and return are summarised (first and last iteration).
@@ -9,9 +9,9 @@ curves of the training episode length and return are summarised (first and last 
 Built as mjlab's ``play`` builds it (the task's play env config, its runner class, the actor's weights), the policy
 acts for ``num_steps`` steps from reset: deterministically (a flow from zero initial noise, what ``play`` and the ONNX
 export do; a Gaussian's mean), or, for a flow policy, from random initial noise (``initial_noise=random``; both:
-``random,zero``, one rate each, the same protocols as ``eval.initial_noise``); the result is the mean reward per second
-of simulated
-time (mjlab's rewards are per step times the step's dt). Why not the episode length: a task whose only
+``random,zero``, one rate each, the same protocols as ``eval.initial_noise``), with ``flow_steps`` Euler steps (0, the
+default: the actor's own ``num_flow_steps``; 1 is the one-step deployment); the result is the mean reward per second
+of simulated time (mjlab's rewards are per step times the step's dt). Why not the episode length: a task whose only
 termination is the time-out (the cartpoles) has episodes of one length whatever the policy does.
 """
 
@@ -32,14 +32,15 @@ from refpo_warp.models.sampled_policy import INITIAL_NOISE, noise_protocols
 from refpo_warp.utils.console import quiet_stdout
 from refpo_warp.utils.errors import ConfigError
 
-OPTIONS = {"num_envs": 64, "num_steps": 200, "seed": 0}
+OPTIONS = {"num_envs": 64, "num_steps": 200, "seed": 0, "flow_steps": 0}  # flow_steps 0: the actor's own
 PROTOCOLS = ["zero"]  # the deterministic policy mjlab's play runs
 
 
 def evaluate(task_id: str, checkpoint: str, num_envs: int = 64, num_steps: int = 200, seed: int = 0,
-             device: str = "cpu", initial_noise: str = "zero") -> dict[str, float]:  # fmt: skip
+             device: str = "cpu", initial_noise: str = "zero", flow_steps: int = 0) -> dict[str, float]:  # fmt: skip
     """``{"reward_rate": mean reward per simulated second, "num_envs", "num_steps"}`` of ``checkpoint``'s policy
-    (a flow's initial noise ``zero`` or ``random``; a Gaussian acts by its mean either way)."""
+    (a flow's initial noise ``zero`` or ``random`` and its Euler steps, ``flow_steps`` or 0 for its own; a Gaussian
+    acts by its mean either way)."""
     env_cfg = load_env_cfg(task_id, play=True)
     env_cfg.scene.num_envs = num_envs
     env_cfg.seed = seed
@@ -50,8 +51,9 @@ def evaluate(task_id: str, checkpoint: str, num_envs: int = 64, num_steps: int =
             runner = (load_runner_cls(task_id) or MjlabOnPolicyRunner)(env, asdict(agent_cfg), device=device)
         runner.load(checkpoint, load_cfg={"actor": True}, strict=True, map_location=device)
         policy = runner.get_inference_policy(device=device)
-        if initial_noise != "zero" and hasattr(policy, "sample"):
-            actor, policy = policy, lambda obs: actor.sample(obs, initial_noise=initial_noise)
+        if (initial_noise != "zero" or flow_steps) and hasattr(policy, "sample"):
+            actor = policy
+            policy = lambda obs: actor.sample(obs, num_steps=flow_steps or None, initial_noise=initial_noise)  # noqa: E731
         obs, total = env.get_observations(), 0.0
         with torch.inference_mode():
             for _ in range(num_steps):

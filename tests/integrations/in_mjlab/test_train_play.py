@@ -91,7 +91,7 @@ def test_play_records_a_video_of_the_checkpoint(trained):
 @pytest.mark.rsl_rl
 def test_evaluate_reports_both_initial_noise_protocols(trained):
     """The checkpoint's return rate under zero (play's, the default) and random initial noise, as eval.initial_noise
-    names them; a bad value is one message and exit code 2."""
+    names them, and at a given number of flow steps; a bad value is one message and exit code 2."""
     import json
 
     _, run_dir = trained
@@ -103,6 +103,9 @@ def test_evaluate_reports_both_initial_noise_protocols(trained):
     zero = json.loads(subprocess.run(base, capture_output=True, text=True, timeout=600).stdout.strip().splitlines()[-1])
     assert set(rates) == {"reward_rate/random", "reward_rate/zero"} and rates["reward_rate/zero"] == zero["reward_rate"]
     assert rates["reward_rate/random"] != rates["reward_rate/zero"]  # random x_0 is not the deterministic policy
+    steps = {n: json.loads(subprocess.run([*base, f"flow_steps={n}"], capture_output=True, text=True, timeout=600)
+                           .stdout.strip().splitlines()[-1])["reward_rate"] for n in (10, 1)}  # fmt: skip
+    assert steps[10] == zero["reward_rate"] != steps[1]  # the actor's own 10 steps; one Euler step acts otherwise
     bad = subprocess.run([*base, "initial_noise=none"], capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and "initial_noise='none' is invalid" in bad.stderr and "Traceback" not in bad.stderr
     bad = subprocess.run([*base, "num_envs=abc"], capture_output=True, text=True, timeout=600)
