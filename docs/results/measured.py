@@ -21,7 +21,7 @@ BEGIN, END = "<!-- measured: begin (python docs/results/measured.py) -->", "<!--
 SWEEPS = [  # (per-task CSV, methods in the order shown)
     ("cpu_dmc/per_task.csv", ["ppo", "fpo", "refpo"]),
     ("fpo_pp/report/per_task.csv", ["fpo_pp", "refpo_pp"]),
-    ("one_step/search/per_task.csv", None),
+    ("one_step/search/report/per_task.csv", ["onestep_c03"]),
 ]
 TASKS = {"dmc_cartpole_balance": "cartpole_balance (450k env steps)", "dmc_point_mass": "point_mass (1M)",
          "dmc_reacher_easy": "reacher_easy (1M)"}  # fmt: skip
