@@ -55,8 +55,8 @@ class LearningCheck:
     describe: str = ""
     properties: Callable[[dict], list[str]] = field(default=lambda record: [])  # failures of non-learning asserts
     runner: str = "refpo_warp"  # or "mjlab": mjlab's own train command, in an mjlab environment
-    minutes: float = 3.0  # its wall time in CI (the slow marker's, which orders the run): the median of its records'
-    # one-thread learning runs
+    minutes: float = 3.0  # its wall time in CI (the slow marker's, which orders the run), from a fresh-clone run's
+    # pytest --durations
 
     def verdict(self, record: dict) -> tuple[bool, dict[str, float]]:
         stats = self.statistics(record)
@@ -136,48 +136,48 @@ CHECKS: dict[str, LearningCheck] = {
             "gridworld_refpo", ("task=gridworld", "algo=refpo", "eval.flow_steps=[1, 10]"),
             length_ratios("N=1", "N=10"),
             (Bound("length_ratio_N=1", "<=", 0.6), Bound("length_ratio_N=10", "<=", 0.6)),
-            minutes=15,
+            minutes=4.5,
             describe="ReFPO on GridWorld (the paper's 260k env steps): episode length at N = 1 and 10 over the "
                      "initial policy's", properties=gridworld_properties),
         LearningCheck(
             "cartpole_refpo", (*CARTPOLE, "algo=refpo"), return_gains("N=10", "N=1"),
             (Bound("gain_N=10", ">=", 1.4), Bound("gain_N=1", ">=", 1.4)),
-            minutes=9,
+            minutes=4.9,
             describe="ReFPO on dmc_cartpole_balance (450k env steps): N = 10 and N = 1 return over the initial "
                      "policy's"),
         LearningCheck(
             "cartpole_ppo", (*CARTPOLE, "algo=ppo", "eval.interval=0"), return_gains("mean_action"),
             (Bound("gain_mean_action", ">=", 1.5),),
-            minutes=4.7,
+            minutes=2.8,
             describe="Gaussian PPO on dmc_cartpole_balance (450k env steps): mean-action return over the initial "
                      "policy's"),
         LearningCheck(
             "cartpole_refpo_aw", (*CARTPOLE, "algo=refpo_aw"), return_gains("N=10"),
             (Bound("gain_N=10", ">=", 1.5),),
-            minutes=5.6,
+            minutes=3.9,
             describe="advantage-weighted ReFPO on dmc_cartpole_balance (450k env steps): N = 10 return over the "
                      "initial policy's"),
         LearningCheck(
             "cartpole_fpo_pp", (*CARTPOLE, "algo=fpo_pp"), mean_gain("N=10", "N=1", "N=10/zero", "N=1/zero"),
             (Bound("mean_gain", ">=", 1.1),),
-            minutes=5.7,
+            minutes=4.3,
             describe="FPO++ on dmc_cartpole_balance (450k env steps; the EMA actor): the mean of its N = 10 and N = 1 "
                      "returns' gains over the initial policy's, from random and from zero initial noise"),
         LearningCheck(
             "cartpole_flow_grpo", (*CARTPOLE, "algo=flow_grpo"), return_gains("N=10"),
             (Bound("gain_N=10", ">=", 1.2),),
-            minutes=5,
+            minutes=4.0,
             describe="Flow-GRPO on dmc_cartpole_balance (1M env steps): N = 10 return over the initial policy's"),
         LearningCheck(
             "gridworld_reinflow", ("task=gridworld", "algo=reinflow"), length_ratios("N=4", "N=1"),
             (Bound("length_ratio_N=4", "<=", 0.6),),
-            minutes=1.3,
+            minutes=2.3,
             describe="ReinFlow on GridWorld (the paper's 260k env steps): deterministic K = 4 chain's episode length "
                      "over the initial policy's"),
         LearningCheck(
             "humanoid_refpo", ("task=humanoid_all_residual", "algo=refpo", "max_iterations=40", "eval.at_end=false"),
             length_trend, (Bound("length_trend_t", ">=", 3.0), Bound("length_rise", ">=", 0.05)), initial_eval=False,
-            minutes=4.2,
+            minutes=6.3,
             describe="ReFPO on humanoid_all_residual (40 iterations): trend of the training episode length"),
         LearningCheck(
             "mjlab_cartpole_refpo", ("Mjlab-Cartpole-Balance-ReFPO", "--env.scene.num-envs", "64",
