@@ -1,11 +1,12 @@
 """Reliability: what a hostile but fair user types or hands over never crashes a tool, loses a run or runs code.
 
-Every case runs a tool as a subprocess, as a user would, and checks: the exit code (docs/cli.md), a message naming
-the culprit, no traceback, files unchanged (hashes) where a run is refused, and that a malicious file's payload
-did not run (its marker file is absent). The kill -9 cases live in test_reliability_kill.py.
+Every case runs a command as a user would, through the entry point of the ``refpo`` command and ``tools/*.py``
+(``call_tool``: in this process, its output and exit code captured), and checks: the exit code (docs/cli.md), a
+message naming the culprit, no traceback, files unchanged (hashes) where a run is refused, and that a malicious file's
+payload did not run (its marker file is absent). The kill -9 cases, which need a process of their own, live in
+test_reliability_kill.py.
 
-CI runs every case (about 2 minutes of 2 cores with -n 2); the quick suite (-m "not slow") runs one or two of each
-kind, listed in QUICK.
+CI runs every case; the quick suite (-m "not slow") runs one or two of each kind, listed in QUICK.
 """
 
 from __future__ import annotations
@@ -17,9 +18,8 @@ import pytest
 import torch
 from reliability_helpers import (
     assert_refused,
+    call_tool,
     copy_run,
-    run_python,
-    run_tool,
     tiny,
     tree_hash,
     truncate,
@@ -45,7 +45,7 @@ def cases(rows, ids=None):
 def base_run(tmp_path_factory):
     """A finished tiny run (model_0..2, progress, config) that cases copy and then damage or misuse."""
     run = tmp_path_factory.mktemp("base") / "run"
-    proc = run_tool("train", *tiny("max_iterations=3", "eval.at_end=false", f"run_dir={run}"))
+    proc = call_tool("train", *tiny("max_iterations=3", "eval.at_end=false", f"run_dir={run}"))
     assert proc.returncode == 0, proc.stderr[-3000:]
     return run
 
@@ -88,7 +88,7 @@ BAD_OPTIONS = [
 @pytest.mark.parametrize("arg,culprits", cases(BAD_OPTIONS))
 def test_bad_option_is_refused_before_anything_is_created(arg, culprits, tmp_path):
     run_dir = tmp_path / "never"
-    proc = run_tool("train", *tiny("max_iterations=2", f"run_dir={run_dir}", arg))
+    proc = call_tool("train", *tiny("max_iterations=2", f"run_dir={run_dir}", arg))
     assert_refused(proc, USAGE, *culprits)
     assert not run_dir.exists()
 
@@ -98,7 +98,7 @@ def test_bad_option_is_refused_before_anything_is_created(arg, culprits, tmp_pat
                                                ["same-key", "alias-key"]))  # fmt: skip
 @SLOW
 def test_key_given_twice_is_refused(args, culprit, tmp_path):
-    proc = run_tool("train", *tiny(f"run_dir={tmp_path / 'never'}"), *args)
+    proc = call_tool("train", *tiny(f"run_dir={tmp_path / 'never'}"), *args)
     assert_refused(proc, USAGE, culprit)
     assert not (tmp_path / "never").exists()
 
@@ -108,7 +108,7 @@ def test_run_dir_that_is_a_file_is_refused_and_kept(tmp_path):
     afile = tmp_path / "notes.txt"
     afile.write_text("my notes")
     for run_dir in (afile, afile / "sub"):
-        proc = run_tool("train", *tiny("max_iterations=2", f"run_dir={run_dir}"))
+        proc = call_tool("train", *tiny("max_iterations=2", f"run_dir={run_dir}"))
         assert_refused(proc, USAGE, str(afile))
     assert afile.read_text() == "my notes"
 
@@ -120,7 +120,7 @@ def test_new_run_into_a_foreign_directory_is_refused(tmp_path):
     (folder / "config.yaml").write_text("my own config: keep me\n")
     (folder / "eval.json").write_text("{}")
     before = tree_hash(folder)
-    assert_refused(run_tool("train", *tiny("max_iterations=2", f"run_dir={folder}")), USAGE, str(folder),
+    assert_refused(call_tool("train", *tiny("max_iterations=2", f"run_dir={folder}")), USAGE, str(folder),
                    "not a refpo_warp run directory")  # fmt: skip
     assert tree_hash(folder) == before
 
@@ -138,7 +138,7 @@ RESUME_CHANGES = [
 @pytest.mark.parametrize("arg,culprit", cases(RESUME_CHANGES))
 def test_resume_that_changes_the_run_is_refused_and_writes_nothing(run, arg, culprit):
     before = tree_hash(run)
-    assert_refused(run_tool("train", f"run_dir={run}", "resume=true", arg), USAGE, culprit)
+    assert_refused(call_tool("train", f"run_dir={run}", "resume=true", arg), USAGE, culprit)
     assert tree_hash(run) == before
 
 
@@ -147,20 +147,20 @@ def test_resume_without_checkpoint_is_an_error_not_a_fresh_start(run):
     for ckpt in run.glob("model_*.pt"):
         ckpt.unlink()
     before = tree_hash(run)
-    assert_refused(run_tool("train", f"run_dir={run}", "resume=true"), USAGE, "holds no checkpoint")
+    assert_refused(call_tool("train", f"run_dir={run}", "resume=true"), USAGE, "holds no checkpoint")
     assert tree_hash(run) == before
 
 
 @SLOW
 def test_resume_of_missing_run_dir_is_refused(tmp_path):
-    assert_refused(run_tool("train", f"run_dir={tmp_path / 'gone'}", "resume=true"), USAGE, "no such run directory")
+    assert_refused(call_tool("train", f"run_dir={tmp_path / 'gone'}", "resume=true"), USAGE, "no such run directory")
     assert not (tmp_path / "gone").exists()
 
 
 @SLOW
 def test_new_run_into_a_run_dir_with_checkpoints_is_refused(run):
     before = tree_hash(run)
-    assert_refused(run_tool("train", *tiny(f"run_dir={run}")), USAGE, "resume=true", "model_2.pt")
+    assert_refused(call_tool("train", *tiny(f"run_dir={run}")), USAGE, "resume=true", "model_2.pt")
     assert tree_hash(run) == before
 
 
@@ -174,7 +174,7 @@ def test_damaged_saved_config_is_named(run, content, culprit):
     config = run / "config.yaml"
     config.write_bytes(content if content is not None else config.read_bytes().replace(b"num_envs: 4", b"num_envs: 0"))
     before = tree_hash(run)
-    assert_refused(run_tool("train", f"run_dir={run}", "resume=true"), BAD_FILE, "config.yaml", culprit)
+    assert_refused(call_tool("train", f"run_dir={run}", "resume=true"), BAD_FILE, "config.yaml", culprit)
     assert tree_hash(run) == before
 
 
@@ -185,7 +185,7 @@ def test_saved_config_cannot_select_an_arbitrary_callable(run, tmp_path):
     text = config.read_text().replace("class_name: rsl_rl.models:MLPModel", "class_name: os:system", 1)
     config.write_text(text.replace("\ncritic:\n", f"\ncritic:\n  command: touch {marker}\n", 1))
     before = tree_hash(run)
-    assert_refused(run_tool("train", f"run_dir={run}", "resume=true"), BAD_FILE, "config.yaml", "os:system")
+    assert_refused(call_tool("train", f"run_dir={run}", "resume=true"), BAD_FILE, "config.yaml", "os:system")
     assert not marker.exists() and tree_hash(run) == before
 
 
@@ -198,7 +198,7 @@ def test_run_dir_in_use_is_refused(run):
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)  # as a running training process holds it
         before = tree_hash(run)
-        assert_refused(run_tool("train", f"run_dir={run}", "resume=true", "max_iterations=5"), USAGE, "in use")
+        assert_refused(call_tool("train", f"run_dir={run}", "resume=true", "max_iterations=5"), USAGE, "in use")
         assert tree_hash(run) == before
     finally:
         os.close(fd)
@@ -206,7 +206,7 @@ def test_run_dir_in_use_is_refused(run):
 
 @SLOW
 def test_resume_continues_progress_and_honours_learning_rate(run):
-    proc = run_tool("train", f"run_dir={run}", "resume=true", "max_iterations=5", "algorithm.learning_rate=1e-4",
+    proc = call_tool("train", f"run_dir={run}", "resume=true", "max_iterations=5", "algorithm.learning_rate=1e-4",
                     "eval.at_end=false")  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
     rows = [json.loads(line) for line in (run / "progress.jsonl").read_text().splitlines()]
@@ -247,7 +247,7 @@ def test_bad_checkpoint_given_to_eval_is_named(run, kind):
     make, culprit = CORRUPT[kind]
     make(run, bad)
     before = tree_hash(run)
-    assert_refused(run_tool("eval", f"run_dir={run}", f"checkpoint={bad}"), BAD_FILE, str(bad), culprit)
+    assert_refused(call_tool("eval", f"run_dir={run}", f"checkpoint={bad}"), BAD_FILE, str(bad), culprit)
     assert tree_hash(run) == before
 
 
@@ -256,7 +256,7 @@ def test_malicious_checkpoint_is_refused_without_running_it(run, tmp_path, kind)
     marker = tmp_path / "PWNED"
     evil = write_malicious(run / "evil.pt", marker, kind)
     before = tree_hash(run)
-    proc = run_tool("eval", f"run_dir={run}", f"checkpoint={evil}")
+    proc = call_tool("eval", f"run_dir={run}", f"checkpoint={evil}")
     assert_refused(proc, BAD_FILE, str(evil))
     assert not marker.exists(), "the checkpoint's payload ran"
     assert tree_hash(run) == before
@@ -266,7 +266,7 @@ def test_malicious_checkpoint_is_refused_without_running_it(run, tmp_path, kind)
 def test_malicious_newest_checkpoint_is_skipped_on_resume(run, tmp_path):
     marker = tmp_path / "PWNED"
     write_malicious(run / "model_9.pt", marker, "zip")
-    proc = run_tool("train", f"run_dir={run}", "resume=true", "max_iterations=4", "eval.at_end=false")
+    proc = call_tool("train", f"run_dir={run}", "resume=true", "max_iterations=4", "eval.at_end=false")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "skipping checkpoint" in proc.stderr and "model_9.pt" in proc.stderr and "model_2.pt" in proc.stderr
     assert "Traceback" not in proc.stderr
@@ -277,7 +277,7 @@ def test_malicious_newest_checkpoint_is_skipped_on_resume(run, tmp_path):
 def test_malicious_newest_checkpoint_is_skipped_by_eval(run, tmp_path):
     marker = tmp_path / "PWNED"
     write_malicious(run / "model_9.pt", marker, "legacy")
-    proc = run_tool("eval", f"run_dir={run}")
+    proc = call_tool("eval", f"run_dir={run}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "model_9.pt" in proc.stderr and not marker.exists()
     assert json.loads((run / "eval.json").read_text())["checkpoint_iteration"] == 2
@@ -286,7 +286,7 @@ def test_malicious_newest_checkpoint_is_skipped_by_eval(run, tmp_path):
 @SLOW
 def test_truncated_newest_checkpoint_falls_back_on_resume(run):
     truncate(run / "model_2.pt")
-    proc = run_tool("train", f"run_dir={run}", "resume=true", "max_iterations=3", "eval.at_end=false")
+    proc = call_tool("train", f"run_dir={run}", "resume=true", "max_iterations=3", "eval.at_end=false")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "model_2.pt" in proc.stderr and "continuing from model_1.pt" in proc.stderr
     rows = [json.loads(line) for line in (run / "progress.jsonl").read_text().splitlines()]
@@ -299,21 +299,21 @@ def test_all_checkpoints_unusable_is_named_and_writes_nothing(run):
     for ckpt in run.glob("model_*.pt"):
         truncate(ckpt)
     before = tree_hash(run)
-    assert_refused(run_tool("train", f"run_dir={run}", "resume=true"), BAD_FILE, "model_0.pt", "model_2.pt")
+    assert_refused(call_tool("train", f"run_dir={run}", "resume=true"), BAD_FILE, "model_0.pt", "model_2.pt")
     assert tree_hash(run) == before
 
 
 @pytest.mark.parametrize("target", cases(["missing.pt", "."], ["missing", "directory"]))
 def test_checkpoint_path_that_is_not_a_file(run, target):
     path = run / target
-    assert_refused(run_tool("eval", f"run_dir={run}", f"checkpoint={path}"), BAD_FILE, str(path))
+    assert_refused(call_tool("eval", f"run_dir={run}", f"checkpoint={path}"), BAD_FILE, str(path))
 
 
 @SLOW
 def test_eval_of_run_without_checkpoint(run):
     for ckpt in run.glob("model_*.pt"):
         ckpt.unlink()
-    assert_refused(run_tool("eval", f"run_dir={run}"), USAGE, "holds no checkpoint")
+    assert_refused(call_tool("eval", f"run_dir={run}"), USAGE, "holds no checkpoint")
 
 
 # ------------------------------------------------------------------------------------------------ progress files
@@ -324,7 +324,7 @@ def _tear(run):
 
 def test_torn_progress_line_is_tolerated_by_plot(run):
     _tear(run)
-    proc = run_tool("plot", f"run_dir={run}")
+    proc = call_tool("plot", f"run_dir={run}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (run / "curves.png").stat().st_size > 0
 
@@ -332,7 +332,7 @@ def test_torn_progress_line_is_tolerated_by_plot(run):
 @SLOW
 def test_torn_progress_line_is_repaired_on_resume(run):
     _tear(run)
-    proc = run_tool("train", f"run_dir={run}", "resume=true", "max_iterations=4", "eval.at_end=false")
+    proc = call_tool("train", f"run_dir={run}", "resume=true", "max_iterations=4", "eval.at_end=false")
     assert proc.returncode == 0, proc.stderr[-3000:]
     rows = [json.loads(line) for line in (run / "progress.jsonl").read_text().splitlines()]
     assert [r["iteration"] for r in rows] == [0, 1, 2, 3]
@@ -341,7 +341,7 @@ def test_torn_progress_line_is_repaired_on_resume(run):
 @SLOW
 def test_torn_progress_line_is_tolerated_by_eval(run):
     _tear(run)
-    proc = run_tool("eval", f"run_dir={run}")
+    proc = call_tool("eval", f"run_dir={run}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert json.loads((run / "eval.json").read_text())["diagnostics"]
 
@@ -351,7 +351,7 @@ def test_damaged_progress_line_is_named(run):
     path = run / "progress.jsonl"
     lines = path.read_text().splitlines()
     path.write_text("\n".join([lines[0], "garbage{", *lines[1:]]) + "\n")
-    assert_refused(run_tool("plot", f"run_dir={run}"), BAD_FILE, "progress.jsonl: line 2")
+    assert_refused(call_tool("plot", f"run_dir={run}"), BAD_FILE, "progress.jsonl: line 2")
 
 
 # ------------------------------------------------------------------------------------------------ motion files
@@ -379,20 +379,20 @@ def test_bad_motion_file_is_named(kind, tmp_path):
     options, culprit = MOTIONS[kind]
     src = _amass(tmp_path / f"{kind}_poses.npz", **options)
     out = tmp_path / "out.motionlib.npz"
-    assert_refused(run_tool("convert_amass", src, out), BAD_FILE, str(src), culprit)
+    assert_refused(call_tool("convert_amass", src, out), BAD_FILE, str(src), culprit)
     assert not out.exists()
 
 
 @SLOW
 def test_bad_library_frame_rate_option(tmp_path):
     src = _amass(tmp_path / "ok_poses.npz")
-    assert_refused(run_tool("convert_amass", src, tmp_path / "o.motionlib.npz", "--fps", "0"), USAGE, "--fps=0")
+    assert_refused(call_tool("convert_amass", src, tmp_path / "o.motionlib.npz", "--fps", "0"), USAGE, "--fps=0")
 
 
 @pytest.mark.parametrize("damage", cases(["one-frame-clip", "not-a-zip"]))
 def test_bad_motion_library_given_to_train_is_named(damage, tmp_path):
     lib = tmp_path / "lib.motionlib.npz"
-    assert run_tool("convert_amass", _amass(tmp_path / "ok_poses.npz"), lib).returncode == 0
+    assert call_tool("convert_amass", _amass(tmp_path / "ok_poses.npz"), lib).returncode == 0
     if damage == "not-a-zip":
         lib.write_bytes(b"PK\x03\x04 broken")
         culprit = "cannot be read"
@@ -405,27 +405,22 @@ def test_bad_motion_library_given_to_train_is_named(damage, tmp_path):
         with open(lib, "wb") as f:
             np.savez(f, **arrays)
         culprit = "has 1 frame(s)"
-    proc = run_tool("train", "task=humanoid_root", "device=cpu", "num_envs=2", "max_iterations=1",
+    proc = call_tool("train", "task=humanoid_root", "device=cpu", "num_envs=2", "max_iterations=1",
                     f"run_dir={tmp_path / 'never'}", f"motion_file={lib}")  # fmt: skip
     assert_refused(proc, BAD_FILE, str(lib), culprit)
     assert not (tmp_path / "never").exists()
 
 
 # ------------------------------------------------------------------------------------------------ faults
-_PATCHED_RUN = """
-import sys
-{patch}
-from refpo_warp.cli.main import main
-sys.exit(main(["train", *{args!r}]))
-"""
+def _boom(*args, **kwargs):
+    raise RuntimeError("injected fault")
 
 
-def test_unexpected_error_before_the_run_dir_exists_goes_to_a_log_file(tmp_path):
-    patch = ("import refpo_warp.training.train_run as t\n"
-             "def boom(*a, **k): raise RuntimeError('injected fault')\n"
-             "t.build_runner = boom")  # fmt: skip
-    args = tiny("max_iterations=2", f"run_dir={tmp_path / 'never'}")
-    proc = run_python(_PATCHED_RUN.format(patch=patch, args=args))
+def test_unexpected_error_before_the_run_dir_exists_goes_to_a_log_file(tmp_path, monkeypatch):
+    import refpo_warp.training.train_run as train_run
+
+    monkeypatch.setattr(train_run, "build_runner", _boom)
+    proc = call_tool("train", *tiny("max_iterations=2", f"run_dir={tmp_path / 'never'}"))
     assert_refused(proc, UNEXPECTED, "unexpected RuntimeError: injected fault", "full traceback is in")
     log = proc.stderr.rsplit("full traceback is in ", 1)[1].strip()
     assert "Traceback (most recent call last)" in open(log).read()
@@ -433,46 +428,50 @@ def test_unexpected_error_before_the_run_dir_exists_goes_to_a_log_file(tmp_path)
 
 
 @SLOW
-def test_unexpected_error_during_training_goes_to_the_run_dir(tmp_path):
-    patch = ("from refpo_warp.runner.runner import Runner\n"
-             "def boom(*a, **k): raise RuntimeError('injected fault')\n"
-             "Runner.learn = boom")  # fmt: skip
+def test_unexpected_error_during_training_goes_to_the_run_dir(tmp_path, monkeypatch):
+    from refpo_warp.runner.runner import Runner
+
+    monkeypatch.setattr(Runner, "learn", _boom)
     run_dir = tmp_path / "run"
-    proc = run_python(_PATCHED_RUN.format(patch=patch, args=tiny("max_iterations=2", f"run_dir={run_dir}")))
+    proc = call_tool("train", *tiny("max_iterations=2", f"run_dir={run_dir}"))
     assert_refused(proc, UNEXPECTED, "injected fault", str(run_dir / "error.log"))
     assert "Traceback (most recent call last)" in (run_dir / "error.log").read_text()
 
 
-_NAN_AT_UPDATE = """
-from refpo_warp.algorithms import ReFPO
-original, calls = ReFPO.update, [0]
-def update(self):
-    out = original(self)
-    calls[0] += 1
-    if calls[0] == {n}:
-        out["surrogate"] = float("nan")
-    return out
-ReFPO.update = update
-"""
+def _nan_at_update(monkeypatch, n: int) -> None:
+    """ReFPO's n-th update reports a NaN surrogate loss (as a diverged update would)."""
+    from refpo_warp.algorithms import ReFPO
+
+    original, calls = ReFPO.update, [0]
+
+    def update(self):
+        out = original(self)
+        calls[0] += 1
+        if calls[0] == n:
+            out["surrogate"] = float("nan")
+        return out
+
+    monkeypatch.setattr(ReFPO, "update", update)
 
 
-def test_non_finite_loss_without_checkpoint_says_so(tmp_path):
+def test_non_finite_loss_without_checkpoint_says_so(tmp_path, monkeypatch):
     run_dir = tmp_path / "run"
-    proc = run_python(_PATCHED_RUN.format(patch=_NAN_AT_UPDATE.format(n=1),
-                                          args=tiny("max_iterations=4", f"run_dir={run_dir}")))  # fmt: skip
+    _nan_at_update(monkeypatch, 1)
+    proc = call_tool("train", *tiny("max_iterations=4", f"run_dir={run_dir}"))
     assert_refused(proc, NONFINITE, "iteration 0", "No checkpoint was written", "algorithm.learning_rate")
     assert "intact" not in proc.stderr and not list(run_dir.glob("model_*.pt"))
 
 
 @SLOW
-def test_non_finite_loss_advice_works(tmp_path):
+def test_non_finite_loss_advice_works(tmp_path, monkeypatch):
     run_dir = tmp_path / "run"
-    proc = run_python(_PATCHED_RUN.format(patch=_NAN_AT_UPDATE.format(n=3),
-                                          args=tiny("max_iterations=4", f"run_dir={run_dir}")))  # fmt: skip
+    _nan_at_update(monkeypatch, 3)
+    proc = call_tool("train", *tiny("max_iterations=4", f"run_dir={run_dir}"))
     assert_refused(proc, NONFINITE, "iteration 2", str(run_dir / "model_1.pt"), "resume=true")
+    monkeypatch.undo()  # the advised resume runs the real update
     command = proc.stderr.split("refpo train ", 1)[1].split("\n")[0]
     args = command.replace("<value>", "1e-4").split() + ["max_iterations=4", "eval.at_end=false"]
-    resumed = run_tool("train", *args)
+    resumed = call_tool("train", *args)
     assert resumed.returncode == 0, resumed.stderr[-3000:]
     saved = torch.load(run_dir / "model_3.pt", weights_only=True)
     assert saved["optimizer_state_dict"]["param_groups"][0]["lr"] == pytest.approx(1e-4)
