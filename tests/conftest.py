@@ -2,8 +2,8 @@
 run: the slow tests first, longest first, by the minutes their ``slow`` marker declares.
 
 Markers (pyproject.toml): ``slow(minutes=M)`` a bounded learning check or a long subprocess case, with its measured
-wall time in CI; ``gpu`` needs CUDA; ``rsl_rl`` touches rsl_rl's API (CI runs these again on the lowest supported
-rsl-rl-lib).
+wall time in CI; ``on_demand`` a learning check CI leaves out (run with ``--all-checks``); ``gpu`` needs CUDA;
+``rsl_rl`` touches rsl_rl's API (CI runs these again on the lowest supported rsl-rl-lib).
 """
 
 import os
@@ -29,6 +29,9 @@ def pytest_addoption(parser):
     parser.addoption("--null-control", action="store_true",
                      help="run each learning check with learning switched off (tests/learning/checks.py NULL_CONTROL) "
                           "and assert that its bound is NOT met")  # fmt: skip
+    parser.addoption("--all-checks", action="store_true",
+                     help="also run the learning checks that CI leaves to be run on demand (in_ci=False in "
+                          "tests/learning/checks.py)")  # fmt: skip
 
 
 @pytest.fixture
@@ -60,6 +63,12 @@ def slow_first(items: list) -> list:
 
 
 def pytest_collection_modifyitems(config, items):
+    if not config.getoption("--all-checks"):
+        skip = pytest.mark.skip(reason="a learning check CI leaves to be run on demand: --all-checks")
+        for item in items:
+            if "on_demand" in item.keywords:
+                item.add_marker(skip)
+                item.own_markers[:] = [m for m in item.own_markers if m.name != "slow"]  # ordered as a quick test
     items[:] = slow_first(items)
     if any("gpu" in item.keywords for item in items) and not cuda_available():
         skip = pytest.mark.skip(reason="needs a CUDA device (torch and Warp)")

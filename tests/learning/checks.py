@@ -8,6 +8,12 @@ changed); a check's bound must fail there. ``docs/results/learning_checks.md`` g
 (seeds 1-5 on one torch thread, 1-3 on two, the null control on seeds 1-3) and where its bound sits between them;
 ``tests/learning/measure.py`` makes those runs and that table.
 
+CI's default test command runs six of them: one per environment family (GridWorld, the DMC cartpole, the humanoid,
+mjlab's cartpole in the mjlab job) and per kind of policy gradient (ReFPO's flow ratio, Flow-GRPO's SDE likelihood,
+ReinFlow's noisy chain). The other three run on demand (``--all-checks``; ``in_ci=False``), to keep CI's whole run
+within its 25 minutes: Gaussian PPO (rsl_rl's own algorithm) and the advantage-weighted ReFPO and FPO++ (ReFPO's
+actor, rollout and update loop with their own loss terms, which have hand-worked unit tests).
+
 A bound obeys the rule the table checks: strictly beyond the null control's best, and at most halfway from it to the
 learning runs' worst, so that another CPU, which moves a run as another seed does, cannot fail it by a hair.
 """
@@ -57,6 +63,7 @@ class LearningCheck:
     runner: str = "refpo_warp"  # or "mjlab": mjlab's own train command, in an mjlab environment
     minutes: float = 3.0  # its wall time in CI (the slow marker's, which orders the run), from a fresh-clone run's
     # pytest --durations
+    in_ci: bool = True  # run by the default test command (CI's); False: on demand with --all-checks
 
     def verdict(self, record: dict) -> tuple[bool, dict[str, float]]:
         stats = self.statistics(record)
@@ -148,19 +155,19 @@ CHECKS: dict[str, LearningCheck] = {
         LearningCheck(
             "cartpole_ppo", (*CARTPOLE, "algo=ppo", "eval.interval=0"), return_gains("mean_action"),
             (Bound("gain_mean_action", ">=", 1.5),),
-            minutes=2.8,
+            minutes=2.8, in_ci=False,
             describe="Gaussian PPO on dmc_cartpole_balance (450k env steps): mean-action return over the initial "
                      "policy's"),
         LearningCheck(
             "cartpole_refpo_aw", (*CARTPOLE, "algo=refpo_aw"), return_gains("N=10"),
             (Bound("gain_N=10", ">=", 1.5),),
-            minutes=3.9,
+            minutes=3.9, in_ci=False,
             describe="advantage-weighted ReFPO on dmc_cartpole_balance (450k env steps): N = 10 return over the "
                      "initial policy's"),
         LearningCheck(
             "cartpole_fpo_pp", (*CARTPOLE, "algo=fpo_pp"), mean_gain("N=10", "N=1", "N=10/zero", "N=1/zero"),
             (Bound("mean_gain", ">=", 1.1),),
-            minutes=4.3,
+            minutes=4.3, in_ci=False,
             describe="FPO++ on dmc_cartpole_balance (450k env steps; the EMA actor): the mean of its N = 10 and N = 1 "
                      "returns' gains over the initial policy's, from random and from zero initial noise"),
         LearningCheck(

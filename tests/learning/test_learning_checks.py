@@ -2,8 +2,9 @@
 bound against the policy it started from, measured in the same test. Their runs over seeds and threads, their null
 controls and the margins: ``docs/results/learning_checks.md``.
 
-    python -m pytest -m slow tests/learning                   # the checks (CI runs them, longest first)
-    python -m pytest -m slow tests/learning --null-control    # each with learning off: its bound must fail
+    python -m pytest -m slow tests/learning                                # CI's checks, longest first
+    python -m pytest -m slow tests/learning --all-checks                   # and the ones CI leaves (in_ci=False)
+    python -m pytest -m slow tests/learning --all-checks --null-control    # each with learning off: must fail
 """
 
 import importlib.util
@@ -13,7 +14,7 @@ from checks import CHECKS, run_check  # tests/learning/checks.py
 
 
 def marks(check):
-    out = [pytest.mark.slow(minutes=check.minutes)]
+    out = [pytest.mark.slow(minutes=check.minutes), *([] if check.in_ci else [pytest.mark.on_demand])]
     if check.runner == "mjlab" and importlib.util.find_spec("mjlab") is None:
         out.append(pytest.mark.skip(reason="mjlab is not installed: the mjlab job runs it in its venv (.ci/mjlab)"))
     elif check.runner != "mjlab" and importlib.util.find_spec("warp") is None:
