@@ -4,6 +4,9 @@ video headless (EGL), read back frame by frame.
 
 Needs mjlab (skipped without it): run in the mjlab job's venv, ``.ci/mjlab`` (docs/mjlab.md)."""
 
+import contextlib
+import io
+import json
 import os
 import signal
 import subprocess
@@ -88,25 +91,38 @@ def test_play_records_a_video_of_the_checkpoint(trained):
     assert len({bytes(frame) for frame in frames}) > 1  # the cartpole moves
 
 
+def evaluate_here(*argv: str) -> subprocess.CompletedProcess:
+    """``python -m refpo_warp.integrations.mjlab.evaluate argv...`` in this process (its ``main``, output and exit
+    code captured): the same code from the argument list on, without a new interpreter's imports of mjlab."""
+    from refpo_warp.integrations.mjlab.evaluate import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(list(argv))
+    return subprocess.CompletedProcess(argv, code, out.getvalue(), err.getvalue())
+
+
+def printed_json(proc: subprocess.CompletedProcess) -> dict:
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
 @pytest.mark.rsl_rl
 def test_evaluate_reports_both_initial_noise_protocols(trained):
     """The checkpoint's return rate under zero (play's, the default) and random initial noise, as eval.initial_noise
-    names them, and at a given number of flow steps; a bad value is one message and exit code 2."""
-    import json
-
+    names them, and at a given number of flow steps; a bad value is one message and exit code 2. The first call as a
+    user makes it (``python -m``), the others in this process."""
     _, run_dir = trained
-    base = [sys.executable, "-m", "refpo_warp.integrations.mjlab.evaluate", TASK, str(run_dir / "model_1.pt"),
-            "num_envs=4", "num_steps=20"]  # fmt: skip
-    both = subprocess.run([*base, "initial_noise=random,zero"], capture_output=True, text=True, timeout=600)
-    assert both.returncode == 0, both.stderr[-2000:]
-    rates = json.loads(both.stdout.strip().splitlines()[-1])
-    zero = json.loads(subprocess.run(base, capture_output=True, text=True, timeout=600).stdout.strip().splitlines()[-1])
+    base = [TASK, str(run_dir / "model_1.pt"), "num_envs=4", "num_steps=20"]
+    module = [sys.executable, "-m", "refpo_warp.integrations.mjlab.evaluate"]
+    rates = printed_json(subprocess.run([*module, *base, "initial_noise=random,zero"], capture_output=True, text=True,
+                                        timeout=600))  # fmt: skip
+    zero = printed_json(evaluate_here(*base))
     assert set(rates) == {"reward_rate/random", "reward_rate/zero"} and rates["reward_rate/zero"] == zero["reward_rate"]
     assert rates["reward_rate/random"] != rates["reward_rate/zero"]  # random x_0 is not the deterministic policy
-    steps = {n: json.loads(subprocess.run([*base, f"flow_steps={n}"], capture_output=True, text=True, timeout=600)
-                           .stdout.strip().splitlines()[-1])["reward_rate"] for n in (10, 1)}  # fmt: skip
+    steps = {n: printed_json(evaluate_here(*base, f"flow_steps={n}"))["reward_rate"] for n in (10, 1)}
     assert steps[10] == zero["reward_rate"] != steps[1]  # the actor's own 10 steps; one Euler step acts otherwise
-    bad = subprocess.run([*base, "initial_noise=none"], capture_output=True, text=True, timeout=600)
+    bad = evaluate_here(*base, "initial_noise=none")
     assert bad.returncode == 2 and "initial_noise='none' is invalid" in bad.stderr and "Traceback" not in bad.stderr
-    bad = subprocess.run([*base, "num_envs=abc"], capture_output=True, text=True, timeout=600)
+    bad = evaluate_here(*base, "num_envs=abc")
     assert bad.returncode == 2 and "num_envs=abc is invalid" in bad.stderr and "Traceback" not in bad.stderr
