@@ -20,7 +20,7 @@ class HumanoidTrackingCfg(EnvCfg):
     conditioning: str = "all"
     """Goal conditioning of the policy observation: all | root_hands | root (set by the task id)."""
     motion_file: str = ""
-    """AMASS npz file, folder of them, or *.motionlib.npz; "" = the shipped synthetic clips."""
+    """AMASS npz file, folder of them, or *.motionlib.npz; "" = the shipped synthetic clips, shipped:<file> = one."""
     eval_mode: bool = False
     """Env i plays clip i from its start (no random init); termination on the mean body distance."""
     max_episode_length: int = 300

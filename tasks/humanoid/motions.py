@@ -7,14 +7,28 @@ from pathlib import Path
 
 from refpo_warp.motion.motion_library import MotionLibrary
 from refpo_warp.tasks.humanoid.model import CONTROL_HZ
+from refpo_warp.utils.errors import MotionDataError, closest
 
 SHIPPED_MOTIONS = Path(__file__).resolve().parent / "data" / "synthetic"
+SHIPPED = "shipped:"  # motion_file=shipped:<file>: one shipped clip, found wherever the package is installed
 LIBRARY_FPS = CONTROL_HZ  # AMASS input is converted at the control rate
 
 
 def resolve_motion_file(motion_file: str) -> Path:
-    """``""`` selects the shipped synthetic clips; anything else is a path (``~`` expanded)."""
-    return SHIPPED_MOTIONS if not motion_file else Path(motion_file).expanduser().resolve()
+    """``""`` selects every shipped synthetic clip, ``shipped:<file>`` one of them (a file name in
+    ``SHIPPED_MOTIONS``); anything else is a path (``~`` expanded)."""
+    if not motion_file:
+        return SHIPPED_MOTIONS
+    if motion_file.startswith(SHIPPED):
+        name = motion_file[len(SHIPPED) :]
+        shipped = sorted(path.name for path in SHIPPED_MOTIONS.glob("*.npz"))
+        if name not in shipped:
+            hint = closest(name, shipped)
+            raise MotionDataError(f"motion_file={motion_file}: no shipped clip of that name"
+                                  f"{f' (did you mean shipped:{hint}?)' if hint else ''}; shipped clips: "
+                                  f"{', '.join(shipped)}")  # fmt: skip
+        return SHIPPED_MOTIONS / name
+    return Path(motion_file).expanduser().resolve()
 
 
 @lru_cache(maxsize=4)

@@ -64,6 +64,11 @@ def test_the_wheel_trains_evaluates_explains_lists_and_sweeps_outside_the_checko
     run([refpo, "eval", "run_dir=run1", "eval.flow_steps=[1]"], tmp_path, env)
     assert (tmp_path / "run1" / "eval.prev.json").is_file()
 
+    clip = run([str(bin_dir / "python"), "-c", "from refpo_warp.config.resolve import resolve_config as c; "
+                "from refpo_warp.tasks.humanoid.motions import resolve_motion_file as r; "
+                "print(r(c(['task=humanoid_all_residual'], device_type='cpu')['env']['motion_file']))"], tmp_path, env)
+    assert Path(clip.stdout.strip()).is_file() and Path(clip.stdout.strip()).is_relative_to(bin_dir.parent), clip.stdout
+
     explained = run([refpo, "train", "task=gridworld", "algo=fpo", "--explain", "algorithm.reflow_coef"], tmp_path, env)
     assert "algorithm.reflow_coef = 0.0\n  set by  configs/algo/fpo.yaml" in explained.stdout
 
