@@ -7,7 +7,7 @@ from pathlib import Path
 
 from refpo_warp.motion.motion_library import MotionLibrary
 from refpo_warp.tasks.humanoid.model import CONTROL_HZ
-from refpo_warp.utils.errors import MotionDataError, closest
+from refpo_warp.utils.errors import unknown
 
 SHIPPED_MOTIONS = Path(__file__).resolve().parent / "data" / "synthetic"
 SHIPPED = "shipped:"  # motion_file=shipped:<file>: one shipped clip, found wherever the package is installed
@@ -21,12 +21,9 @@ def resolve_motion_file(motion_file: str) -> Path:
         return SHIPPED_MOTIONS
     if motion_file.startswith(SHIPPED):
         name = motion_file[len(SHIPPED) :]
-        shipped = sorted(path.name for path in SHIPPED_MOTIONS.glob("*.npz"))
+        shipped = [path.name for path in SHIPPED_MOTIONS.glob("*.npz")]
         if name not in shipped:
-            hint = closest(name, shipped)
-            raise MotionDataError(f"motion_file={motion_file}: no shipped clip of that name"
-                                  f"{f' (did you mean shipped:{hint}?)' if hint else ''}; shipped clips: "
-                                  f"{', '.join(shipped)}")  # fmt: skip
+            raise unknown("shipped clip in env.motion_file=shipped:<file>", name, shipped)
         return SHIPPED_MOTIONS / name
     return Path(motion_file).expanduser().resolve()
 

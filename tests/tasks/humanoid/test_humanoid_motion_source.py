@@ -5,7 +5,7 @@ import pytest
 
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.tasks.humanoid.motions import SHIPPED_MOTIONS, num_clips, resolve_motion_file
-from refpo_warp.utils.errors import MotionDataError
+from refpo_warp.utils.errors import ConfigError
 
 
 def test_empty_is_every_shipped_clip_and_shipped_names_one():
@@ -22,8 +22,8 @@ def test_a_path_is_taken_from_the_working_directory(tmp_path, monkeypatch):
 
 
 def test_an_unknown_shipped_name_lists_the_shipped_clips():
-    with pytest.raises(MotionDataError, match=r"shipped:stand_sway_pose\.npz: no shipped clip.*did you mean "
-                                              r"shipped:stand_sway_poses\.npz.*wave_right_poses\.npz"):  # fmt: skip
+    with pytest.raises(ConfigError, match=r"motion_file=shipped:<file> 'stand_sway_pose\.npz'.*Did you mean "
+                                          r"'stand_sway_poses\.npz'.*wave_right_poses\.npz"):  # fmt: skip
         resolve_motion_file("shipped:stand_sway_pose.npz")
 
 
