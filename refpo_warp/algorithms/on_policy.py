@@ -43,6 +43,7 @@ from torch import nn
 from refpo_warp.algorithms import rsl_rl_rules  # noqa: F401  (the rules of rsl_rl's PPO arguments, inherited here)
 from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_indices
 from refpo_warp.models.ema import ActorEMA
+from refpo_warp.utils.device import flush_denormals_on_cpu
 from refpo_warp.utils.errors import NonFiniteLossError
 from refpo_warp.utils.option_rules import Flag, Int, Real, checks_options
 from refpo_warp.utils.options import option, option_values
@@ -138,6 +139,7 @@ class OnPolicyAlgorithm(RslPPO):
         self.num_updates = 0
         self.store = TransitionStore(storage.num_transitions_per_env, storage.num_envs, self.device)
         self.ema = ActorEMA(uncompiled(self, "actor"), self.ema_decay, self.ema_warmup) if self.ema_decay else None
+        flush_denormals_on_cpu(self.device)  # speed only: the same results (refpo_warp.utils.device)
 
     # ------------------------------------------------------------------------------------------------ rollout
     def process_env_step(

@@ -3,6 +3,7 @@ minibatches it has, and a non-finite loss in any minibatch still stops the updat
 the parameters, the optimizer state and the learning rate as they were before it."""
 
 import copy
+import math
 import sys
 from contextlib import contextmanager
 
@@ -83,3 +84,16 @@ def test_a_non_finite_loss_in_a_later_minibatch_stops_the_update_and_undoes_it()
     assert old_state.keys() == new_state.keys() and all(
         torch.equal(old_state[i][k], new_state[i][k]) for i in old_state for k in old_state[i])  # fmt: skip
     assert after[3] == before[3] and alg.num_updates == 1
+
+
+def test_an_algorithm_on_the_cpu_computes_float32_denormals_as_zero():
+    if not torch.set_flush_denormal(False):
+        pytest.skip("this CPU has no flush-to-zero mode")
+    x = torch.tensor([-88.0], requires_grad=True)
+    torch.nn.functional.silu(x).backward()
+    # SiLU'(x) = s (1 + x (1 - s)), s = sigmoid(-88) = 6.1e-39, a float32 denormal: -87 e^-88 = -5.3e-37
+    assert x.grad.item() == pytest.approx(-87 * math.exp(-88), rel=1e-3, abs=0)
+    make_refpo()  # on the CPU
+    x.grad = None
+    torch.nn.functional.silu(x).backward()
+    assert x.grad.item() == 0.0  # s read as 0
