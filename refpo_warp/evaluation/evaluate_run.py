@@ -10,6 +10,10 @@ maximum), and, on observations visited by the evaluated policy, ``straightness_e
 (``one_step_error_eval``, ``policy_spread_eval``, ``one_step_ratio_eval``) and the Jacobian statistics
 (``refpo_warp/models/flow_diagnostics.py``).
 An existing ``eval.json`` is kept as ``eval.prev.json`` before the new one is written (both writes atomic).
+
+The evaluation draws from random streams of its own, seeded from the run's seed and the checkpoint's iteration
+(``refpo_warp.utils.rng``): the evaluation at the end of training and ``refpo eval`` of the same checkpoint give the
+same numbers, and neither touches the streams of the process it runs in.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ from refpo_warp.runner.checkpoints import latest_checkpoint, load_latest
 from refpo_warp.runner.progress import progress_path, read_rows
 from refpo_warp.utils.atomic_files import write_json, write_text
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.rng import FINAL_EVALUATION, own_random_streams, stream_seed
 
 DIAGNOSTIC_OBSERVATIONS = 1024  # on-policy observations kept from the evaluation for the flow diagnostics
 TRAINING_MEANS = ("straightness_error", "explosion_rate", "explosion_rate_pair", "clip_fraction", "one_step_error",
@@ -90,9 +95,13 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
             load_latest(runner, run_dir, cfg["task"], cfg["algo"])
     actor = runner.get_inference_policy(device=runner.device)
     flow = is_flow(actor)
-    results, visited = evaluate_actor(cfg, actor, envs, cfg["eval"]["flow_steps"],
-                                      record_obs=DIAGNOSTIC_OBSERVATIONS if flow else 0)  # fmt: skip
     iteration = runner.current_learning_iteration
+    with own_random_streams(stream_seed(cfg["seed"], FINAL_EVALUATION, iteration), runner.device):
+        results, visited = evaluate_actor(cfg, actor, envs, cfg["eval"]["flow_steps"],
+                                          record_obs=DIAGNOSTIC_OBSERVATIONS if flow else 0)  # fmt: skip
+        diagnostics = ({**training_diagnostics(run_dir),
+                        **flow_diagnostics(runner.alg, actor, visited, env.cfg.action_transform, cfg["seed"])}
+                       if flow else {})  # fmt: skip
     out = {
         "task": cfg["task"],
         "algo": cfg["algo"],
@@ -106,9 +115,7 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
                      if flow else {"mean_action": True}),  # fmt: skip
         "results": results,
         "health": run_health(read_rows(run_dir)) if progress_path(run_dir).exists() else {},
-        "diagnostics": ({**training_diagnostics(run_dir),
-                         **flow_diagnostics(runner.alg, actor, visited, env.cfg.action_transform, cfg["seed"])}
-                        if flow else {}),
+        "diagnostics": diagnostics,
     }
     out["figures"] = [str(p) for p in run_figures(run_dir, actor, cfg)]
     kept = write_eval_json(out, run_dir)

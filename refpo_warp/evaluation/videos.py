@@ -2,15 +2,15 @@
 ``render.py``), one panel per flow-step count N side by side from the same initial states, several envs tiled in each
 panel, each env's return so far written on it; saved as MP4 and/or GIF under ``<run dir>/videos/``.
 
-The caller's random streams are left as they were (a recording during training changes nothing in the run): the
-envs are seeded by ``VideoOptions.seed`` and every panel samples its noise from the same reseeded stream.
+A recording runs on random streams of its own (``refpo_warp.utils.rng``), so the caller's are left as they were (a
+recording during training changes nothing in the run): the envs are seeded by ``VideoOptions.seed`` and every panel
+samples its noise from the same reseeded stream.
 """
 
 from __future__ import annotations
 
-import contextlib
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -21,20 +21,10 @@ from refpo_warp.render.frames import overlay, tile
 from refpo_warp.render.options import VideoOptions
 from refpo_warp.render.video import write_video
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.rng import VIDEO, own_random_streams, stream_seed
 
 MAX_FPS = 30.0
 VIDEO_DIR = "videos"
-
-
-@contextlib.contextmanager
-def preserved_random_state() -> Iterator[None]:
-    """Leave torch's and numpy's global random streams as they were before the block."""
-    torch_state, numpy_state = torch.get_rng_state(), np.random.get_state()
-    try:
-        yield
-    finally:
-        torch.set_rng_state(torch_state)
-        np.random.set_state(numpy_state)
 
 
 def frame_source(task: str, env, options: VideoOptions):
@@ -99,7 +89,7 @@ def record(task: str, env_options: dict, device: str, policies: dict[str, Callab
            out_dir: Path, name: str, seed: int) -> list[Path]:  # fmt: skip
     """Record one panel per policy (label -> a function of the env giving the obs -> actions function), side by
     side; returns the files written."""
-    with preserved_random_state():
+    with own_random_streams(stream_seed(seed, VIDEO), device):
         recorded = [record_panel(task, env_options, device, policy, label, options, seed)
                     for label, policy in policies.items()]  # fmt: skip
     frames = side_by_side([panel for panel, _ in recorded])

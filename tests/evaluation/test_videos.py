@@ -4,9 +4,9 @@ recording leaves the run's random streams as they were."""
 import numpy as np
 import torch
 
-from refpo_warp.evaluation.videos import preserved_random_state
 from refpo_warp.render.video import read_video
 from refpo_warp.training import train
+from refpo_warp.utils.rng import own_random_streams
 
 
 def test_a_run_records_its_final_policy_and_lists_the_video(tmp_run_dir, capsys):
@@ -25,7 +25,10 @@ def test_a_recording_leaves_the_random_streams_alone():
     expected = torch.rand(2), np.random.rand(2)
     torch.manual_seed(1)
     np.random.seed(1)
-    with preserved_random_state():
+    with own_random_streams(7):
+        inside = torch.rand(2)
         torch.rand(100)
         np.random.rand(100)
     assert torch.equal(torch.rand(2), expected[0]) and np.array_equal(np.random.rand(2), expected[1])
+    with own_random_streams(7):  # the block's own draws depend on its seed alone
+        assert torch.equal(torch.rand(2), inside)
