@@ -20,10 +20,11 @@ shares) and rsl_rl's PPO arguments; a field may give one of those another defaul
 as an attribute of the same name and passes rsl_rl's arguments to rsl_rl's PPO; a subclass's constructor only adds
 what it derives from them.
 
-The EMA actor (``ema_decay``, ``ema_warmup``; FPO++): an exponential moving average of the actor's weights, updated once
-per update and restarted from the live weights after ``ema_warmup`` updates (``refpo_warp.models.ema``); evaluation
-and export (``get_policy``) use it, rollouts the live actor; checkpoints hold both and a resume trains on from the
-live weights.
+The EMA actor (``ema_decay``, ``ema_warmup``; FPO++): an exponential moving average of the actor's weights that starts
+from the live weights after ``ema_warmup`` updates and is updated once per update from then on
+(``refpo_warp.models.ema``). Until then evaluation and export (``get_policy``) use the live actor, afterwards the
+average; rollouts always use the live actor. Checkpoints hold the live weights, and the average once it has started;
+a resume trains on from the live weights.
 
 Logged statistics: keys with a ``/`` (e.g. ``Flow/ratio_max``) are logged under that name, others as ``Loss/<key>``;
 a key ending in ``_max`` is the maximum over the update's minibatches, every other key the mean.
@@ -110,11 +111,13 @@ class OnPolicyAlgorithm(RslPPO):
         bound_coef: float = option(0.0, Real(0, 1e6), "soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on "
                                                       "the predicted action; 0 turns it off (Puffer-PHC: 10)")
         bound: float = option(0.9, Real(0, None), "the bound of that loss, in the action range (Puffer-PHC: 0.9)")
+        weight_decay: float | None = option(None, Real(0, 1, optional=True), "the optimizer's weight decay; null: "
+                                            "its own default (adam 0, adamw 0.01) (FPO++: adamw, 1e-4)")
         ema_decay: float | None = option(None, Real(0, 1, lo_open=True, hi_open=True, optional=True),
-                                         "an EMA of the actor's weights, which evaluation and export use "
-                                         "(FPO++: 0.95); null: off")
-        ema_warmup: int = option(500, Int(0, 10**9), "updates after which the EMA restarts from the live weights "
-                                                     "(FPO++: 500)")
+                                         "an EMA of the actor's weights, which evaluation and export use after "
+                                         "its warm-up (FPO++: 0.95); null: off")
+        ema_warmup: int = option(500, Int(0, 10**9), "updates before the EMA starts from the live weights; until "
+                                                     "then the live actor is the policy (FPO++: 500)")
 
     def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         for name in ("rnd_cfg", "symmetry_cfg"):
@@ -135,6 +138,9 @@ class OnPolicyAlgorithm(RslPPO):
             setattr(self, name, value)
         if self.value_clip_param is None:
             self.value_clip_param = self.clip_param
+        if self.weight_decay is not None:  # rsl_rl builds its optimizer with the optimizer's default
+            for group in self.optimizer.param_groups:
+                group["weight_decay"] = self.weight_decay
         self.base_learning_rate = float(self.learning_rate)
         self.num_updates = 0
         self.store = TransitionStore(storage.num_transitions_per_env, storage.num_envs, self.device)
@@ -287,23 +293,26 @@ class OnPolicyAlgorithm(RslPPO):
         self._set_learning_rate(lr)
 
     # ---------------------------------------------------------------------------------------------- policy, checkpoints
+    def ema_started(self) -> bool:
+        return self.ema is not None and self.ema.started(self.num_updates)
+
     def get_policy(self) -> nn.Module:
-        """The policy evaluation, inference and export use: the EMA actor when ``ema_decay`` is set."""
-        return self.ema.model if self.ema is not None else uncompiled(self, "actor")
+        """The policy evaluation, inference and export use: the EMA actor once it has started, else the live one."""
+        return self.ema.model if self.ema_started() else uncompiled(self, "actor")
 
     def save(self) -> dict:
         saved = super().save()  # actor_state_dict: the live weights, which a resume trains on from
         saved["num_updates"] = self.num_updates
-        if self.ema is not None:
+        if self.ema_started():
             saved["ema_actor_state_dict"] = self.ema.state_dict()
         return saved
 
     def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
         out = super().load(loaded_dict, load_cfg, strict)
         self.num_updates = int(loaded_dict.get("num_updates", 0))
-        if self.ema is not None:
+        if self.ema_started():
             if "ema_actor_state_dict" in loaded_dict:
                 self.ema.load_state_dict(loaded_dict["ema_actor_state_dict"])
-            else:  # a checkpoint of a run without the EMA: start the average at its weights
+            else:  # a checkpoint past the warm-up without an average (a run without the EMA): start it here
                 self.ema.reset(uncompiled(self, "actor"))
         return out

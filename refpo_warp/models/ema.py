@@ -1,9 +1,11 @@
-"""An exponential moving average of an actor's weights: the policy that evaluation and export use (FPO++).
+"""An exponential moving average of an actor's weights: after its warm-up, the policy that evaluation, checkpoints'
+policy and export use (FPO++).
 
-Once per update, ``theta_ema <- decay * theta_ema + (1 - decay) * theta``; at the update numbered ``warmup`` the
-average restarts from the live weights, so the early, fast-changing weights leave it at once. Only parameters are
-averaged: buffers (the observation normaliser's statistics) are copied from the live actor, as FPO++ keeps one
-normaliser for both. Rollouts never use the average.
+As FPO++ runs it (``ema_warmup_steps``, "updates before starting EMA"): for the first ``warmup`` updates the average
+plays no part and the live weights are the policy; after update number ``warmup`` it starts from the live weights,
+and after every later update ``theta_ema <- decay * theta_ema + (1 - decay) * theta``. A run shorter than its
+warm-up never uses the average. Only parameters are averaged: buffers (the observation normaliser's statistics) are
+copied from the live actor, as FPO++ keeps one normaliser for both. Rollouts never use the average.
 """
 
 from __future__ import annotations
@@ -22,6 +24,10 @@ class ActorEMA:
         self.warmup = int(warmup)
         self.model = copy.deepcopy(actor).eval().requires_grad_(False)
 
+    def started(self, num_updates: int) -> bool:
+        """Whether the average is the policy after ``num_updates`` updates (else the live actor is)."""
+        return num_updates >= self.warmup
+
     @torch.no_grad()
     def reset(self, actor: nn.Module) -> None:
         self.model.load_state_dict(actor.state_dict())
@@ -29,10 +35,12 @@ class ActorEMA:
     @torch.no_grad()
     def update(self, actor: nn.Module, num_updates: int) -> None:
         """After update number ``num_updates`` (counted from 1) of ``actor``."""
+        if num_updates < self.warmup:
+            return
         if num_updates == self.warmup:
             self.reset(actor)
             return
-        ema = [p for p in self.model.parameters()]
+        ema = list(self.model.parameters())
         live = [p.detach() for p in actor.parameters()]
         torch._foreach_lerp_(ema, live, 1.0 - self.decay)
         for mine, theirs in zip(self.model.buffers(), actor.buffers()):

@@ -1,5 +1,8 @@
-"""The EMA actor (``algorithm.ema_decay``): its update and warm-up restart by hand, the policy evaluation and export
-use, and checkpoints that hold both weights, a resume training on from the live ones."""
+"""The EMA actor (``algorithm.ema_decay``, FPO++'s): its start after the warm-up and its update by hand; the live
+weights as the policy of evaluation, checkpoints and export before the warm-up, the average after it; checkpoints that
+hold both, a resume training on from the live ones."""
+
+import copy
 
 import pytest
 import torch
@@ -25,17 +28,20 @@ class Scalar(nn.Module):
         self.register_buffer("count", torch.tensor([0.0]))
 
 
-def test_ema_update_and_warmup_restart_hand_worked():
+def test_ema_starts_after_its_warmup_from_the_live_weights_hand_worked():
     live = Scalar(0.0)
     ema = ActorEMA(live, decay=0.5, warmup=3)
-    for update, (value, expected) in enumerate([(1.0, 0.5), (2.0, 1.25), (3.0, 3.0), (5.0, 4.0)], start=1):
+    expected = [(1.0, 0.0), (2.0, 0.0), (3.0, 3.0), (5.0, 4.0), (9.0, 6.5)]  # (live, average) after each update
+    for update, (value, average) in enumerate(expected, start=1):
         with torch.no_grad():
             live.w.fill_(value)
             live.count.fill_(10.0 * update)
-        ema.update(live, update)  # 0.5 * ema + 0.5 * live; update 3 restarts from the live weights
-        assert ema.model.w.item() == pytest.approx(expected), update
-        assert ema.model.count.item() == 10.0 * update  # buffers (the normaliser) follow the live actor
-    assert not ema.model.w.requires_grad
+        ema.update(live, update)  # nothing before update 3; then the live weights; then 0.5 * ema + 0.5 * live
+        assert ema.model.w.item() == pytest.approx(average), update
+        assert ema.started(update) == (update >= 3)
+        if update >= 3:
+            assert ema.model.count.item() == 10.0 * update  # buffers (the normaliser) follow the live actor
+    assert not ema.model.w.requires_grad and not ema.started(2) and ActorEMA(live, 0.5, 0).started(0)
 
 
 def build(cls=ReFPO, **kwargs):
@@ -55,13 +61,13 @@ def train(alg, updates: int) -> None:
         alg.update()
 
 
-def test_rollouts_use_the_live_actor_and_the_policy_is_the_ema():
-    alg, obs = build(ema_decay=0.9)
+def test_rollouts_use_the_live_actor_and_the_policy_is_the_ema_after_its_warmup():
+    alg, obs = build(ema_decay=0.9, ema_warmup=1)
     train(alg, 3)
     policy = alg.get_policy()
     assert policy is alg.ema.model and policy is not alg.actor
     live, ema = alg.actor.sample(obs, initial_noise="zero"), policy.sample(obs, initial_noise="zero")
-    assert not torch.allclose(live, ema)  # 3 updates apart
+    assert not torch.allclose(live, ema)  # started after update 1, two updates behind
 
     def from_one_stream(sample):
         torch.manual_seed(3)
@@ -75,6 +81,25 @@ def test_rollouts_use_the_live_actor_and_the_policy_is_the_ema():
     assert plain.ema is None and plain.get_policy() is plain.actor
 
 
+def test_before_the_warmup_evaluation_checkpoints_and_export_use_the_live_weights():
+    alg, obs = build(FPOPlusPlus, ema_warmup=3)
+    train(alg, 2)
+    assert alg.get_policy() is alg.actor and "ema_actor_state_dict" not in alg.save()
+    exported = torch.jit.script(alg.get_policy().as_jit())
+    torch.testing.assert_close(exported(obs["policy"]), alg.actor.sample(obs, initial_noise="zero"))
+    train(alg, 1)  # update 3: the average starts from the live weights
+    assert alg.get_policy() is alg.ema.model
+    for a, b in zip(alg.actor.state_dict().values(), alg.ema.state_dict().values()):
+        torch.testing.assert_close(a, b, rtol=0, atol=0)
+    train(alg, 1)
+    saved = alg.save()
+    assert not torch.equal(saved["ema_actor_state_dict"]["velocity.head.weight"],
+                           saved["actor_state_dict"]["velocity.head.weight"])  # fmt: skip
+    default, _ = build(FPOPlusPlus)  # FPO++'s 500 updates: a short run never uses its average
+    train(default, 2)
+    assert default.ema.warmup == 500 and default.get_policy() is default.actor
+
+
 def test_zero_noise_sampling_is_deterministic():
     alg, obs = build()
     first, second = alg.actor.sample(obs, initial_noise="zero"), alg.actor.sample(obs, initial_noise="zero")
@@ -83,7 +108,7 @@ def test_zero_noise_sampling_is_deterministic():
 
 
 def test_export_gives_the_ema_actors_zero_noise_actions():
-    alg, obs = build(FPOPlusPlus)
+    alg, obs = build(FPOPlusPlus, ema_warmup=1)
     train(alg, 2)
     exported = torch.jit.script(alg.get_policy().as_jit())
     expected = alg.ema.model.sample(obs, initial_noise="zero")
@@ -92,21 +117,39 @@ def test_export_gives_the_ema_actors_zero_noise_actions():
 
 
 def test_checkpoint_holds_both_and_a_resume_trains_from_the_live_weights():
-    alg, _ = build(ema_decay=0.9)
+    alg, _ = build(ema_decay=0.9, ema_warmup=1)
     train(alg, 2)
     saved = alg.save()
     assert saved["num_updates"] == 2
-    resumed, _ = build(ema_decay=0.9)
+    resumed, _ = build(ema_decay=0.9, ema_warmup=1)
     resumed.load(saved, None, strict=True)
     for name, value in alg.actor.state_dict().items():
         torch.testing.assert_close(resumed.actor.state_dict()[name], value)  # the weights training continues from
     for name, value in alg.ema.state_dict().items():
         torch.testing.assert_close(resumed.ema.state_dict()[name], value)
     assert not all(torch.equal(a, b) for a, b in zip(resumed.actor.parameters(), resumed.ema.model.parameters()))
-    # a checkpoint without an EMA starts the average at its weights
+    # a checkpoint past the warm-up without an EMA starts the average at its weights
     plain, _ = build()
     train(plain, 1)
-    late, _ = build(ema_decay=0.9)
+    late, _ = build(ema_decay=0.9, ema_warmup=1)
     late.load(plain.save(), None, strict=True)
     for a, b in zip(late.actor.parameters(), late.ema.model.parameters()):
         torch.testing.assert_close(a, b)
+
+
+def test_a_resume_before_the_warmup_trains_on_from_the_live_weights_and_starts_the_average_on_time():
+    alg, _ = build(ema_decay=0.9, ema_warmup=3)
+    train(alg, 2)
+    resumed, _ = build(ema_decay=0.9, ema_warmup=3)
+    resumed.load(copy.deepcopy(alg.save()), None, strict=True)  # as from a file: no tensor shared with alg
+    assert resumed.get_policy() is resumed.actor
+    for a, b in zip(alg.actor.state_dict().values(), resumed.actor.state_dict().values()):
+        torch.testing.assert_close(a, b, rtol=0, atol=0)
+    for one in (alg, resumed):  # the same third update from the same weights, rollout and random numbers
+        torch.manual_seed(7)
+        random_rollout(one, T, N, OBS, seed=2)
+        one.update()
+    for a, b in zip(alg.ema.state_dict().values(), resumed.ema.state_dict().values()):
+        torch.testing.assert_close(a, b)
+    for a, b in zip(resumed.actor.state_dict().values(), resumed.ema.state_dict().values()):
+        torch.testing.assert_close(a, b, rtol=0, atol=0)  # started from the live weights at update 3
