@@ -14,9 +14,10 @@ with A the GAE advantage normalised over the whole rollout and clamped to +-adva
 for A > 0 and SPO's penalty otherwise (``refpo_warp.algorithms.trust_region``). The Reflow term keeps ReFPO's
 definition (the mean CFM loss of the current parameters on the same pairs), in the same sqrt(D)-reduced units as the
 ratio, so lambda weighs it against the surrogate as in ReFPO; uncapped, because the caps only guard the ratio.
-Rollouts add FPO++'s 0.02 perturbation to the sampled action (the actor's ``action_noise_std``, set in
-``configs/algo/fpo_pp.yaml``) and evaluation and export use an EMA of the actor (decay 0.95, restarted after 500
-updates). Every difference from FPO and from FPO++'s code: ``docs/algorithms.md``, "FPO++".
+Rollouts add FPO++'s 0.02 perturbation to the sampled action (the actor's ``action_noise_std``); after 500 updates
+evaluation and export use an EMA of the actor (decay 0.95), before them the live actor, as FPO++ does. FPO++'s other
+values (64 Euler steps, 16 pairs, AdamW, ...) are in ``configs/algo/fpo_pp.yaml``, each with its place in FPO++'s
+code. Every difference from FPO and from FPO++'s code: ``docs/algorithms.md``, "FPO++".
 """
 
 from __future__ import annotations
@@ -69,7 +70,8 @@ class FPOPlusPlus(ReFPO):
         trust_region: str = option("aspo", doc="PPO's clip for A > 0, SPO's penalty otherwise (FPO++)")
         tau_sampling: str = option("uniform_inset", doc="flow times U[0.005, 0.995] (FPO++)")
         output_mode: str | None = option("u", doc="velocity regression (FPO++ hard-codes it)")
-        ema_decay: float | None = option(0.95, doc="the EMA actor that evaluation and export use (FPO++: 0.95)")
+        ema_decay: float | None = option(0.95, doc="the EMA actor that evaluation and export use after its warm-up "
+                                                   "(FPO++: 0.95)")
 
     def cfm_losses(self, obs, actions, tau, eps):
         loss, terms = super().cfm_losses(obs, actions, tau, eps)

@@ -2,7 +2,8 @@
 ``refpo train task=gridworld algo=fpo --explain algorithm.reflow_coef``.
 
 For each key: the resolved value, the layer that set it (a file and section, the command line, a constructor's or an
-env cfg's default, or the task id), what the earlier layers had set, and what the option means where its class
+env cfg's default, or the task id) with the comment that file gives the value on its line, what the earlier layers had
+set, and what the option means where its class
 declares it in an ``Options`` dataclass. A section (``--explain algorithm``) lists every option of it, the ones only a
 constructor sets included.
 """
@@ -123,6 +124,8 @@ def explain_key(res: Resolution, key: str) -> list[str]:
     if history:
         source, _ = history[-1]
         lines.append(f"  set by  {source}")
+        if key in res.notes:
+            lines.append(f"  why     {res.notes[key]}")
         for earlier, old in reversed(history[:-1]):
             lines.append(f"  over    {old!r} from {earlier}")
     meaning = _meaning(cfg, key)

@@ -22,11 +22,11 @@ folders, then the shipped ``configs/``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from refpo_warp.config.config_path import DEFAULT_FILE, ConfigPath
-from refpo_warp.config.yaml_files import load_yaml
+from refpo_warp.config.yaml_files import key_comments, load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR, shown
 
@@ -36,10 +36,18 @@ DEVICE_TYPES = ("cpu", "cuda")
 
 @dataclass(frozen=True)
 class Layer:
-    """One delta of the config and where it comes from (``configs/task/_dmc.yaml by_algo.refpo``)."""
+    """One delta of the config, where it comes from (``configs/task/_dmc.yaml by_algo.refpo``) and, by dotted key,
+    the comment the file gives a value on its line (why it is set: ``--explain`` prints it)."""
 
     source: str
     values: dict
+    notes: dict = field(default_factory=dict)
+
+
+def _notes(file: Path, section: str = "") -> dict[str, str]:
+    """The line comments of ``file``'s keys under ``section`` (dotted), relative to it."""
+    prefix = f"{section}." if section else ""
+    return {k[len(prefix):]: v for k, v in key_comments(file).items() if k.startswith(prefix)}
 
 
 def algo_names(path: ConfigPath) -> list[str]:
@@ -126,20 +134,21 @@ def _without_profiles(data: dict) -> dict:
 
 def generic_layers(task: str, path: ConfigPath) -> list[Layer]:
     """Layers 1 and 2: the defaults and what the task sets for every algorithm and device."""
-    layers = [Layer(shown(DEFAULT_FILE), load_yaml(DEFAULT_FILE))]
-    return layers + [Layer(shown(file), _without_profiles(data)) for file, data in task_files(task, path)]
+    layers = [Layer(shown(DEFAULT_FILE), load_yaml(DEFAULT_FILE), _notes(DEFAULT_FILE))]
+    return layers + [Layer(shown(file), _without_profiles(data), _notes(file)) for file, data in task_files(task, path)]
 
 
 def specific_layers(task: str, algo: str, device_type: str, path: ConfigPath) -> list[Layer]:
     """Layers 3 and 4: the task's device profile, then each algorithm of the chain with the task's settings for it."""
     files = task_files(task, path)
     profiles = [(file, dict((data.get("by_device") or {}).get(device_type) or {})) for file, data in files]
-    layers = [Layer(f"{shown(file)} by_device.{device_type}", {k: v for k, v in p.items() if k != "by_algo"})
-              for file, p in profiles]  # fmt: skip
+    layers = [Layer(f"{shown(file)} by_device.{device_type}", {k: v for k, v in p.items() if k != "by_algo"},
+                    _notes(file, f"by_device.{device_type}")) for file, p in profiles]  # fmt: skip
     for name, file, data in algo_files(algo, path):
-        layers.append(Layer(shown(file), _without_profiles(data)))
-        layers += [Layer(f"{shown(file)} by_algo.{name}", (d.get("by_algo") or {}).get(name) or {})
-                   for file, d in files]  # fmt: skip
+        layers.append(Layer(shown(file), _without_profiles(data), _notes(file)))
+        layers += [Layer(f"{shown(file)} by_algo.{name}", (d.get("by_algo") or {}).get(name) or {},
+                         _notes(file, f"by_algo.{name}")) for file, d in files]  # fmt: skip
         layers += [Layer(f"{shown(file)} by_device.{device_type}.by_algo.{name}",
-                         (p.get("by_algo") or {}).get(name) or {}) for file, p in profiles]  # fmt: skip
+                         (p.get("by_algo") or {}).get(name) or {}, _notes(file, f"by_device.{device_type}.by_algo.{name}"))
+                   for file, p in profiles]  # fmt: skip
     return [layer for layer in layers if layer.values]

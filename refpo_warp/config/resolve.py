@@ -29,11 +29,13 @@ COMMAND_LINE = "command line"
 
 @dataclass
 class Resolution:
-    """A resolved config and, per dotted key, every layer that set it with the value it gave (in order)."""
+    """A resolved config and, per dotted key, every layer that set it with the value it gave (in order), and the
+    comment the last of them gives it on its line (``notes``)."""
 
     cfg: dict
     sources: dict[str, list[tuple[str, Any]]] = field(default_factory=dict)
     layers: list[Layer] = field(default_factory=list)
+    notes: dict[str, str] = field(default_factory=dict)
 
 
 def run_config_path(flat: dict[str, Any]) -> ConfigPath:
@@ -100,17 +102,23 @@ def resolve(overrides: list[str] | dict[str, Any] | None = None, device_type: st
     layers.append(Layer(COMMAND_LINE, {}))
     cfg: dict = {}
     sources: dict[str, list[tuple[str, Any]]] = {}
+    notes: dict[str, str] = {}
     for layer in layers[:-1]:
         cfg = merge(cfg, layer.values)
         for key, value in flatten(layer.values).items():
             sources.setdefault(key, []).append((layer.source, value))
+            if key in layer.notes:
+                notes[key] = layer.notes[key]
+            else:
+                notes.pop(key, None)
     for key, value in flat.items():
         set_dotted(cfg, key, value)
         sources.setdefault(key, []).append((COMMAND_LINE, value))
+        notes.pop(key, None)
     cfg["task"], cfg["algo"] = task, algo
     cfg = validate(cfg, defaults)
     check_combinations(cfg)
-    return Resolution(cfg, sources, layers)
+    return Resolution(cfg, sources, layers, notes)
 
 
 def _merged(layers: list[Layer]) -> dict:

@@ -41,6 +41,50 @@ ConfigLoader.add_implicit_resolver(
 )
 
 
+def _comment(line: str) -> str:
+    """The text after the line's first `` #`` outside quotes ("" if none)."""
+    quote = None
+    for i, char in enumerate(line):
+        if quote:
+            quote = None if char == quote else quote
+        elif char in "'\"":
+            quote = char
+        elif char == "#" and i > 0 and line[i - 1].isspace():
+            return line[i + 1 :].strip()
+    return ""
+
+
+def key_comments(path: Path) -> dict[str, str]:
+    """The comment at the end of the line of each key of a block mapping that holds a value, by dotted key
+    (``algorithm.num_mc_samples: 16  # FPO++: rl_cfg.py:234`` gives ``{"algorithm.num_mc_samples": "FPO++: ..."}``):
+    why a file sets a value, for ``--explain``. Keys inside a one-line ``{...}`` mapping share a line and get none."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+        root = yaml.compose(text, Loader=ConfigLoader)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return {}
+    lines = text.splitlines()
+    out: dict[str, str] = {}
+
+    def walk(node, prefix: str) -> None:
+        if not isinstance(node, yaml.MappingNode):
+            return
+        for key_node, value in node.value:
+            if not isinstance(key_node, yaml.ScalarNode) or key_node.tag == "tag:yaml.org,2002:merge":
+                continue
+            key = prefix + str(key_node.value)
+            if isinstance(value, yaml.MappingNode):
+                if not value.flow_style:
+                    walk(value, key + ".")
+            elif not node.flow_style:
+                comment = _comment(lines[key_node.start_mark.line])
+                if comment:
+                    out[key] = comment
+
+    walk(root, "")
+    return out
+
+
 def load_yaml(path: Path, error: type[Exception] = ConfigError) -> dict:
     """Read a YAML mapping; any problem (unreadable, not YAML, duplicate key, not a mapping) raises ``error``
     naming the file."""

@@ -34,6 +34,24 @@ def test_explain_names_the_layer_that_set_a_key_and_the_constructor_default_belo
             ) in text  # fmt: skip
 
 
+def test_explain_gives_the_comment_a_file_writes_beside_the_value_it_sets(tmp_path):
+    text = explain(resolve(["task=dmc_point_mass", "algo=fpo_pp"], device_type="cpu"),
+                   ["algorithm.num_mc_samples", "actor.num_flow_steps", "algorithm.gamma"])  # fmt: skip
+    assert ("algorithm.num_mc_samples = 16\n  set by  configs/algo/fpo_pp.yaml\n"
+            "  why     FPO++ rl_cfg.py:234 n_samples_per_action = 16 (\"gains plateau beyond 16\")\n") in text
+    assert "actor.num_flow_steps = 64\n  set by  configs/algo/fpo_pp.yaml\n  why     FPO++ rl_cfg.py:86" in text
+    assert "algorithm.gamma = 0.995\n  set by  configs/task/_dmc.yaml\n  over" in text  # a task's value: no comment
+    # the comment of the layer that set the value; a later layer without one, or the command line, drops it
+    res = resolve(["task=dmc_point_mass", "algo=fpo_pp", "algorithm.num_mc_samples=4"], device_type="cpu")
+    assert "why" not in explain(res, ["algorithm.num_mc_samples"])
+    from refpo_warp.config.yaml_files import key_comments
+
+    path = tmp_path / "a.yaml"
+    path.write_text("a:\n  b: 1   # one '#' in quotes: \"#\"\n  c: {d: 2}  # shared by a flow mapping\n"
+                    "e: 'x # not a comment'\nf: [1, 2]  # a list\n")  # fmt: skip
+    assert key_comments(path) == {"a.b": "one '#' in quotes: \"#\"", "f": "a list"}
+
+
 def test_a_section_lists_every_option_of_its_class_and_env_defaults_name_their_cfg():
     res = resolve(["task=dmc_point_mass", "algo=refpo"], device_type="cpu")
     text = explain(res, ["algorithm", "env.task", "env.max_episode_length"])

@@ -27,8 +27,9 @@ def test_both_protocols_leave_the_random_numbers_and_the_training_as_they_were(t
         assert {k: v for k, v in a.items() if k.startswith(("Loss/", "reward"))} == \
                {k: v for k, v in b.items() if k.startswith(("Loss/", "reward"))}  # fmt: skip
     assert both["protocol"]["initial_noise"] == ["random", "zero"]
-    assert set(both["health"]) == {"N=1", "N=10", "N=1/zero", "N=10/zero"}
-    assert both["health"]["N=1"]["final_iteration"] == 2
+    assert set(both["health"]["curves"]) == {"N=1", "N=10", "N=1/zero", "N=10/zero"}
+    assert both["health"]["curves"]["N=1"]["final_iteration"] == 2
+    assert both["health"]["cliff"]["status"] == "insufficient_data"  # 3 iterations of FPO++'s 150
 
 
 def test_zero_noise_evaluation_repeats_exactly(tmp_run_dir, quick_run):
@@ -49,7 +50,7 @@ def test_bad_protocols_are_refused_by_name(tmp_run_dir, quick_run, value, words)
 
 def test_a_run_with_the_ema_checkpoints_both_and_evaluates_the_ema(tmp_run_dir, quick_run):
     quick_run = [a.replace("algo=refpo", "algo=fpo_pp") for a in quick_run]
-    out = train([*quick_run, f"run_dir={tmp_run_dir}", "algorithm.ema_decay=0.5"])
+    out = train([*quick_run, f"run_dir={tmp_run_dir}", "algorithm.ema_decay=0.5", "algorithm.ema_warmup=1"])
     saved = torch.load(latest_checkpoint(tmp_run_dir), weights_only=True)
     live, ema = saved["actor_state_dict"], saved["ema_actor_state_dict"]
     assert any(not torch.equal(live[k], ema[k]) for k in live)
