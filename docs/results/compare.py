@@ -6,8 +6,8 @@
 Each REPORT_DIR is a ``refpo report`` output folder (its ``per_task.csv`` and ``runs.csv``); the labels pick and order
 its methods (default: all). Writes the Markdown table between the markers ``<!-- compare: begin -->`` and
 ``<!-- compare: end -->`` of OUT.md: per task and method, mean ± population std over seeds of the 10-step and 1-step
-returns under random and zero initial noise, Straightness, Explosion, the one-step error, the runs whose health
-flags a cliff, the training minutes, and how many (task, seed) pairs keep the 1-step return at 0.9 × the 10-step one
+returns under random and zero initial noise, Straightness, Explosion, the one-step error, the runs whose training
+reward falls off a cliff by FPO++'s rule, the training minutes, and how many (task, seed) pairs keep the 1-step return at 0.9 × the 10-step one
 or better. Nothing in the table is typed in by hand.
 """
 
@@ -42,6 +42,15 @@ def one_step_holds(runs: list[dict], task: str, label: str) -> str:
     return f"{sum(one >= 0.9 * multi for one, multi in pairs)}/{len(pairs)}" if pairs else "--"
 
 
+def cliff_cell(runs: list[dict]) -> str:
+    """Runs whose training reward fell off a cliff by FPO++'s rule / runs long enough for it (``health`` of
+    runs.csv); ``n/a`` where no run is long enough, ``--`` for a report without the column."""
+    if not runs or "health" not in runs[0]:
+        return "--"
+    judged = [r for r in runs if r["health"] in ("healthy", "cliff_detected")]
+    return f"{sum(r['health'] == 'cliff_detected' for r in judged)}/{len(judged)}" if judged else "n/a"
+
+
 def rows_of(spec: str) -> list[tuple[dict, list[dict], Path]]:
     folder, _, labels = spec.partition(":")
     folder = Path(folder)
@@ -58,13 +67,13 @@ def table(specs: list[str]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for task in TASK_ORDER:
         for row, runs, folder in (r for r in rows if r[0]["task"] == task):
-            cliffs = [r for r in runs if r["task"] == task and r["label"] == row["label"] and r.get("cliffs")]
+            mine = [r for r in runs if r["task"] == task and r["label"] == row["label"] and r["status"] == "ok"]
             lines.append("| " + " | ".join([
                 task.removeprefix("dmc_"), row["method"], f"{row['runs_finished']}/{row['runs_total']}",
                 stat(row, "return_multi"), stat(row, "return_1"), stat(row, "return_multi_zero"),
                 stat(row, "return_1_zero"), one_step_holds(runs, task, row["label"]), stat(row, "straightness", False),
                 stat(row, "explosion", False), stat(row, "one_step", False),
-                f"{len(cliffs)}" if runs and "cliffs" in runs[0] else "--", stat(row, "minutes", False),
+                cliff_cell(mine), stat(row, "minutes", False),
                 f"`{folder.as_posix()}`"]) + " |")  # fmt: skip
     return "\n".join([BEGIN, *lines, END])
 

@@ -103,7 +103,7 @@ def load_record(sweep_dir: Path, entry: dict, status: dict) -> RunRecord:
         record.status, record.note = "unreadable", f"{type(err).__name__}: {err}"
         return record
     record.metrics, record.multi_n = run_metrics(report)
-    record.cliffs = [setting for setting, h in (report.get("health") or {}).items() if h.get("cliff")]
+    record.health = ((report.get("health") or {}).get("cliff") or {}).get("status", "")
     return record
 
 
@@ -167,10 +167,10 @@ def runs_csv(records: list[RunRecord]) -> str:
     metrics = list(METRIC_TITLES)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["task", "label", "seed", "status", "multi_step_n", *metrics, "cliffs", "note", "run_dir"])
+    writer.writerow(["task", "label", "seed", "status", "multi_step_n", *metrics, "health", "note", "run_dir"])
     for r in records:
         writer.writerow([r.task, r.label, r.seed, r.status, r.multi_n or "",
-                         *[repr(r.metrics[m]) if m in r.metrics else "" for m in metrics], ";".join(r.cliffs), r.note,
+                         *[repr(r.metrics[m]) if m in r.metrics else "" for m in metrics], r.health, r.note,
                          r.run_dir])  # fmt: skip
     return out.getvalue()
 
@@ -235,7 +235,7 @@ def report_markdown(spec, records, mrows, trows, figures, notes, sweep_dir: Path
               f"`refpo report {sweep_dir}`.", "",
               "## DMC table (the paper's \"MuJoCo Playground results\")", "", main_markdown(mrows), AGGREGATION, "",
               SOURCES_MAIN, "", "## Per task", "", task_markdown(trows),
-              "## Run health: runs that fell 30 % or more below their peak", "", cliffs_markdown(records),
+              "## Run health: FPO++'s cliff rule on each run's training reward", "", cliffs_markdown(records),
               "## Appendix C: Jacobian and policy-ratio diagnostics", "", appendix_c_markdown(mrows),
               SOURCES_APPENDIX_C, "",
               "CSV: `main.csv`, `per_task.csv`, `appendix_c.csv` (full precision), `runs.csv` (one row per run).", ""]

@@ -27,6 +27,8 @@ import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from refpo_warp.evaluation.run_health import CLIFF, HEALTHY, INSUFFICIENT
+
 MISSING = "--"
 METRIC_TITLES = {
     "return_multi": "10-step Reward",
@@ -72,8 +74,9 @@ SOURCES_MAIN = (
     "`diagnostics.explosion_rate`; 1-step Err. (ours, not in the paper) = `diagnostics.one_step_error_eval`, the "
     "mean squared gap between the 1-step and the N-step action from the same noise in the env's action space on the "
     "final policy's states, and 1-step Ratio = that gap over the policy's spread (`one_step_ratio_eval`). Train min. "
-    "= `train_time_s` / 60 (training only; shared machines run slower); Cliffs = runs whose periodic evaluation ends "
-    "30 % or more below its peak in some setting (`health`), of the finished runs."
+    "= `train_time_s` / 60 (training only; shared machines run slower); Cliffs = runs whose training reward falls off "
+    "a cliff by FPO++'s rule (`health.cliff`: a 50-iteration mean, 100 or more iterations after the peak, 30 % or "
+    "more below it), of the finished runs long enough for the rule (150 iterations)."
 )
 SOURCES_APPENDIX_C = (
     "Means over the same runs as above (std in `appendix_c.csv`). Sources: `diagnostics.jacobian_explosion_rate`, "
@@ -93,7 +96,7 @@ class RunRecord:
     note: str = ""
     metrics: dict[str, float] = field(default_factory=dict)
     multi_n: int | None = None  # the multi-step N of the 10-step column (None: Gaussian mean action)
-    cliffs: list[str] = field(default_factory=list)  # the settings whose run health flags a cliff
+    health: str = ""  # the cliff rule's verdict on its training reward (run_health): healthy | cliff_detected | ...
 
 
 @dataclass
@@ -180,15 +183,22 @@ def _runs_cell(records: list[RunRecord]) -> str:
 
 
 def cliff_count(records: list[RunRecord]) -> str:
-    """Runs flagged by their health / finished runs."""
-    ok = [r for r in records if r.status == "ok"]
-    return f"{sum(bool(r.cliffs) for r in ok)}/{len(ok)}"
+    """Runs whose training reward fell off a cliff / finished runs long enough to tell (``n/a``: none is)."""
+    judged = [r for r in records if r.status == "ok" and r.health in (HEALTHY, CLIFF)]
+    return f"{sum(r.health == CLIFF for r in judged)}/{len(judged)}" if judged else "n/a"
 
 
 def cliffs_markdown(records: list[RunRecord]) -> str:
-    """One line per flagged run: the settings that fell off their peak."""
-    lines = [f"- {r.task} / {r.label} / seed {r.seed}: {', '.join(r.cliffs)}" for r in records
-             if r.status == "ok" and r.cliffs]  # fmt: skip
+    """One line per run that fell off a cliff, and how many runs were too short for the rule."""
+    ok = [r for r in records if r.status == "ok"]
+    lines = [f"- {r.task} / {r.label} / seed {r.seed}: cliff" for r in ok if r.health == CLIFF]
+    short = sum(r.health == INSUFFICIENT for r in ok)
+    judged = sum(r.health in (HEALTHY, CLIFF) for r in ok)
+    if judged and not lines:
+        lines = [f"No cliff in the {judged} runs long enough for the rule."]
+    if short:
+        lines.append(f"{short} of {len(ok)} finished runs are too short for the rule, or peak under its minimum "
+                     f"(insufficient data).")  # fmt: skip
     return "\n".join(lines) + "\n" if lines else "None.\n"
 
 

@@ -58,12 +58,14 @@ def headline_numbers(results: dict) -> list[tuple[str, str]]:
     return rows
 
 
-def health_line(health: dict[str, dict]) -> str:
-    """A run's health (``refpo_warp.evaluation.run_health``) on one line:
-    ``N=10 peak 950 (it 39), final 940 (-1 %);  N=1 peak 724 (it 48), final 75 (-90 %) CLIFF``."""
-    return ";  ".join(f"{setting} peak {h['peak']:.4g} (it {h['peak_iteration']}), final {h['final']:.4g} "
-                      f"({-100 * h['drop']:+.0f} %)" + (" CLIFF" if h["cliff"] else "")
-                      for setting, h in health.items())  # fmt: skip
+def health_line(health: dict) -> str:
+    """A run's health (``refpo_warp.evaluation.run_health``) on one line: ``cliff: healthy (no cliff after ...);
+    N=10 peak 950 (it 39), final 940 (-1 %)``."""
+    cliff = health.get("cliff") or {}
+    parts = [f"cliff: {cliff['status'].replace('_', ' ')} ({cliff['message']})"] if cliff else []
+    parts += [f"{setting} peak {h['peak']:.4g} (it {h['peak_iteration']}), final {h['final']:.4g} "
+              f"({-100 * h['drop']:+.0f} %)" for setting, h in (health.get("curves") or {}).items()]  # fmt: skip
+    return ";  ".join(parts)
 
 
 def run_outputs(run_dir: Path, checkpoint, results: dict | None) -> list[tuple[str, object]]:

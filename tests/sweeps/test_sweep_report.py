@@ -28,7 +28,7 @@ def flow_eval(n10, n1, straight=None, explosion=None, jac=None, multi=10, zero=N
         report["results"].update({f"N={multi}/zero": {"return_mean": zero[0]}, "N=1/zero": {"return_mean": zero[1]}})
     if seconds is not None:
         report["train_time_s"] = seconds
-    report["health"] = {"N=10": {"cliff": False}, "N=1": {"cliff": cliff == "N=1"}}
+    report["health"] = {"cliff": {"status": cliff or "healthy"}, "curves": {}}
     diagnostics = {}
     if straight is not None:
         diagnostics.update(straightness_error=straight, explosion_rate=explosion)
@@ -53,8 +53,8 @@ RUNS = {
     ("dmc_a", "refpo", 2): flow_eval(700.0, 700.0, 0.02, 0.002, (0.03, 0.5, 0.9), zero=(750.0, 600.0), seconds=180),
     ("dmc_b", "refpo", 1): flow_eval(800.0, 800.0, 0.03, 0.003, (0.0, 0.6, 1.0), zero=(850.0, 600.0), seconds=240),
     ("dmc_b", "refpo", 2): flow_eval(900.0, 800.0, 0.06, 0.002, (0.02, 0.5, 1.3), zero=(950.0, 600.0), seconds=300,
-                                     cliff="N=1"),
-    ("dmc_a", "reinflow", 1): flow_eval(300.0, 250.0, multi=4),
+                                     cliff="cliff_detected"),
+    ("dmc_a", "reinflow", 1): flow_eval(300.0, 250.0, multi=4, cliff="insufficient_data"),
     ("dmc_a", "refpo_l0.08", 1): flow_eval(1000.0, 1000.0, 0.0, 0.0),
 }  # fmt: skip
 METHODS = [("ppo", "PPO"), ("fpo", "FPO"), ("refpo", "ReFPO*"), ("reinflow", "ReinFlow"), ("refpo_l0.08", "λ=0.08")]
@@ -129,17 +129,18 @@ def test_markdown_tables(sweep_dir):
     text = (sweep_dir / "report" / "report.md").read_text()
     assert ("| Method | Runs | 10-step Reward | 1-step Reward | 10-step, zero noise | 1-step, zero noise | "
             "Straightness | Explosion | 1-step Err. | 1-step Ratio | Train min. | Cliffs |") in text
-    assert "| PPO | 4/4 | 400 ± 224 | -- | -- | -- | -- | -- | -- | -- | -- | 0/4 |" in text
+    assert "| PPO | 4/4 | 400 ± 224 | -- | -- | -- | -- | -- | -- | -- | -- | n/a |" in text  # no health: n/a
     assert "| FPO | 3/4 | 500 ± 81.6 | 200 ± 81.6 | -- | -- | 0.06 | 0.003 | -- | -- | -- | 0/3 |" in text
     # zero noise: 10-step 650..950 -> 800 ± 112, 1-step 600 ± 0; minutes 2, 3, 4, 5 -> 3.5; one run flagged
     assert "| ReFPO* | 4/4 | 750 ± 112 | 700 ± 122 | 800 ± 112 | 600 ± 0 | 0.03 | 0.002 | -- | -- | 3.5 | 1/4 |" in text
-    assert "| ReinFlow | 1/1 | 300 (N=4) | 250 | -- | -- | -- | -- | -- | -- | -- | 0/1 |" in text
-    assert "| λ=0.08 | 0/1 | -- | -- | -- | -- | -- | -- | -- | -- | -- | 0/0 |" in text
+    assert "| ReinFlow | 1/1 | 300 (N=4) | 250 | -- | -- | -- | -- | -- | -- | -- | n/a |" in text  # too short
+    assert "| λ=0.08 | 0/1 | -- | -- | -- | -- | -- | -- | -- | -- | -- | n/a |" in text
     # Per task, mean ± std over seeds: dmc_a ReFPO 600/700 -> 650 ± 50, 1-step 500/700 -> 600 ± 100.
     assert ("| dmc_a | ReFPO* | 2/2 | 650 ± 50 | 600 ± 100 | 700 ± 50 | 600 ± 0 | 0.015 ± 0.005 | 0.0015 ± 0.0005 | -- "
             "| -- | 2.5 ± 0.5 | 0/2 |") in text
     assert "| dmc_b | FPO | 1/2 | 600 | 200 | -- | -- | 0.06 | 0.003 | -- | -- | -- | 0/1 |" in text
-    assert "## Run health: runs that fell 30 % or more below their peak\n\n- dmc_b / refpo / seed 2: N=1\n" in text
+    assert ("## Run health: FPO++'s cliff rule on each run's training reward\n\n- dmc_b / refpo / seed 2: cliff\n"
+            "1 of 12 finished runs are too short for the rule, or peak under its minimum (insufficient data).\n") in text
     # Appendix C: Jac. Expl. (0.01 + 0.03 + 0 + 0.02) / 4, Ratio Expl. = Explosion, norms 0.5 and P95 1.
     assert "| ReFPO* | 4/4 | 0.015 | 0.002 | 0.5 | 1 |" in text
     assert "| FPO | 3/4 | -- | 0.003 | -- | -- |" in text
@@ -157,7 +158,7 @@ def test_per_task_csv_and_runs_csv(sweep_dir):
     failed = next(r for r in runs if (r["task"], r["label"], r["seed"]) == ("dmc_b", "fpo", "2"))
     assert failed["status"] == "failed" and failed["return_multi"] == ""
     flagged = next(r for r in runs if (r["task"], r["label"], r["seed"]) == ("dmc_b", "refpo", "2"))
-    assert (flagged["cliffs"], flagged["return_1_zero"], flagged["minutes"]) == ("N=1", "600.0", "5.0")
+    assert (flagged["health"], flagged["return_1_zero"], flagged["minutes"]) == ("cliff_detected", "600.0", "5.0")
 
 
 def test_figures_written(sweep_dir):
