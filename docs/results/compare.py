@@ -6,7 +6,8 @@
 Each REPORT_DIR is a ``refpo report`` output folder (its ``per_task.csv`` and ``runs.csv``); the labels pick and order
 its methods (default: all). Writes the Markdown table between the markers ``<!-- compare: begin -->`` and
 ``<!-- compare: end -->`` of OUT.md: per task and method, mean ± population std over seeds of the 10-step and 1-step
-returns under random and zero initial noise, Straightness, Explosion, the one-step error, the runs whose training
+returns under random and zero initial noise, each method's own headline return (its first protocol at its largest
+N: FPO++'s N = 64 from zero noise), Straightness, Explosion, the one-step error, the runs whose training
 reward falls off a cliff by FPO++'s rule, the training minutes, and how many (task, seed) pairs keep the 1-step return at 0.9 × the 10-step one
 or better. Nothing in the table is typed in by hand.
 """
@@ -42,6 +43,20 @@ def one_step_holds(runs: list[dict], task: str, label: str) -> str:
     return f"{sum(one >= 0.9 * multi for one, multi in pairs)}/{len(pairs)}" if pairs else "--"
 
 
+def headline_cell(runs: list[dict]) -> str:
+    """Mean ± population std of the runs' own headline return (runs.csv ``return_headline``), with its setting
+    (``N=64/zero`` for FPO++); ``--`` for a report without the column."""
+    values = [float(r["return_headline"]) for r in runs if r.get("return_headline")]
+    if not values:
+        return "--"
+    mean = sum(values) / len(values)
+    spread = (sum((v - mean) ** 2 for v in values) / len(values)) ** 0.5
+    shown = f"{mean:.0f}" if abs(mean) >= 100 else f"{mean:.3g}"
+    settings = sorted({r["headline"] for r in runs if r.get("headline")})
+    shown = shown if len(values) == 1 else f"{shown} ± {spread:.0f}"
+    return shown + (f" ({', '.join(settings)})" if settings else "")
+
+
 def cliff_cell(runs: list[dict]) -> str:
     """Runs whose training reward fell off a cliff by FPO++'s rule / runs long enough for it (``health`` of
     runs.csv); ``n/a`` where no run is long enough, ``--`` for a report without the column."""
@@ -63,7 +78,7 @@ def rows_of(spec: str) -> list[tuple[dict, list[dict], Path]]:
 def table(specs: list[str]) -> str:
     rows = [entry for spec in specs for entry in rows_of(spec)]
     header = ["task", "method", "runs", "10-step", "1-step", "10-step, zero noise", "1-step, zero noise",
-              "1-step ≥ 0.9 × 10-step", "Straightness", "Explosion", "one-step error", "cliffs", "train min.", "source"]
+              "own headline", "1-step ≥ 0.9 × 10-step", "Straightness", "Explosion", "one-step error", "cliffs", "train min.", "source"]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for task in TASK_ORDER:
         for row, runs, folder in (r for r in rows if r[0]["task"] == task):
@@ -71,8 +86,8 @@ def table(specs: list[str]) -> str:
             lines.append("| " + " | ".join([
                 task.removeprefix("dmc_"), row["method"], f"{row['runs_finished']}/{row['runs_total']}",
                 stat(row, "return_multi"), stat(row, "return_1"), stat(row, "return_multi_zero"),
-                stat(row, "return_1_zero"), one_step_holds(runs, task, row["label"]), stat(row, "straightness", False),
-                stat(row, "explosion", False), stat(row, "one_step", False),
+                stat(row, "return_1_zero"), headline_cell(mine), one_step_holds(runs, task, row["label"]),
+                stat(row, "straightness", False), stat(row, "explosion", False), stat(row, "one_step", False),
                 cliff_cell(mine), stat(row, "minutes", False),
                 f"`{folder.as_posix()}`"]) + " |")  # fmt: skip
     return "\n".join([BEGIN, *lines, END])

@@ -148,7 +148,7 @@ def specific_layers(task: str, algo: str, device_type: str, path: ConfigPath) ->
         layers.append(Layer(shown(file), _without_profiles(data), _notes(file)))
         layers += [Layer(f"{shown(file)} by_algo.{name}", (d.get("by_algo") or {}).get(name) or {},
                          _notes(file, f"by_algo.{name}")) for file, d in files]  # fmt: skip
-        layers += [Layer(f"{shown(file)} by_device.{device_type}.by_algo.{name}",
-                         (p.get("by_algo") or {}).get(name) or {}, _notes(file, f"by_device.{device_type}.by_algo.{name}"))
+        section = f"by_device.{device_type}.by_algo.{name}"
+        layers += [Layer(f"{shown(file)} {section}", (p.get("by_algo") or {}).get(name) or {}, _notes(file, section))
                    for file, p in profiles]  # fmt: skip
     return [layer for layer in layers if layer.values]

@@ -41,6 +41,7 @@ from refpo_warp.sweeps.tables import (
     RunRecord,
     appendix_c_markdown,
     cliffs_markdown,
+    headline_setting,
     main_markdown,
     method_rows,
     run_metrics,
@@ -104,6 +105,7 @@ def load_record(sweep_dir: Path, entry: dict, status: dict) -> RunRecord:
         return record
     record.metrics, record.multi_n = run_metrics(report)
     record.health = ((report.get("health") or {}).get("cliff") or {}).get("status", "")
+    record.headline = headline_setting(report) or ""
     return record
 
 
@@ -167,10 +169,11 @@ def runs_csv(records: list[RunRecord]) -> str:
     metrics = list(METRIC_TITLES)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["task", "label", "seed", "status", "multi_step_n", *metrics, "health", "note", "run_dir"])
+    writer.writerow(["task", "label", "seed", "status", "multi_step_n", *metrics, "headline", "health", "note",
+                     "run_dir"])
     for r in records:
         writer.writerow([r.task, r.label, r.seed, r.status, r.multi_n or "",
-                         *[repr(r.metrics[m]) if m in r.metrics else "" for m in metrics], r.health, r.note,
+                         *[repr(r.metrics[m]) if m in r.metrics else "" for m in metrics], r.headline, r.health, r.note,
                          r.run_dir])  # fmt: skip
     return out.getvalue()
 

@@ -1,15 +1,18 @@
 """The paper's DMC tables from per-run ``eval.json`` files: which numbers, how they are aggregated and printed.
 
 Per run (``eval.json``, the project's shared format):
-- 10-step reward: ``results["N=<n>"].return_mean`` for the largest n > 1 (ReinFlow: N = 4, marked in the cell);
-  a Gaussian policy's ``results["mean_action"].return_mean``;
+- 10-step reward: ``results["N=10"].return_mean``, or where a run has no N = 10 its largest n > 1 (ReinFlow: N = 4,
+  marked in the cell); a Gaussian policy's ``results["mean_action"].return_mean``;
 - 1-step reward: ``results["N=1"].return_mean``; both again under zero initial noise (``N=<n>/zero``, ``N=1/zero``)
   where the run evaluated that protocol;
 - Straightness: ``diagnostics.straightness_error``; Explosion and Ratio Expl.: ``diagnostics.explosion_rate``
   (per action, the paper's number); Jac. Expl., Mean Jac. Norm, Jac. Norm P95: ``diagnostics.jacobian_*``;
 - 1-step Err. (ours): ``diagnostics.one_step_error_eval``, E|T(a_1) - T(a_N)|^2 with shared noise on the final
   policy's evaluation states, and 1-step Ratio its ratio to the policy's spread (``one_step_ratio_eval``).
-- Train min.: ``train_time_s`` / 60; Cliffs: the settings whose run health (``health``) flags a cliff.
+- Own headline (``runs.csv`` only): the return under the run's first initial-noise protocol at its largest N (FPO++:
+  ``N=64/zero``; the mean action for a Gaussian policy), with that setting in the ``headline`` column;
+- Train min.: ``train_time_s`` / 60; Cliffs: runs whose training reward falls off a cliff by FPO++'s rule
+  (``health.cliff``).
 A number a run does not have (e.g. PPO's diagnostics) is left out and prints as ``--``.
 
 Aggregation (``AGGREGATION`` says it in the reports): the method table pools all finished (task, seed) runs of a
@@ -44,6 +47,7 @@ METRIC_TITLES = {
     "jac_norm_mean": "Mean Jac. Norm",
     "jac_norm_p95": "Jac. Norm P95",
     "minutes": "Train min.",
+    "return_headline": "Own headline",
 }
 DIAGNOSTIC_KEYS = {
     "straightness": "straightness_error",
@@ -96,6 +100,7 @@ class RunRecord:
     note: str = ""
     metrics: dict[str, float] = field(default_factory=dict)
     multi_n: int | None = None  # the multi-step N of the 10-step column (None: Gaussian mean action)
+    headline: str = ""  # the setting of the run's own headline (headline_setting)
     health: str = ""  # the cliff rule's verdict on its training reward (run_health): healthy | cliff_detected | ...
 
 
@@ -114,13 +119,26 @@ def _finite(value) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
+def headline_setting(report: dict) -> str | None:
+    """The setting a run's own protocol puts first: its first initial-noise protocol at its largest N (``N=64/zero``
+    for FPO++), or ``mean_action``; None for a report without results."""
+    results = report.get("results") or {}
+    if "mean_action" in results:
+        return "mean_action"
+    steps = sorted(int(k[2:]) for k in results if k.startswith("N=") and k[2:].isdigit())
+    if not steps:
+        return None
+    protocols = (report.get("protocol") or {}).get("initial_noise") or ["random"]
+    return f"N={steps[-1]}" + ("" if protocols[0] == "random" else f"/{protocols[0]}")
+
+
 def run_metrics(report: dict) -> tuple[dict[str, float], int | None]:
     """The table numbers of one ``eval.json`` and the multi-step N used for the 10-step column (see the module
     docstring)."""
     results = report.get("results") or {}
     steps = sorted(int(k[2:]) for k in results if k.startswith("N=") and k[2:].isdigit())
     raw: dict[str, object] = {}
-    multi = steps[-1] if steps and steps[-1] > 1 else None
+    multi = 10 if 10 in steps else (steps[-1] if steps and steps[-1] > 1 else None)
     if multi is not None:
         raw["return_multi"] = results[f"N={multi}"].get("return_mean")
     elif "mean_action" in results:
@@ -129,6 +147,8 @@ def run_metrics(report: dict) -> tuple[dict[str, float], int | None]:
         raw["return_1"] = results["N=1"].get("return_mean")
     raw["return_multi_zero"] = results.get(f"N={multi}/zero", {}).get("return_mean")
     raw["return_1_zero"] = results.get("N=1/zero", {}).get("return_mean")
+    setting = headline_setting(report)
+    raw["return_headline"] = results.get(setting, {}).get("return_mean") if setting else None
     raw["minutes"] = report["train_time_s"] / 60 if _finite(report.get("train_time_s")) else None
     diagnostics = report.get("diagnostics") or {}
     for metric, key in DIAGNOSTIC_KEYS.items():

@@ -36,11 +36,11 @@ def test_explain_names_the_layer_that_set_a_key_and_the_constructor_default_belo
 
 def test_explain_gives_the_comment_a_file_writes_beside_the_value_it_sets(tmp_path):
     text = explain(resolve(["task=dmc_point_mass", "algo=fpo_pp"], device_type="cpu"),
-                   ["algorithm.num_mc_samples", "actor.num_flow_steps", "algorithm.gamma"])  # fmt: skip
+                   ["algorithm.num_mc_samples", "actor.num_flow_steps", "actor.hidden_dims"])  # fmt: skip
     assert ("algorithm.num_mc_samples = 16\n  set by  configs/algo/fpo_pp.yaml\n"
             "  why     FPO++ rl_cfg.py:234 n_samples_per_action = 16 (\"gains plateau beyond 16\")\n") in text
     assert "actor.num_flow_steps = 64\n  set by  configs/algo/fpo_pp.yaml\n  why     FPO++ rl_cfg.py:86" in text
-    assert "algorithm.gamma = 0.995\n  set by  configs/task/_dmc.yaml\n  over" in text  # a task's value: no comment
+    assert "actor.hidden_dims = [32, 32, 32, 32]\n  set by  configs/task/_dmc.yaml\n  over" in text  # no comment there
     # the comment of the layer that set the value; a later layer without one, or the command line, drops it
     res = resolve(["task=dmc_point_mass", "algo=fpo_pp", "algorithm.num_mc_samples=4"], device_type="cpu")
     assert "why" not in explain(res, ["algorithm.num_mc_samples"])

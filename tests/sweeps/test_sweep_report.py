@@ -15,7 +15,7 @@ import yaml
 from refpo_warp.sweeps.figures import seed_mean
 from refpo_warp.sweeps.report import write_report
 from refpo_warp.sweeps.spec import fingerprint
-from refpo_warp.sweeps.tables import aggregate, fmt_number, run_metrics
+from refpo_warp.sweeps.tables import aggregate, fmt_number, headline_setting, run_metrics
 from refpo_warp.utils.paths import REPO_ROOT
 
 ROOT = REPO_ROOT
@@ -140,7 +140,8 @@ def test_markdown_tables(sweep_dir):
             "| -- | 2.5 ± 0.5 | 0/2 |") in text
     assert "| dmc_b | FPO | 1/2 | 600 | 200 | -- | -- | 0.06 | 0.003 | -- | -- | -- | 0/1 |" in text
     assert ("## Run health: FPO++'s cliff rule on each run's training reward\n\n- dmc_b / refpo / seed 2: cliff\n"
-            "1 of 12 finished runs are too short for the rule, or peak under its minimum (insufficient data).\n") in text
+            "1 of 12 finished runs are too short for the rule, or peak under its minimum (insufficient data).\n"
+            ) in text  # fmt: skip
     # Appendix C: Jac. Expl. (0.01 + 0.03 + 0 + 0.02) / 4, Ratio Expl. = Explosion, norms 0.5 and P95 1.
     assert "| ReFPO* | 4/4 | 0.015 | 0.002 | 0.5 | 1 |" in text
     assert "| FPO | 3/4 | -- | 0.003 | -- | -- |" in text
@@ -170,9 +171,17 @@ def test_figures_written(sweep_dir):
 
 def test_run_metrics_settings():
     metrics, multi = run_metrics(flow_eval(300.0, 250.0, multi=4))
-    assert multi == 4 and metrics == {"return_multi": 300.0, "return_1": 250.0}
+    assert multi == 4 and metrics == {"return_multi": 300.0, "return_1": 250.0, "return_headline": 300.0}
     metrics, multi = run_metrics({"results": {"mean_action": {"return_mean": 12.0}}, "diagnostics": {}})
-    assert multi is None and metrics == {"return_multi": 12.0}
+    assert multi is None and metrics == {"return_multi": 12.0, "return_headline": 12.0}
+    # FPO++: N = 64 beside 10 and 1, zero noise first: the 10-step column reads N = 10, its headline N = 64 from zero
+    fpo_pp = {"results": {s: {"return_mean": v} for s, v in (("N=64/zero", 9.0), ("N=10/zero", 8.0), ("N=1/zero", 7.0),
+                                                            ("N=64", 6.0), ("N=10", 5.0), ("N=1", 4.0))},
+              "protocol": {"initial_noise": ["zero", "random"]}}  # fmt: skip
+    metrics, multi = run_metrics(fpo_pp)
+    assert multi == 10 and headline_setting(fpo_pp) == "N=64/zero"
+    assert metrics == {"return_multi": 5.0, "return_1": 4.0, "return_multi_zero": 8.0, "return_1_zero": 7.0,
+                       "return_headline": 9.0}  # fmt: skip
     metrics, _ = run_metrics(flow_eval(float("nan"), 5.0, 0.1, 0.2))  # a non-finite number is left out
     assert "return_multi" not in metrics and metrics["ratio_expl"] == metrics["explosion"] == 0.2
 
