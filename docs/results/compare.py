@@ -1,10 +1,10 @@
 #!/usr/bin/env python
 """One per-task table from several sweeps' reports, for the pages that set new methods beside the committed ones:
 
-    python docs/results/compare.py OUT.md REPORT_DIR[:label,label,...] [REPORT_DIR[:labels] ...]
+    python docs/results/compare.py OUT.md REPORT_DIR[:label,label,...][#note] [REPORT_DIR[:labels][#note] ...]
 
 Each REPORT_DIR is a ``refpo report`` output folder (its ``per_task.csv`` and ``runs.csv``); the labels pick and order
-its methods (default: all). Writes the Markdown table between the markers ``<!-- compare: begin -->`` and
+its methods (default: all); a ``#note`` is added to the names of its methods (to tell two grids of one method apart). Writes the Markdown table between the markers ``<!-- compare: begin -->`` and
 ``<!-- compare: end -->`` of OUT.md: per task and method, mean ± population std over seeds of the 10-step and 1-step
 returns under random and zero initial noise, each method's own headline return (its first protocol at its largest
 N: FPO++'s N = 64 from zero noise), Straightness, Explosion, the one-step error, the runs whose training
@@ -67,12 +67,16 @@ def cliff_cell(runs: list[dict]) -> str:
 
 
 def rows_of(spec: str) -> list[tuple[dict, list[dict], Path]]:
+    spec, _, note = spec.partition("#")
     folder, _, labels = spec.partition(":")
     folder = Path(folder)
     per_task = list(csv.DictReader((folder / "per_task.csv").open()))
     runs = list(csv.DictReader((folder / "runs.csv").open())) if (folder / "runs.csv").exists() else []
     wanted = labels.split(",") if labels else list(dict.fromkeys(r["label"] for r in per_task))
-    return [(row, runs, folder) for label in wanted for row in per_task if row["label"] == label]
+    rows = [(dict(row), runs, folder) for label in wanted for row in per_task if row["label"] == label]
+    for row, _, _ in rows:
+        row["method"] += f", {note}" if note else ""
+    return rows
 
 
 def table(specs: list[str]) -> str:
