@@ -3,7 +3,7 @@
 
 Rewrites the table between the markers in README.md ("Measured: learning") from
 - docs/results/learning_checks/records/gridworld_refpo.jsonl: ReFPO on GridWorld, the learning check's runs;
-- docs/results/*/per_task.csv of the DMC sweeps below (tools/report.py's output): the CPU profiles' returns per task,
+- docs/results/*/per_task.csv of the DMC sweeps below (`refpo report`'s output): the CPU profiles' returns per task,
   mean ± population std over seeds 1-3.
 Each row names its data file; nothing here is typed in by hand.
 """
