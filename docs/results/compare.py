@@ -15,6 +15,7 @@ or better. Nothing in the table is typed in by hand.
 from __future__ import annotations
 
 import csv
+import statistics
 import sys
 from pathlib import Path
 
@@ -27,17 +28,22 @@ def value(row: dict, key: str) -> float | None:
     return float(text) if text not in ("", None) else None
 
 
+def mean_and_spread(mean: float, spread: float | None) -> str:
+    """``mean ± spread`` (no spread: the mean alone), the mean to 3 significant digits below 100."""
+    shown = f"{mean:.0f}" if abs(mean) >= 100 else f"{mean:.3g}"
+    return shown if spread is None else f"{shown} ± {spread:.0f}"
+
+
 def stat(row: dict, metric: str, std: bool = True) -> str:
     mean, spread = value(row, f"{metric}_mean"), value(row, f"{metric}_std")
     if mean is None:
         return "--"
-    shown = f"{mean:.0f}" if abs(mean) >= 100 else f"{mean:.3g}"
-    return shown if not std or spread is None or value(row, f"{metric}_n") == 1 else f"{shown} ± {spread:.0f}"
+    return mean_and_spread(mean, spread if std and value(row, f"{metric}_n") != 1 else None)
 
 
-def one_step_holds(runs: list[dict], task: str, label: str) -> str:
-    """(task, seed) pairs of the method whose 1-step return is at least 0.9 x its 10-step one, of its finished runs."""
-    mine = [r for r in runs if r["task"] == task and r["label"] == label and r["status"] == "ok"]
+def one_step_holds(mine: list[dict]) -> str:
+    """(task, seed) pairs of a method whose 1-step return is at least 0.9 x its 10-step one, of its finished runs
+    ``mine``."""
     pairs = [(value(r, "return_1"), value(r, "return_multi")) for r in mine]
     pairs = [(one, multi) for one, multi in pairs if one is not None and multi is not None]
     return f"{sum(one >= 0.9 * multi for one, multi in pairs)}/{len(pairs)}" if pairs else "--"
@@ -49,11 +55,8 @@ def headline_cell(runs: list[dict]) -> str:
     values = [float(r["return_headline"]) for r in runs if r.get("return_headline")]
     if not values:
         return "--"
-    mean = sum(values) / len(values)
-    spread = (sum((v - mean) ** 2 for v in values) / len(values)) ** 0.5
-    shown = f"{mean:.0f}" if abs(mean) >= 100 else f"{mean:.3g}"
+    shown = mean_and_spread(statistics.mean(values), statistics.pstdev(values) if len(values) > 1 else None)
     settings = sorted({r["headline"] for r in runs if r.get("headline")})
-    shown = shown if len(values) == 1 else f"{shown} ± {spread:.0f}"
     return shown + (f" ({', '.join(settings)})" if settings else "")
 
 
@@ -90,7 +93,7 @@ def table(specs: list[str]) -> str:
             lines.append("| " + " | ".join([
                 task.removeprefix("dmc_"), row["method"], f"{row['runs_finished']}/{row['runs_total']}",
                 stat(row, "return_multi"), stat(row, "return_1"), stat(row, "return_multi_zero"),
-                stat(row, "return_1_zero"), headline_cell(mine), one_step_holds(runs, task, row["label"]),
+                stat(row, "return_1_zero"), headline_cell(mine), one_step_holds(mine),
                 stat(row, "straightness", False), stat(row, "explosion", False), stat(row, "one_step", False),
                 cliff_cell(mine), stat(row, "minutes", False),
                 f"`{folder.as_posix()}`"]) + " |")  # fmt: skip

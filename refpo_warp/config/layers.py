@@ -44,10 +44,10 @@ class Layer:
     notes: dict = field(default_factory=dict)
 
 
-def _notes(file: Path, section: str = "") -> dict[str, str]:
-    """The line comments of ``file``'s keys under ``section`` (dotted), relative to it."""
+def _notes(comments: dict[str, str], section: str = "") -> dict[str, str]:
+    """A file's line comments (``key_comments``) of the keys under ``section`` (dotted), relative to it."""
     prefix = f"{section}." if section else ""
-    return {k[len(prefix):]: v for k, v in key_comments(file).items() if k.startswith(prefix)}
+    return {k[len(prefix):]: v for k, v in comments.items() if k.startswith(prefix)}
 
 
 def algo_names(path: ConfigPath) -> list[str]:
@@ -134,21 +134,23 @@ def _without_profiles(data: dict) -> dict:
 
 def generic_layers(task: str, path: ConfigPath) -> list[Layer]:
     """Layers 1 and 2: the defaults and what the task sets for every algorithm and device."""
-    layers = [Layer(shown(DEFAULT_FILE), load_yaml(DEFAULT_FILE), _notes(DEFAULT_FILE))]
-    return layers + [Layer(shown(file), _without_profiles(data), _notes(file)) for file, data in task_files(task, path)]
+    layers = [Layer(shown(DEFAULT_FILE), load_yaml(DEFAULT_FILE), key_comments(DEFAULT_FILE))]
+    return layers + [Layer(shown(file), _without_profiles(data), key_comments(file))
+                     for file, data in task_files(task, path)]  # fmt: skip
 
 
 def specific_layers(task: str, algo: str, device_type: str, path: ConfigPath) -> list[Layer]:
     """Layers 3 and 4: the task's device profile, then each algorithm of the chain with the task's settings for it."""
     files = task_files(task, path)
+    comments = {file: key_comments(file) for file, _ in files}  # each task file read once for all its sections
     profiles = [(file, dict((data.get("by_device") or {}).get(device_type) or {})) for file, data in files]
     layers = [Layer(f"{shown(file)} by_device.{device_type}", {k: v for k, v in p.items() if k != "by_algo"},
-                    _notes(file, f"by_device.{device_type}")) for file, p in profiles]  # fmt: skip
+                    _notes(comments[file], f"by_device.{device_type}")) for file, p in profiles]  # fmt: skip
     for name, file, data in algo_files(algo, path):
-        layers.append(Layer(shown(file), _without_profiles(data), _notes(file)))
+        layers.append(Layer(shown(file), _without_profiles(data), key_comments(file)))
         layers += [Layer(f"{shown(file)} by_algo.{name}", (d.get("by_algo") or {}).get(name) or {},
-                         _notes(file, f"by_algo.{name}")) for file, d in files]  # fmt: skip
+                         _notes(comments[file], f"by_algo.{name}")) for file, d in files]  # fmt: skip
         section = f"by_device.{device_type}.by_algo.{name}"
-        layers += [Layer(f"{shown(file)} {section}", (p.get("by_algo") or {}).get(name) or {}, _notes(file, section))
-                   for file, p in profiles]  # fmt: skip
+        layers += [Layer(f"{shown(file)} {section}", (p.get("by_algo") or {}).get(name) or {},
+                         _notes(comments[file], section)) for file, p in profiles]  # fmt: skip
     return [layer for layer in layers if layer.values]

@@ -41,19 +41,6 @@ ConfigLoader.add_implicit_resolver(
 )
 
 
-def _comment(line: str) -> str:
-    """The text after the line's first `` #`` outside quotes ("" if none)."""
-    quote = None
-    for i, char in enumerate(line):
-        if quote:
-            quote = None if char == quote else quote
-        elif char in "'\"":
-            quote = char
-        elif char == "#" and i > 0 and line[i - 1].isspace():
-            return line[i + 1 :].strip()
-    return ""
-
-
 def key_comments(path: Path) -> dict[str, str]:
     """The comment at the end of the line of each key of a block mapping that holds a value, by dotted key
     (``algorithm.num_mc_samples: 16  # FPO++: rl_cfg.py:234`` gives ``{"algorithm.num_mc_samples": "FPO++: ..."}``):
@@ -76,10 +63,11 @@ def key_comments(path: Path) -> dict[str, str]:
             if isinstance(value, yaml.MappingNode):
                 if not value.flow_style:
                     walk(value, key + ".")
-            elif not node.flow_style:
-                comment = _comment(lines[key_node.start_mark.line])
-                if comment:
-                    out[key] = comment
+            elif not node.flow_style and value.end_mark.line == key_node.start_mark.line:
+                # after the value's end only blanks and a comment can follow on its line
+                rest = lines[value.end_mark.line][value.end_mark.column :]
+                if "#" in rest:
+                    out[key] = rest.split("#", 1)[1].strip()
 
     walk(root, "")
     return out

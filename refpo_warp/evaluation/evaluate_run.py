@@ -99,9 +99,7 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
     with own_random_streams(stream_seed(cfg["seed"], FINAL_EVALUATION, iteration), runner.device):
         results, visited = evaluate_actor(cfg, actor, envs, cfg["eval"]["flow_steps"],
                                           record_obs=DIAGNOSTIC_OBSERVATIONS if flow else 0)  # fmt: skip
-        diagnostics = ({**training_diagnostics(run_dir),
-                        **flow_diagnostics(runner.alg, actor, visited, env.cfg.action_transform, cfg["seed"])}
-                       if flow else {})  # fmt: skip
+        on_policy = flow_diagnostics(runner.alg, actor, visited, env.cfg.action_transform, cfg["seed"]) if flow else {}
     out = {
         "task": cfg["task"],
         "algo": cfg["algo"],
@@ -115,7 +113,7 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
                      if flow else {"mean_action": True}),  # fmt: skip
         "results": results,
         "health": run_health(read_rows(run_dir)) if progress_path(run_dir).exists() else {},
-        "diagnostics": diagnostics,
+        "diagnostics": {**training_diagnostics(run_dir), **on_policy} if flow else {},
     }
     out["figures"] = [str(p) for p in run_figures(run_dir, actor, cfg)]
     kept = write_eval_json(out, run_dir)

@@ -31,9 +31,14 @@ def returns(path: Path, label: str, task: str) -> dict[int, tuple[float, float]]
             if r["label"] == label and r["task"] == task and r["status"] == "ok"}  # fmt: skip
 
 
-def gap(task: str) -> float:
+def ten_step_means(task: str) -> tuple[float, float]:
+    """The 10-step return's mean over seeds: the one-step configuration's and ReFPO's."""
     mine = statistics.mean(v[0] for v in returns(SEARCH_RUNS, "onestep_c03", task).values())
-    refpo = statistics.mean(v[0] for v in returns(CPU_DMC_RUNS, "refpo", task).values())
+    return mine, statistics.mean(v[0] for v in returns(CPU_DMC_RUNS, "refpo", task).values())
+
+
+def gap(task: str) -> float:
+    mine, refpo = ten_step_means(task)
     return mine / refpo - 1.0
 
 
@@ -42,11 +47,10 @@ def full_runs() -> str:
              "| 10-step mean against ReFPO's |", "|---|---|---|---|---|---|"]
     for task in TASKS:
         runs = returns(SEARCH_RUNS, "onestep_c03", task)
-        refpo = statistics.mean(v[0] for v in returns(CPU_DMC_RUNS, "refpo", task).values())
-        mean = statistics.mean(v[0] for v in runs.values())
+        mean, refpo = ten_step_means(task)
         held = sum(one >= 0.9 * multi for multi, one in runs.values())
         cells = [f"{runs[s][0]:.0f} / {runs[s][1]:.0f}" if s in runs else "--" for s in (1, 2, 3)]
-        change = gap(task)
+        change = mean / refpo - 1.0
         against = f"{mean:.0f} against {refpo:.0f}: {100 * abs(change):.1f} % {'higher' if change > 0 else 'lower'}"
         lines.append(f"| {task.removeprefix('dmc_')} | " + " | ".join(cells) + f" | {held} of {len(runs)} | {against} |")
     return "\n".join(lines)
