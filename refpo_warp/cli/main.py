@@ -21,6 +21,7 @@ COMMANDS = {
     "plot": "refpo_warp.cli.plot",
     "sweep": "refpo_warp.cli.sweep",
     "report": "refpo_warp.cli.report",
+    "tune": "refpo_warp.cli.tune",
     "bench": "refpo_warp.cli.bench",
     "convert-amass": "refpo_warp.cli.convert_amass",
     "make-clips": "refpo_warp.cli.make_clips",

@@ -20,7 +20,7 @@ from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR, shown
 
 ENV_VAR = "REFPO_CONFIG_PATH"
-KINDS = ("task", "algo", "sweep")
+KINDS = ("task", "algo", "sweep", "tune")
 DEFAULT_FILE = PACKAGED_CONFIG_DIR / "default.yaml"
 
 
