@@ -135,7 +135,9 @@ def validate(tuning: Tuning) -> dict[str, list[dict[str, Any]]]:
                     errors.append(f"- {method.label} on {task} at {values}: {err}")
                     break
     if errors:
-        raise ConfigError(f"Tuning '{tuning.name}': {len(errors)} method config(s) do not resolve:\n" + "\n".join(errors))
+        raise ConfigError(
+            f"Tuning '{tuning.name}': {len(errors)} method config(s) do not resolve:\n" + "\n".join(errors)
+        )
     return enqueued
 
 
@@ -307,12 +309,16 @@ class Tuner:
         enqueued = validate(t)
         self.echo(f"[tune] {t.name}: {len(t.methods)} method(s) x {t.trials} trials, each trial {len(t.tasks)} run(s) "
                   f"({', '.join(t.tasks)}) on seed {t.seed}, {self.jobs} at a time; every config resolves")  # fmt: skip
-        self.echo(f"[tune] objective: mean over tasks of {t.objective.metric} / "
-                  + ", ".join(f"{k} {v:g}" for k, v in t.objective.reference.items()))
+        self.echo(
+            f"[tune] objective: mean over tasks of {t.objective.metric} / "
+            + ", ".join(f"{k} {v:g}" for k, v in t.objective.reference.items())
+        )
         if dry_run:
             for method in t.methods:
-                self.echo(f"  {method.label}: enqueued {enqueued[method.label]}; space "
-                          + ", ".join(f"{d.key} {d.describe()}" for d in method.space))
+                self.echo(
+                    f"  {method.label}: enqueued {enqueued[method.label]}; space "
+                    + ", ".join(f"{d.key} {d.describe()}" for d in method.space)
+                )
             return True
         from refpo_warp.sweeps.run import SweepLock
 
@@ -367,7 +373,9 @@ class Tuner:
             return False
         if result.state == "complete":
             study.tell(trial, result.score)
-            returns = "  ".join(f"{task} {v.get('return_multi', float('nan')):.1f}" for task, v in result.values.items())
+            returns = "  ".join(
+                f"{task} {v.get('return_multi', float('nan')):.1f}" for task, v in result.values.items()
+            )
             best = study.best_trial
             self.echo(f"        score {result.score:.3f} ({returns}) in {_duration(result.seconds)}; best so far "
                       f"trial {best.user_attrs['slot']:02d} {best.value:.3f} | elapsed {elapsed}")  # fmt: skip
@@ -432,6 +440,8 @@ def chosen_values(tuning: Tuning, studies: dict[str, Any]) -> dict[str, dict[str
 def chosen_yaml(tuning: Tuning, studies: dict[str, Any]) -> str:
     import yaml
 
-    head = (f"# refpo tune {tuning.name}: each method's best completed trial (objective: mean over "
-            f"{', '.join(tuning.tasks)} of {tuning.objective.metric} / its reference, seed {tuning.seed}).\n")
+    head = (
+        f"# refpo tune {tuning.name}: each method's best completed trial (objective: mean over "
+        f"{', '.join(tuning.tasks)} of {tuning.objective.metric} / its reference, seed {tuning.seed}).\n"
+    )
     return head + yaml.safe_dump(chosen_values(tuning, studies), sort_keys=False)

@@ -209,8 +209,10 @@ def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
         if key not in OBJECTIVE_KEYS:
             raise unknown(f"objective key in {where}", key, OBJECTIVE_KEYS)
     reference = objective["reference"]
-    if not isinstance(reference, dict) or sorted(reference) != sorted(tasks) or not all(
-        isinstance(v, (int, float)) and v > 0 for v in reference.values()
+    if (
+        not isinstance(reference, dict)
+        or sorted(reference) != sorted(tasks)
+        or not all(isinstance(v, (int, float)) and v > 0 for v in reference.values())
     ):
         raise ConfigError(f"{where}: objective.reference needs one positive number for each of {tasks}, got "
                           f"{reference!r}")  # fmt: skip
