@@ -6,7 +6,7 @@ per task on the tuning seed, scored by the objective the tuning file states befo
   TPE samples the declared space; the sampler is seeded from (tuning seed, method, trial), so a resumed search draws
   what an uninterrupted one would.
 - **Pruning.** After each periodic evaluation that every task's run has reached, the trial reports the objective on
-  those evaluations; a trial in the lowest ``percentile`` of earlier trials at that evaluation (after
+  those evaluations (its intermediate values, also without a pruner); a trial in the lowest ``percentile`` of earlier trials at that evaluation (after
   ``warmup_evaluations``) is stopped.
 - **Resumable.** The studies live in ``<out>/journal.log`` (Optuna's journal storage: one JSON line per event). A
   trial cut off (Ctrl-C, a killed session) is trained again with the same values in the same folder, where a run that
@@ -32,12 +32,13 @@ from refpo_warp.sweeps.state import LOG_FILE, run_state
 from refpo_warp.sweeps.tables import run_metrics
 from refpo_warp.sweeps.tune_spec import CONFIG_VALUES, Dimension, TunedMethod, Tuning
 from refpo_warp.utils.atomic_files import write_text
-from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.rng import stream_seed
 
 JOURNAL_FILE = "journal.log"
 TRIALS_FILE = "trials.csv"
 CHOSEN_FILE = "chosen.yaml"
+EVALUATION_FILE = "evaluate.yaml"  # the sweep of the chosen values on fresh seeds (tuning files with `evaluate`)
 POLL_S = 2.0
 # The periodic return the pruner reads: a flow's N = 10 (as the objective's 10-step column), else a Gaussian's mean.
 CURVE_KEYS = ("eval/return_N10", "eval/return")
@@ -75,17 +76,18 @@ def option_value(cfg: dict, key: str) -> Any:
 
     node: Any = cfg
     parts = key.split(".")
-    for part in parts[:-1]:
-        node = node.get(part) if isinstance(node, dict) else None
-    if not isinstance(node, dict):
-        raise ConfigError(f"'{key}' is not an option of this run's config")
+    for i, part in enumerate(parts[:-1]):
+        if not isinstance(node, dict) or not isinstance(node.get(part), dict):
+            choices = [".".join([*parts[:i], k]) for k, v in node.items() if isinstance(v, dict)]
+            raise unknown("config section", ".".join(parts[: i + 1]), choices)
+        node = node[part]
+    params = class_parameters(node["class_name"]) if "class_name" in node else {}
     if parts[-1] in node:
         return node[parts[-1]]
-    if "class_name" in node:
-        params = class_parameters(node["class_name"])
-        if parts[-1] in params:
-            return params[parts[-1]]
-    raise ConfigError(f"'{key}' is not an option of this run's config")
+    if parts[-1] in params:
+        return params[parts[-1]]
+    section = ".".join(parts[:-1])
+    raise unknown(f"option of {section}", key, [f"{section}.{k}" for k in sorted({*node, *params})])
 
 
 def config_values(tuning: Tuning, method: TunedMethod) -> dict[str, Any]:
@@ -214,8 +216,6 @@ class TrialRunner:
                         stop_training([p for _, p in running.values()])
                         return TrialResult("failed", None, {}, time.monotonic() - started,
                                            f"{task} exited {proc.returncode}; log {run.run_dir / LOG_FILE}")  # fmt: skip
-                if self.tuning.pruner is None:
-                    continue
                 curves = {run.task: periodic_returns(run.run_dir) for run in runs}
                 common = min(len(c) for c in curves.values())
                 while reported < common:
@@ -340,6 +340,8 @@ class Tuner:
             lock.release()
         self.echo(f"[tune] done: {t.trials} trials per method; records: {t.out_dir / TRIALS_FILE}, "
                   f"{t.out_dir / CHOSEN_FILE}")  # fmt: skip
+        if t.evaluation is not None:
+            self.echo(f"[tune] the chosen values on fresh seeds: refpo sweep {t.out_dir / EVALUATION_FILE}")
         return True
 
     def _trial(self, studies: dict, index: int, method: TunedMethod, runner: TrialRunner, start: float) -> bool:
@@ -389,6 +391,9 @@ class Tuner:
     def write_records(self, studies: dict[str, Any]) -> None:
         write_text(self.tuning.out_dir / TRIALS_FILE, trials_csv(self.tuning, studies))
         write_text(self.tuning.out_dir / CHOSEN_FILE, chosen_yaml(self.tuning, studies))
+        sweep = evaluation_sweep(self.tuning, studies)
+        if sweep is not None:
+            write_text(self.tuning.out_dir / EVALUATION_FILE, sweep)
 
 
 def trial_rows(tuning: Tuning, studies: dict[str, Any]) -> list[dict[str, Any]]:
@@ -445,3 +450,28 @@ def chosen_yaml(tuning: Tuning, studies: dict[str, Any]) -> str:
         f"{', '.join(tuning.tasks)} of {tuning.objective.metric} / its reference, seed {tuning.seed}).\n"
     )
     return head + yaml.safe_dump(chosen_values(tuning, studies), sort_keys=False)
+
+
+def evaluation_sweep(tuning: Tuning, studies: dict[str, Any]) -> str | None:
+    """The sweep file of the chosen values on fresh seeds (``refpo sweep <out>/evaluate.yaml``), once every method has
+    spent its trials and has a completed one; None before. A run keeps its method's own evaluation protocol (the
+    tuning's ``overrides`` are for the trials only)."""
+    import yaml
+
+    ev = tuning.evaluation
+    chosen = chosen_values(tuning, studies)
+    if ev is None or any(len(_spent(studies[m.label])) < tuning.trials or m.label not in chosen for m in tuning.methods):
+        return None
+    methods = [{"label": m.label, "algo": m.algo, "name": f"{m.name} (tuned)", "overrides": chosen[m.label]["overrides"]}
+               for m in tuning.methods]  # fmt: skip
+    for v in ev.variants:
+        methods.append({"label": v["label"], "algo": v["algo"], "name": f"{v['name']} (tuned {v['of']})",
+                        "overrides": chosen[v["of"]]["overrides"]})  # fmt: skip
+    spec = {
+        "description": f"the chosen values of refpo tune {tuning.name} on fresh seeds {ev.seeds}",
+        "device": tuning.device, "tasks": ev.tasks, "seeds": ev.seeds, "methods": methods,
+        "out": str(tuning.out_dir / "evaluate"),
+    }  # fmt: skip
+    head = (f"# Written by refpo tune {tuning.name} when every method had spent its {tuning.trials} trials: each "
+            f"method's best trial (chosen.yaml). Run: refpo sweep <this file>\n")  # fmt: skip
+    return head + yaml.safe_dump(json.loads(json.dumps(spec)), sort_keys=False)  # a plain copy: no YAML anchors

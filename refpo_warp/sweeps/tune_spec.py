@@ -21,6 +21,11 @@ A tuning file (``tune/<name>.yaml`` of the config folders, or any YAML path) hol
         space:
           algorithm.learning_rate: {low: 3.0e-5, high: 3.0e-3, log: true}
           algorithm.clip_param: {choices: [0.02, 0.05, 0.1, 0.2]}
+    evaluate:                         # optional: the sweep of the chosen values on fresh seeds, written when done
+      tasks: [dmc_cartpole_balance, dmc_point_mass, dmc_reacher_easy]
+      seeds: [11, 12, 13]
+      variants:                       # more rows: another algo with a tuned method's chosen values
+        - {label: refpo_onestep, of: refpo, algo: refpo_onestep}
 """
 
 from __future__ import annotations
@@ -37,11 +42,13 @@ from refpo_warp.sweeps.spec import Method, Run, _flat_overrides, cli_value, devi
 from refpo_warp.utils.errors import ConfigError, unknown
 
 SPEC_KEYS = ("description", "device", "tasks", "seed", "trials", "overrides", "objective", "sampler", "pruner",
-             "methods", "out")  # fmt: skip
+             "methods", "evaluate", "out")  # fmt: skip
 METHOD_KEYS = ("label", "algo", "name", "overrides", "enqueue", "space")
 OBJECTIVE_KEYS = ("metric", "reference", "description")
 SAMPLER_KEYS = ("startup_trials",)
 PRUNER_KEYS = ("percentile", "startup_trials", "warmup_evaluations")
+EVALUATE_KEYS = ("tasks", "seeds", "variants")
+VARIANT_KEYS = ("label", "of", "algo", "name")
 DIMENSION_KEYS = {"float": ("low", "high", "log"), "categorical": ("choices",)}
 CONFIG_VALUES = "config"  # an `enqueue` entry: the values the method's own config resolves to
 # The run options a trial sets itself.
@@ -91,6 +98,16 @@ class Objective:
 
 
 @dataclass
+class Evaluation:
+    """The fresh-seed sweep of the chosen values: every tuned method, plus variants (another algo with a tuned
+    method's chosen values, e.g. ReFPO's one-step configuration)."""
+
+    tasks: list[str]
+    seeds: list[int]
+    variants: list[dict[str, str]]  # {label, of, algo, name}
+
+
+@dataclass
 class Tuning:
     name: str
     source: str
@@ -105,6 +122,7 @@ class Tuning:
     pruner: dict[str, float] | None
     methods: list[TunedMethod]
     out_dir: Path
+    evaluation: Evaluation | None = None
     folders: dict[str, Any] = field(default_factory=dict)  # config_dir=, passed to every run
 
     def trial_runs(self, method: TunedMethod, slot: int, values: dict[str, Any]) -> list[Run]:
@@ -165,6 +183,30 @@ def _method(entry: Any, where: str) -> TunedMethod:
             raise ConfigError(f"{where}: method '{label}': an 'enqueue' entry is '{CONFIG_VALUES}' or a mapping of "
                               f"searched values, got {item!r}")  # fmt: skip
     return TunedMethod(label, str(entry.get("name", label)), str(entry["algo"]), overrides, dims, enqueue)
+
+
+def _evaluation(spec: Any, labels: list[str], where: str) -> Evaluation | None:
+    if spec is None:
+        return None
+    if not isinstance(spec, dict):
+        raise ConfigError(f"{where}: 'evaluate' must be a mapping with tasks, seeds and optionally variants")
+    for key in spec:
+        if key not in EVALUATE_KEYS:
+            raise unknown(f"evaluate key in {where}", key, EVALUATE_KEYS)
+    tasks, seeds = spec.get("tasks"), spec.get("seeds")
+    if not isinstance(tasks, list) or not tasks or not isinstance(seeds, list) or not seeds:
+        raise ConfigError(f"{where}: evaluate needs non-empty lists 'tasks' and 'seeds'")
+    variants = []
+    for entry in spec.get("variants") or []:
+        if not isinstance(entry, dict) or not {"label", "of", "algo"} <= set(entry):
+            raise ConfigError(f"{where}: an evaluate variant needs label, of (a tuned method) and algo, got {entry!r}")
+        for key in entry:
+            if key not in VARIANT_KEYS:
+                raise unknown(f"evaluate variant key in {where}", key, VARIANT_KEYS)
+        if entry["of"] not in labels:
+            raise unknown(f"tuned method (evaluate variant '{entry['label']}' of) in {where}", entry["of"], labels)
+        variants.append({k: str(entry.get(k, entry["label"])) for k in VARIANT_KEYS})
+    return Evaluation([str(t) for t in tasks], [_int(s, "evaluate.seeds", where, 0) for s in seeds], variants)
 
 
 def tuning_file(source: str, folders) -> Path:
@@ -245,6 +287,7 @@ def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
             if label not in labels:
                 raise unknown(f"method of tuning '{path.stem}'", label, labels)
         methods = [m for m in methods if m.label in keep]
+    evaluation = _evaluation(spec.get("evaluate"), labels, where)
     trials = _int(cli.pop("trials", spec.get("trials", 8)), "trials", where, 1)
     device = str(spec.get("device", "cpu"))
     device_type(device)
@@ -260,5 +303,5 @@ def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
             "startup_trials": _int(pruner.get("startup_trials", 3), "pruner.startup_trials", where, 0),
             "warmup_evaluations": _int(pruner.get("warmup_evaluations", 5), "pruner.warmup_evaluations", where, 0)},
         methods=methods, out_dir=Path(str(cli.pop("out", spec.get("out") or Path("runs") / "tune" / path.stem))),
-        folders=folders,
+        evaluation=evaluation, folders=folders,
     )  # fmt: skip
