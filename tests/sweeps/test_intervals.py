@@ -1,0 +1,35 @@
+"""Confidence intervals over runs (rliable): the point estimates by hand, intervals that contain them and shrink
+with more runs, and the probability of improvement of separated and of identical methods."""
+
+import numpy as np
+import pytest
+
+from refpo_warp.sweeps.intervals import aggregate, improvement
+
+
+def test_point_estimates_by_hand_and_intervals_around_them():
+    # 2 tasks x 4 runs: IQM drops the lowest and the highest quarter of the 8 scores (1, 2 and 7, 8).
+    scores = np.array([[1.0, 5.0], [2.0, 6.0], [3.0, 7.0], [4.0, 8.0]])
+    est = aggregate({"m": scores})["m"]
+    assert est["mean"].point == pytest.approx(4.5) and est["iqm"].point == pytest.approx(4.5)
+    skewed = np.array([[0.0, 1.0], [1.0, 1.0], [1.0, 1.0], [1.0, 100.0]])
+    est = aggregate({"s": skewed})["s"]
+    assert est["mean"].point == pytest.approx(106 / 8) and est["iqm"].point == pytest.approx(1.0)
+    for stat in est.values():
+        assert stat.low <= stat.point <= stat.high
+    # Stratified: runs are resampled within a task, so a constant task adds no width; more runs, a narrower interval.
+    rng = np.random.default_rng(0)
+    few, many = rng.normal(1.0, 0.2, (3, 2)), rng.normal(1.0, 0.2, (30, 2))
+    width = {n: (e["mean"].high - e["mean"].low) for n, e in aggregate({"few": few, "many": many}).items()}
+    assert width["many"] < width["few"]
+
+
+def test_probability_of_improvement():
+    low, high = np.full((3, 2), 1.0), np.full((3, 2), 2.0)
+    assert improvement(high, low).point == pytest.approx(1.0)
+    assert improvement(low, high).point == pytest.approx(0.0)
+    same = improvement(low, low)  # every pair ties: one half
+    assert same.point == pytest.approx(0.5) and same.low == pytest.approx(0.5) and same.high == pytest.approx(0.5)
+    # One task each way: x wins task 0 in all 9 pairs, loses task 1 in all: 0.5 on average.
+    x, y = np.array([[2.0, 0.0]] * 3), np.array([[1.0, 1.0]] * 3)
+    assert improvement(x, y).point == pytest.approx(0.5)
