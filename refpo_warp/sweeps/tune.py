@@ -289,11 +289,34 @@ class Tuner:
             if not study.trials:
                 for i, values in enumerate(enqueued[method.label]):
                     study.enqueue_trial(values, user_attrs={"slot": i, "enqueued": True})
+            self._check_configs(study, method, enqueued[method.label][0] if enqueued[method.label] else {})
             for t in study.trials:
                 if t.state == TrialState.RUNNING:
                     self._requeue(study, t)
             out[method.label] = study
         return out
+
+    def _check_configs(self, study, method: TunedMethod, values: dict[str, Any]) -> None:
+        """A search spans sessions, and its trials compare only if the code resolves a method's runs as it did when
+        the search began: the first start records the configs at the first trial's values, a later start names every
+        option that now resolves differently."""
+        from refpo_warp.config.dotted import flatten
+
+        now = {task: json.loads(json.dumps(_resolve(self.tuning, method, task, values))) for task in self.tuning.tasks}
+        for cfg in now.values():
+            for key in ("run_dir", "device", "config_dir"):
+                cfg.pop(key, None)
+        then = study.user_attrs.get("configs")
+        if then is None:
+            study.set_user_attr("configs", now)
+            return
+        for task in self.tuning.tasks:
+            old, new = flatten(then.get(task, {})), flatten(now[task])
+            changed = [f"{k}: {old.get(k, '(absent)')} -> {new.get(k, '(absent)')}" for k in sorted({*old, *new})
+                       if old.get(k, "(absent)") != new.get(k, "(absent)")]  # fmt: skip
+            if changed:
+                self.echo(f"[tune] note: {method.label} on {task} resolves differently from when its search began "
+                          f"(its trials compare across both): " + "; ".join(changed))  # fmt: skip
 
     @staticmethod
     def _requeue(study, trial) -> None:

@@ -107,7 +107,9 @@ def test_a_tiny_study_resumes_a_cut_off_trial_and_writes_its_records(tmp_path):
     studies = {m.label: optuna.load_study(study_name=m.label, storage=storage) for m in more.methods}
     assert evaluation_sweep(more, studies) is None  # not before every method has spent its trials
     lines.clear()
+    spec.write_text(spec.read_text().replace("\n  num_envs: 4", "\n  num_envs: 6"))  # the trials' env count changed since
     assert Tuner(load_tuning(str(spec), [f"out={out}", "trials=2"]), echo=lines.append).run()
+    assert sum("[tune] note: " in line and "num_envs: 4 -> 6" in line for line in lines) == 2, lines
     assert any(line.startswith("[tune ppo 2/2] trial 01: learning_rate=" + f"{lr:.3g}") for line in lines), lines
     rows = list(csv.DictReader((out / TRIALS_FILE).open()))
     assert [(r["method"], r["trial"], r["state"], r["enqueued"]) for r in rows] == [
