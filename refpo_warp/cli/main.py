@@ -16,6 +16,8 @@ from refpo_warp.utils.errors import unknown
 # command -> its module (imported when the command runs: `refpo --help` loads none of them)
 COMMANDS = {
     "train": "refpo_warp.cli.train",
+    "collect": "refpo_warp.cli.collect",
+    "pretrain": "refpo_warp.cli.pretrain",
     "eval": "refpo_warp.cli.eval",
     "play": "refpo_warp.cli.play",
     "plot": "refpo_warp.cli.plot",

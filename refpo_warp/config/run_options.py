@@ -11,7 +11,7 @@ from typing import Any
 
 from refpo_warp.models.sampled_policy import NOISE_PROTOCOLS_RULE, NUM_FLOW_STEPS
 from refpo_warp.utils.errors import ConfigError
-from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Text
+from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real, Text
 
 MAX_ENVS = 1 << 22  # 4M envs: far above what one GPU holds, low enough to catch a typo before allocating
 MAX_TRANSITIONS = 1 << 28  # num_envs x num_steps_per_env held in the rollout storage
@@ -66,6 +66,8 @@ RUN_RULES = {
     "run_dir": Text(optional=True),
     "resume": Flag(),
     "verbose": Flag(),
+    "init_from": Text(optional=True),  # the run dir itself is checked when training starts (training/init_from.py)
+    "critic_warmup_iterations": Int(0, 10**8),
     "config_dir": Text(optional=True),  # the folder itself is checked when the config path is built
     "notice": Check(_check_notice, "null or a text ({task} and {algo} are filled in)", optional=True),
     "runner.num_steps_per_env": Int(1, 1_000_000),
@@ -77,6 +79,13 @@ RUN_RULES = {
     "runner.obs_groups": Check(_check_obs_groups, "a mapping {set: [observation groups]}", fixed=True),
     "runner.init_at_random_ep_len": Flag(),
     "runner.log_full": Flag(),
+    "pretrain.dataset": Text(optional=True),  # read and checked by refpo pretrain (demonstrations/dataset_file.py)
+    "pretrain.epochs": Int(1, 10**6),
+    "pretrain.batch_size": Int(1, 1 << 24),
+    "pretrain.learning_rate": Real(0, 10, lo_open=True),
+    "pretrain.validation_fraction": Real(0, 1, lo_open=True, hi_open=True),
+    "pretrain.patience": Int(1, 10**6),
+    "pretrain.num_pairs": Int(1, 4096, optional=True),
     "eval.at_end": Flag(),
     "eval.flow_steps": FLOW_STEPS,
     "eval.num_envs": Int(1, MAX_ENVS, optional=True),

@@ -34,6 +34,8 @@ from refpo_warp.runner.distributed import process_rank
 from refpo_warp.runner.progress import progress_path, truncate_after
 from refpo_warp.runner.run_dir import RUN_FILES, check_new_run_dir, check_writable, run_lock
 from refpo_warp.runner.runner import Runner
+from refpo_warp.training.critic_warmup import actor_frozen
+from refpo_warp.training.init_from import load_init_from
 from refpo_warp.utils.atomic_files import remove_stale_temp_files
 from refpo_warp.utils.errors import ConfigError, NonFiniteLossError, tag_run_dir
 
@@ -89,6 +91,10 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
         start = 0
         if resume:  # every rank loads the checkpoint
             start = _resume(runner, cfg, run_dir, flat, rank.world_size)
+        elif cfg["init_from"]:  # a cloned actor that does not fit is refused here, before anything is written
+            clone, warmup = load_init_from(runner, cfg), cfg["critic_warmup_iterations"]
+            critic = f"; iterations 0..{warmup - 1} train the critic alone (critic_warmup_iterations)" if warmup else ""
+            print(f"[refpo_warp] starting from the cloned actor {clone}{critic}", flush=True)
         # --- everything below writes (rank 0 only); everything above could refuse the run without touching the disk
         if rank.is_main:
             run_dir.mkdir(parents=True, exist_ok=True)
@@ -150,7 +156,8 @@ def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
         evaluate = with_videos(evaluate, cfg, runner, run_dir, interval)
     if total > start:
         try:
-            _learn_in_chunks(runner, start, total, interval, evaluate, cfg["runner"]["init_at_random_ep_len"])
+            warmup = int(cfg["critic_warmup_iterations"]) if cfg["init_from"] else 0
+            _learn_in_chunks(runner, start, total, interval, evaluate, cfg["runner"]["init_at_random_ep_len"], warmup)
         except NonFiniteLossError as err:  # the CLI's message says what survives and how to go on
             err.checkpoint, err.run_dir = latest_checkpoint(run_dir), run_dir
             err.learning_rate = float(runner.alg.learning_rate)
@@ -196,14 +203,20 @@ def with_videos(evaluate, cfg: dict, runner, run_dir: Path, interval: int):
     return evaluate_and_record
 
 
-def _learn_in_chunks(runner, start: int, total: int, interval: int, evaluate, init_at_random_ep_len: bool) -> None:
+def _learn_in_chunks(runner, start: int, total: int, interval: int, evaluate, init_at_random_ep_len: bool,
+                     warmup: int = 0) -> None:  # fmt: skip
     """Iterations ``start .. total - 1`` in chunks that end where periodic evaluation is due (every ``interval``
     iterations and at the last); the evaluation runs here, between chunks, and its numbers join the progress row
-    of the chunk's last iteration (``eval/return_N<n>`` ...). Every rank learns in the same chunks."""
+    of the chunk's last iteration (``eval/return_N<n>`` ...). Every rank learns in the same chunks. Iterations
+    below ``warmup`` (a fine-tuning run's critic warm-up) keep the actor frozen, in chunks of their own."""
     it = start
     while it < total:
         end = min(total, (it // interval + 1) * interval) if interval > 0 else total
-        runner.learn_chunk(end - it, total, init_at_random_ep_len=init_at_random_ep_len and it == start)
+        if it < warmup:
+            end = min(end, warmup)
+        frozen = actor_frozen(runner.alg) if it < warmup else contextlib.nullcontext()
+        with frozen:
+            runner.learn_chunk(end - it, total, init_at_random_ep_len=init_at_random_ep_len and it == start)
         runner.end_chunk(evaluate(end - 1, end == total) if evaluate is not None else {})
         it = end
 

@@ -32,6 +32,19 @@ def summarize(episodes: dict[str, torch.Tensor]) -> dict[str, float]:
     }
 
 
+def dataset_summary(dataset) -> dict[str, float]:
+    """A demonstration dataset's numbers as ``summarize`` gives a policy's: success rate and the goal bands' shares
+    (an episode succeeds where it terminates; its last observation says which band it reached)."""
+    success = [bool(e.terminations[-1]) for e in dataset.episodes]
+    top = sum(1 for e, ok in zip(dataset.episodes, success) if ok and e.observations[-1, 1] > 0)
+    n_success = sum(success)
+    return {
+        "success_rate": n_success / len(success),
+        "top_share": top / n_success if n_success else 0.0,
+        "bottom_share": (n_success - top) / n_success if n_success else 0.0,
+    }
+
+
 def _obs(cells: torch.Tensor, size: int) -> TensorDict:
     c = (size - 1) / 2
     return TensorDict({"policy": (cells.float() - c) / c}, batch_size=[cells.shape[0]])

@@ -1,0 +1,152 @@
+"""``refpo collect``: roll out a trained run's policy (any method, any task), or a task family's scripted demonstrator,
+with optional Gaussian action noise, and write the episodes as a Minari dataset (``dataset_file``).
+
+Every option is checked and the policy loaded before the dataset is written; an existing ``out`` is refused unless
+``overwrite=true``. The dataset's metadata records the task, its env options, the observation groups and the policy
+that made it (run dir, checkpoint, algorithm, flow steps, sampling, noise, seed).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from refpo_warp.config.run_options import RUN_RULES
+from refpo_warp.config.saved import load_run_config
+from refpo_warp.demonstrations.dataset_file import write_dataset
+from refpo_warp.demonstrations.rollout import collect_episodes
+from refpo_warp.envs.registry import family_module, get_task, make_env, make_env_cfg
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real, Text, check_options
+
+SAMPLING = ("stochastic", "mean")
+RULES = {
+    "run_dir": Text(optional=True), "checkpoint": Text(optional=True), "task": Text(optional=True),
+    "demonstrator": OneOf(None, "scripted"), "episodes": Int(1, 10**8), "out": Text(), "noise": Real(0, 1e3),
+    "overwrite": Flag(), "num_envs": Int(1, 1 << 22, optional=True), "seed": Int(0, 2**32 - 1, optional=True),
+    "flow_steps": Int(1, 1000, optional=True), "sample": OneOf(*SAMPLING), "device": RUN_RULES["device"],
+}  # fmt: skip
+DEFAULTS = {"run_dir": None, "checkpoint": None, "task": None, "demonstrator": None, "noise": 0.0, "overwrite": False,
+            "num_envs": None, "seed": None, "flow_steps": None, "sample": "stochastic", "device": "cpu"}  # fmt: skip
+MAX_DEFAULT_ENVS = 64
+COLLECT_SEED_OFFSET = 20_000  # collection envs draw other initial states than the run's training and evaluation
+
+
+def collect_options(flat: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """(checked options, demonstrator options); every problem a ``ConfigError`` naming the key and valid values."""
+    demo = {k.split(".", 1)[1]: v for k, v in flat.items() if k.startswith("demonstrator.")}
+    flat = {k: v for k, v in flat.items() if not k.startswith("demonstrator.")}
+    for key in flat:
+        if key not in RULES:
+            raise unknown("option of refpo collect", key, [*RULES, "demonstrator.<option>"])
+    for key in ("episodes", "out"):
+        if key not in flat:
+            raise ConfigError(f"refpo collect needs {key}=... (refpo collect --help)")
+    options = {**DEFAULTS, **check_options(RULES, flat)}
+    if (options["run_dir"] is None) == (options["demonstrator"] is None):
+        raise ConfigError("refpo collect needs either run_dir=<trained run> or task=<task> demonstrator=scripted")
+    if options["demonstrator"] and not options["task"]:
+        raise ConfigError("demonstrator=scripted needs task=<task id>")
+    if options["run_dir"] and options["task"]:
+        raise ConfigError("task= comes from the run's config.yaml with run_dir=; give one of them")
+    if demo and not options["demonstrator"]:
+        raise ConfigError(f"demonstrator.{next(iter(demo))} is an option of a scripted demonstrator "
+                          f"(demonstrator=scripted)")  # fmt: skip
+    out = Path(options["out"])
+    if out.exists() and not options["overwrite"]:
+        raise ConfigError(f"out={out} exists; pass overwrite=true to replace it, or choose another out")
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"out={out} is a file; a dataset is a folder: choose another out")
+    return options, demo
+
+
+def collect(flat: dict[str, Any]) -> dict:
+    """Collect and write the dataset; returns a summary (path, episodes, steps, returns, wall time)."""
+    options, demo = collect_options(flat)
+    device = resolve_device(options["device"])
+    if options["run_dir"]:
+        policy, env, groups, source, task, env_options = _run_policy(options, device)
+    else:
+        policy, env, groups, source, task, env_options = _scripted_policy(options, demo, device)
+    generator = torch.Generator().manual_seed(env.seed)  # the action noise's own stream
+    started = time.monotonic()
+    print(f"[collect] {options['episodes']} episodes of {source['kind']} on {task} ({env.num_envs} envs, action "
+          f"noise {options['noise']:g}) -> {options['out']}", flush=True)  # fmt: skip
+    episodes = collect_episodes(policy, env, options["episodes"], groups, options["noise"], generator)
+    wall = time.monotonic() - started
+    action_bound = math.inf if getattr(env.cfg, "action_transform", "clip") == "tanh" else 1.0
+    returns = [float(e.rewards.sum()) for e in episodes]
+    refpo = {"task": task, "env": env_options, "obs_groups": groups,
+             "obs_group_dims": {g: int(env.get_observations()[g].shape[-1]) for g in groups},
+             "policy": {**source, "sample": options["sample"], "action_noise_std": options["noise"]},
+             "num_envs": env.num_envs, "collect_time_s": wall}  # fmt: skip
+    path = write_dataset(options["out"], episodes, episodes[0].observations.shape[-1], env.num_actions, action_bound,
+                         refpo, overwrite=options["overwrite"])  # fmt: skip
+    lengths = [e.length for e in episodes]
+    return {"path": str(path), "episodes": len(episodes), "steps": sum(lengths), "wall_s": wall,
+            "return_mean": sum(returns) / len(returns), "length_mean": sum(lengths) / len(lengths)}  # fmt: skip
+
+
+def _num_envs(options: dict) -> int:
+    return int(options["num_envs"] or min(options["episodes"], MAX_DEFAULT_ENVS))
+
+
+def _run_policy(options: dict, device: str):
+    """The policy of a trained run (its newest usable checkpoint, or ``checkpoint``) and an env of its task."""
+    from refpo_warp.evaluation.evaluate_policy import is_flow
+    from refpo_warp.runner.build import build_runner
+    from refpo_warp.runner.checkpoints import load_latest
+
+    run_dir = Path(options["run_dir"])
+    cfg = load_run_config(run_dir, {"device": device})
+    seed = options["seed"] if options["seed"] is not None else cfg["seed"] + COLLECT_SEED_OFFSET
+    env = make_env(cfg["task"], num_envs=_num_envs(options), device=device, seed=seed, **cfg["env"])
+    _, runner = build_runner(cfg, None, env=env)
+    if options["checkpoint"]:
+        runner.load(options["checkpoint"], map_location=device)
+        checkpoint = options["checkpoint"]
+    else:
+        checkpoint = str(load_latest(runner, run_dir, cfg["task"], cfg["algo"])[0])
+    actor = runner.get_inference_policy(device=device)
+    stochastic = options["sample"] == "stochastic"
+    if is_flow(actor):
+        steps = options["flow_steps"] or actor.num_flow_steps
+
+        def policy(obs):
+            return actor.sample(obs, steps, "random" if stochastic else "zero", perturbation=False)
+    else:
+        steps = None
+
+        def policy(obs):
+            return actor(obs, stochastic_output=stochastic)
+
+    torch.manual_seed(seed)  # the policy's own sampling noise
+    source = {"kind": f"the policy of {run_dir}", "run_dir": str(run_dir.resolve()), "checkpoint": checkpoint,
+              "algo": cfg["algo"], "actor_class": cfg["actor"]["class_name"], "flow_steps": steps,
+              "iteration": runner.current_learning_iteration, "seed": seed}  # fmt: skip
+    return policy, env, list(cfg["runner"]["obs_groups"]["actor"]), source, cfg["task"], dict(cfg["env"])
+
+
+def _scripted_policy(options: dict, demo: dict, device: str):
+    """A task family's scripted demonstrator (``refpo_warp/tasks/<family>/demonstrator.py``) and an env of the task."""
+    task = options["task"]
+    get_task(task)  # an unknown task id names the closest one
+    module = family_module(task, "demonstrator")
+    if module is None:
+        raise ConfigError(f"task={task} has no scripted demonstrator (tasks/<family>/demonstrator.py); collect from a "
+                          f"trained run with run_dir=...")  # fmt: skip
+    for key in demo:
+        if key not in module.OPTIONS:
+            raise unknown(f"option of {task}'s demonstrator (demonstrator.<option>)", key, module.OPTIONS)
+    demo = {**module.DEFAULTS, **check_options(module.OPTIONS, demo, "demonstrator.")}
+    seed = options["seed"] if options["seed"] is not None else 1
+    env_cfg = make_env_cfg(task)
+    env = make_env(task, num_envs=_num_envs(options), device=device, seed=seed)
+    demonstrator = module.make_demonstrator(env_cfg, torch.Generator().manual_seed(seed), **demo)
+    source = {**demonstrator.describe(), "kind": f"{task}'s scripted demonstrator", "algo": "scripted", "seed": seed}
+    return demonstrator, env, ["policy"], source, task, {}

@@ -1,0 +1,189 @@
+"""``refpo pretrain``: clone the actor an algorithm uses from a demonstration dataset, evaluate it and save it as a
+checkpoint in rsl_rl's layout (``model_0.pt``: actor, critic and optimizer states, ``iter``), so that
+``refpo train init_from=<this run dir>`` fine-tunes it and a plain rsl_rl ``OnPolicyRunner.load()`` reads it.
+
+Order of work, as ``refpo train``: the config, the run dir and the whole dataset (format, spaces, values, episode
+ends) are checked and the model built before anything is written; a refused run leaves the disk as it was.
+
+The run dir holds ``config.yaml`` (the resolved config with its ``pretrain`` section), ``model_0.pt``,
+``progress.jsonl`` (one row per epoch: training and validation loss), TensorBoard events, ``eval.json`` (the cloned
+policy at every ``eval.flow_steps`` N for a flow, the mean action for a Gaussian) and the task's figures.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from refpo_warp.config.dotted import parse_overrides
+from refpo_warp.config.resolve import resolve_config
+from refpo_warp.config.saved import RUN_CONFIG
+from refpo_warp.config.yaml_files import dump_config
+from refpo_warp.demonstrations.behaviour_cloning import (
+    CloneOptions,
+    check_clonable,
+    clone,
+    is_flow_actor,
+    make_loss,
+    set_normalizer,
+    split_episodes,
+)
+from refpo_warp.demonstrations.dataset_file import check_spaces, read_dataset
+from refpo_warp.evaluation.evaluate_policy import evaluate_actor, family_evaluation, make_eval_envs, tau_sampler
+from refpo_warp.evaluation.evaluate_run import write_eval_json
+from refpo_warp.runner.build import build_runner, seed_everything
+from refpo_warp.runner.checkpoints import META_KEY, latest_checkpoint
+from refpo_warp.runner.progress import progress_path
+from refpo_warp.runner.run_dir import check_new_run_dir, check_writable, run_lock
+from refpo_warp.utils.atomic_files import append_line, atomic_write, remove_stale_temp_files
+from refpo_warp.utils.errors import ConfigError, tag_run_dir
+from refpo_warp.utils.rng import FINAL_EVALUATION, own_random_streams, stream_seed
+from refpo_warp.utils.rsl_rl_versions import uncompiled
+
+CHECKPOINT = "model_0.pt"  # iteration 0 of the fine-tuning that starts from it
+
+
+def default_pretrain_dir(task: str, algo: str, seed: int) -> Path:
+    return Path("runs") / task / f"pretrain_{algo}_seed{seed}"
+
+
+def pretrain_config(options: list[str] | dict[str, Any]) -> dict:
+    """The resolved config of a pretrain run (``dataset=`` is ``pretrain.dataset``)."""
+    flat = parse_overrides(options) if isinstance(options, list) else dict(options)
+    if "dataset" in flat:
+        if "pretrain.dataset" in flat:
+            raise ConfigError("dataset= and pretrain.dataset= name the same option; give one")
+        flat["pretrain.dataset"] = flat.pop("dataset")
+    for key in ("resume", "init_from"):
+        if flat.get(key):
+            raise ConfigError(f"{key}= is an option of refpo train; refpo pretrain starts a new run each time")
+    cfg = resolve_config(flat)
+    if not cfg["pretrain"]["dataset"]:
+        raise ConfigError("refpo pretrain needs dataset=PATH (a Minari dataset folder; refpo collect writes one)")
+    cfg["run_dir"] = str(cfg["run_dir"] or default_pretrain_dir(cfg["task"], cfg["algo"], cfg["seed"]))
+    return cfg
+
+
+def pretrain(options: list[str] | dict[str, Any]) -> dict:
+    """Clone, evaluate and save; returns the evaluation (as written to ``eval.json``) with the cloning summary."""
+    cfg = pretrain_config(options)
+    run_dir = Path(cfg["run_dir"])
+    check_writable(run_dir)
+    if run_dir.is_dir() and latest_checkpoint(run_dir) is not None:
+        raise ConfigError(f"{run_dir} already holds checkpoints; choose another run_dir for a new pretrain run")
+    check_new_run_dir(run_dir)
+    dataset = read_dataset(cfg["pretrain"]["dataset"])
+    seed_everything(cfg["seed"])
+    env, runner = build_runner(cfg, None)
+    actor = uncompiled(runner.alg, "actor")
+    check_clonable(actor, cfg["algo"])
+    groups = {g: int(env.get_observations()[g].shape[-1]) for g in cfg["runner"]["obs_groups"]["actor"]}
+    check_spaces(dataset, cfg["task"], sum(groups.values()), env.num_actions)
+    train_ids, val_ids = split_episodes(len(dataset.episodes), cfg["pretrain"]["validation_fraction"], cfg["seed"])
+    train_data, val_data = dataset.transitions(train_ids), dataset.transitions(val_ids)
+    # --- everything below writes; everything above could refuse the run without touching the disk
+    run_dir.mkdir(parents=True, exist_ok=True)
+    with run_lock(run_dir), tag_run_dir(run_dir):
+        remove_stale_temp_files(run_dir)
+        for stale in (progress_path(run_dir), run_dir / "eval.json", run_dir / "eval.prev.json"):
+            stale.unlink(missing_ok=True)
+        dump_config(cfg, run_dir / RUN_CONFIG)
+        return _clone_and_evaluate(cfg, runner, actor, groups, dataset, train_data, val_data, run_dir)
+
+
+def _clone_and_evaluate(cfg, runner, actor, groups, dataset, train_data, val_data, run_dir: Path) -> dict:
+    p = cfg["pretrain"]
+    normalised = set_normalizer(actor, train_data[0])
+    if cfg["runner"]["obs_groups"]["critic"] == cfg["runner"]["obs_groups"]["actor"]:
+        set_normalizer(uncompiled(runner.alg, "critic"), train_data[0])  # the critic's warm-up starts from the data's
+    for param in _normalizer_parameters(actor):
+        param.requires_grad_(False)
+    alg = runner.alg
+    num_pairs = p["num_pairs"] or int(getattr(alg, "num_mc_samples", 8))
+    loss = make_loss(actor, tau_sampler(alg), num_pairs)
+    kind = "flow (CFM loss)" if is_flow_actor(actor) else "Gaussian (max. likelihood)"
+    print(f"[pretrain] {cfg['task']} / {cfg['algo']}: cloning the {kind} actor from {dataset.path} "
+          f"({len(dataset.episodes)} episodes, {len(train_data[0]):,} training and {len(val_data[0]):,} validation "
+          f"transitions; observation normaliser {'from the data' if normalised else 'off'}), at most {p['epochs']} "
+          f"epochs, run dir {run_dir}", flush=True)  # fmt: skip
+    writer = _tensorboard(run_dir)
+
+    def report(row: dict) -> None:
+        append_line(progress_path(run_dir), json.dumps(row))
+        if writer is not None:
+            writer.add_scalar("BC/train_loss", row["train_loss"], row["epoch"])
+            writer.add_scalar("BC/val_loss", row["val_loss"], row["epoch"])
+        print(f"[epoch {row['epoch']}/{p['epochs'] - 1}] train {row['train_loss']:.4f}  validation "
+              f"{row['val_loss']:.4f} (best {row['best_val_loss']:.4f})  {row['time_s']:.0f} s", flush=True)  # fmt: skip
+
+    options = CloneOptions(p["epochs"], p["batch_size"], p["learning_rate"], p["patience"], num_pairs, cfg["seed"])
+    summary = clone(actor, loss, groups, train_data, val_data, options, report)
+    print(f"[pretrain] best validation loss {summary['best_val_loss']:.4f} at epoch {summary['best_epoch']} "
+          f"({summary['epochs_run']} epochs, {summary['time_s']:.0f} s)", flush=True)  # fmt: skip
+    checkpoint = save_checkpoint(runner, cfg, run_dir / CHECKPOINT, {**summary, "dataset": str(dataset.path)})
+    results = evaluate_clone(cfg, runner, actor, run_dir, summary, dataset)
+    if writer is not None:
+        for setting, numbers in results["results"].items():
+            for key, value in numbers.items():
+                if isinstance(value, float):
+                    writer.add_scalar(f"Eval/{setting}/{key}", value, 0)
+        writer.close()
+    results["checkpoint"] = str(checkpoint)
+    return results
+
+
+def _normalizer_parameters(actor):
+    return [p for name, p in actor.named_parameters() if "normalizer" in name]
+
+
+def _tensorboard(run_dir: Path):
+    with contextlib.suppress(ImportError):
+        from torch.utils.tensorboard import SummaryWriter
+
+        return SummaryWriter(log_dir=str(run_dir), flush_secs=10)
+    return None
+
+
+def save_checkpoint(runner, cfg: dict, path: Path, pretrain: dict) -> Path:
+    """The cloned models in rsl_rl's checkpoint layout, written atomically; ``refpo_warp`` metadata as training's."""
+    saved = runner.alg.save()
+    saved["iter"] = 0
+    saved["infos"] = None
+    saved[META_KEY] = {"task": cfg["task"], "algo": cfg["algo"], "env_steps": 0, "time_s": 0.0,
+                       "pretrain": {k: v for k, v in pretrain.items()
+                                    if isinstance(v, (int, float, str, bool))}}  # fmt: skip
+    with atomic_write(path) as f:
+        torch.save(saved, f)
+    return path
+
+
+def evaluate_clone(cfg: dict, runner, actor, run_dir: Path, summary: dict, dataset) -> dict:
+    """The cloned policy's evaluation (the run's protocol, streams of its own) written to ``eval.json``, with the
+    dataset's own success numbers beside it where the task defines them, and the task's figures."""
+    started = time.monotonic()
+    actor.eval()
+    with own_random_streams(stream_seed(cfg["seed"], FINAL_EVALUATION, 0), runner.device), torch.inference_mode():
+        results, _ = evaluate_actor(cfg, actor, make_eval_envs(cfg), list(cfg["eval"]["flow_steps"]))
+    lengths = [e.length for e in dataset.episodes]
+    out = {"task": cfg["task"], "algo": cfg["algo"], "seed": cfg["seed"], "checkpoint_iteration": 0, "env_steps": 0,
+           "kind": "behaviour cloning", "pretrain": summary,
+           "dataset": {"path": str(dataset.path), "episodes": len(lengths), "steps": sum(lengths),
+                       "return_mean": sum(float(e.rewards.sum()) for e in dataset.episodes) / len(lengths),
+                       "length_mean": sum(lengths) / len(lengths), "policy": dataset.refpo.get("policy", {})},
+           "protocol": ({"initial_noise": cfg["eval"]["initial_noise"],
+                         "perturbation": bool(cfg["eval"]["perturbation"])}
+                        if is_flow_actor(actor) else {"mean_action": True}),
+           "results": results}  # fmt: skip
+    hooks = family_evaluation(cfg["task"])
+    if hooks is not None and hasattr(hooks, "dataset_summary"):
+        out["dataset"].update(hooks.dataset_summary(dataset))
+    if hooks is not None and hasattr(hooks, "figures"):
+        out["figures"] = [str(p) for p in hooks.figures(run_dir, actor, cfg)]
+    out["eval_time_s"] = time.monotonic() - started
+    write_eval_json(out, run_dir)
+    return out
