@@ -13,7 +13,7 @@ stopping; evaluates the clone and writes model_0.pt (rsl_rl's checkpoint layout)
 row per epoch), TensorBoard events and eval.json into run_dir (default runs/<task>/pretrain_<algo>_seed<seed>).
 Fine-tune it with: refpo train task=<task> algo=<algo> init_from=<that run dir>  (docs/finetuning.md)
 
-Options (configs/default.yaml, pretrain section): pretrain.epochs=200 pretrain.batch_size=512
+Options (configs/default.yaml, pretrain section): pretrain.epochs=100 pretrain.batch_size=512
 pretrain.learning_rate=0.001 pretrain.validation_fraction=0.1 pretrain.patience=10 pretrain.num_pairs=null; any run
 option (seed, device, eval.flow_steps, the actor's sizes, ...) as for refpo train.
 

@@ -127,14 +127,14 @@ def clone(actor, loss, groups: dict[str, int], train: tuple[np.ndarray, np.ndarr
         for start in range(0, n, options.batch_size):
             idx = order[start : start + options.batch_size]
             value = loss(as_obs(obs_t[idx], groups), act_t[idx])
-            if not torch.isfinite(value):
+            if not bool(torch.isfinite(value.detach())):
                 from refpo_warp.utils.errors import NonFiniteLossError
 
                 raise NonFiniteLossError(f"behaviour-cloning loss {float(value)} at epoch {epoch}")
             optimizer.zero_grad()
             value.backward()
             optimizer.step()
-            total, batches = total + float(value), batches + 1
+            total, batches = total + float(value.detach()), batches + 1
         val = validation_loss(actor, loss, groups, obs_v, act_v, options)
         improved = val < best
         if improved:

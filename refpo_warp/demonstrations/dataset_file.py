@@ -2,7 +2,7 @@
 
 A dataset is a folder: ``metadata.json`` (the observation and action spaces as Minari serialises them, the episode and
 step counts, and our ``refpo`` entry: the task, its env options and the policy that made the data) and
-``data/main_data.hdf5`` with one group per episode: ``observations`` (T + 1 rows: the last is the state the episode
+``main_data.hdf5`` with one group per episode: ``observations`` (T + 1 rows: the last is the state the episode
 ended in), ``actions``, ``rewards``, ``terminations`` and ``truncations`` (T rows each). Minari's own
 ``MinariDataset(path)`` reads what ``write_dataset`` writes, and ``read_dataset`` reads a Minari dataset made
 elsewhere (its spaces are checked against the task's by ``check_spaces``).
@@ -99,7 +99,7 @@ def write_dataset(path: str | Path, episodes: list[Episode], obs_dim: int, actio
     renamed into place, so ``path`` is the old dataset or the new one, never a part. An existing ``path`` is refused
     unless ``overwrite``."""
     storage_class = _minari()
-    path = Path(path)
+    path = Path(path).absolute()  # Minari's HDF5 storage joins a relative folder to itself
     if path.exists() and not overwrite:
         raise ConfigError(f"out={path} exists; pass overwrite=true to replace it, or choose another out")
     if path.exists() and not path.is_dir():
@@ -148,13 +148,13 @@ def _buffer(i: int, e: Episode):
 
 def read_dataset(path: str | Path) -> Dataset:
     """Read and check a Minari dataset folder; ``DataFileError`` naming the file for every problem."""
-    path = Path(path)
+    path = Path(path).absolute()
     if not path.exists():
         raise DataFileError(f"dataset={path}: no such dataset (a folder written by refpo collect, or any Minari "
-                            f"dataset folder holding {METADATA_FILE} and data/)")  # fmt: skip
+                            f"dataset's data folder, holding {METADATA_FILE} and main_data.hdf5)")  # fmt: skip
     if not path.is_dir():
-        raise DataFileError(f"dataset={path}: not a Minari dataset (a folder holding {METADATA_FILE} and data/, e.g. "
-                            f"one written by refpo collect); found a file")  # fmt: skip
+        raise DataFileError(f"dataset={path}: not a Minari dataset (a folder holding {METADATA_FILE} and "
+                            f"main_data.hdf5, e.g. one written by refpo collect); found a file")  # fmt: skip
     meta_path = path / METADATA_FILE
     if not meta_path.is_file():
         raise DataFileError(f"{path}: not a Minari dataset: no {METADATA_FILE} in it")
