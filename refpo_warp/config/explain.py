@@ -63,20 +63,6 @@ def _fallback(cfg: dict, key: str) -> tuple[Any, str] | None:
     return None
 
 
-def effective_config(cfg: dict) -> dict:
-    """A resolved config with every option a constructor or env cfg sets by default filled in: what the classes
-    receive (the saved ``config.yaml`` holds only what the layers set)."""
-    from refpo_warp.envs.registry import get_task
-
-    out = dict(cfg)
-    for section in CLASS_SECTIONS:
-        found = class_defaults(cfg[section]["class_name"])
-        defaults = {n: d for n, (d, _) in found.items() if n not in POSITIONAL[section]}
-        out[section] = {**defaults, **cfg[section]}
-    spec = get_task(cfg["task"])
-    out["env"] = {**spec.cfg_class.defaults(), **spec.cfg_overrides, **cfg["env"]}
-    return out
-
 
 def all_keys(cfg: dict) -> list[str]:
     """Every option of a resolved config, the ones set only by a constructor or env cfg default included."""

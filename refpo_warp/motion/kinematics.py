@@ -89,11 +89,6 @@ def model_to_amass(
     return aa[:, 0], body_pose, np.asarray(root_pos, dtype=np.float64) - PELVIS_J0_TEMPLATE
 
 
-def local_from_world(body_rot: np.ndarray) -> np.ndarray:
-    """Per-body local rotations (T, 24, 4) from world rotations; entry 0 is the identity."""
-    local = rot.quat_mul(rot.quat_conjugate(body_rot[:, PARENTS[1:]]), body_rot[:, 1:])
-    return np.concatenate([rot.quat_identity((body_rot.shape[0], 1)), local], axis=1)
-
 
 def dof_positions(local_rot: np.ndarray) -> np.ndarray:
     """Hinge angles (T, 69): intrinsic x-y-z Euler angles of the 23 non-root local rotations, in [-pi, pi).

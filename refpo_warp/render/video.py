@@ -61,10 +61,3 @@ def write_video(frames: list[np.ndarray], path: str | Path, fps: float) -> Path:
         return write_mp4(frames, path, fps)
     keep = max(1, math.ceil(fps / GIF_MAX_FPS))
     return write_gif(frames[::keep], path, fps / keep)
-
-
-def read_video(path: str | Path) -> np.ndarray:
-    """All frames of an MP4 or GIF file as (frames, height, width, 3) uint8 (for checks and tests)."""
-    import imageio.v2 as imageio
-
-    return np.stack([np.asarray(f)[..., :3] for f in imageio.mimread(str(path), memtest=False)])

@@ -1,6 +1,6 @@
 """The layers of the project (``docs/architecture.md``): each folder of ``refpo_warp/`` belongs to one layer, and a
 module's layer is its folder's. A module may import its own layer and the layers below, never above;
-``tests/utils/test_layering.py`` checks this and that the import graph has no circles, on every run.
+``tests/utils/test_layering.py`` checks this, and that the import graph has no circles, on every run.
 ``docs/figures/draw_layers.py`` draws it.
 """
 
@@ -87,14 +87,3 @@ def upward_imports(graph: dict[str, set[str]]) -> list[tuple[str, str]]:
             if a is not None and b is not None and LAYER_RANK[b] > LAYER_RANK[a]:
                 out.append((module, target))
     return out
-
-
-def modules_on_circles(graph: dict[str, set[str]]) -> list[str]:
-    """Modules on an import circle: what is left after repeatedly removing modules that import nothing left."""
-    left = {m: set(t) for m, t in graph.items()}
-    while True:
-        leaves = [m for m, t in left.items() if not t & left.keys()]
-        if not leaves:
-            return sorted(left)
-        for m in leaves:
-            del left[m]

@@ -79,8 +79,3 @@ def rollout(model, states: np.ndarray, targets: np.ndarray, substeps: int, data=
     data = data if data is not None else mujoco.MjData(model)
     out, _ = mj_rollout.rollout(model, data, states, controls, nstep=controls.shape[1])
     return out
-
-
-def qpos_qvel(model, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``qpos`` and ``qvel`` out of full-physics states (..., nstate): the state starts with time, qpos, qvel."""
-    return states[..., 1 : 1 + model.nq], states[..., 1 + model.nq : 1 + model.nq + model.nv]

@@ -7,7 +7,7 @@ import subprocess
 import sys
 
 from refpo_warp.cli.main import main
-from refpo_warp.render.video import read_video
+from video_frames import read_video  # tests/ is on sys.path under pytest
 from refpo_warp.training import train
 from refpo_warp.utils.paths import REPO_ROOT
 

@@ -6,7 +6,8 @@ import sys
 
 import pytest
 
-from refpo_warp.config.explain import effective_config, explain
+from constructor_config import effective_config  # tests/ is on sys.path under pytest
+from refpo_warp.config.explain import explain
 from refpo_warp.config.layers import PROFILE_KEYS
 from refpo_warp.config.resolve import resolve, resolve_config
 from refpo_warp.utils.errors import ConfigError

@@ -7,7 +7,9 @@ import torch
 
 from refpo_warp import make_env
 from refpo_warp.render.frames import overlay, tile
-from refpo_warp.render.video import read_video, write_video
+from video_frames import read_video  # tests/ is on sys.path under pytest
+
+from refpo_warp.render.video import write_video
 
 W, H = 96, 72
 

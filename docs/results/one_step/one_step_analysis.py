@@ -11,7 +11,7 @@ cpu_reflow_pairs.yaml) and writes into out= (default SWEEP_DIR/one_step):
   N = 1 evaluation returns, the one-step error |a_1(eps) - a_N(eps)|^2, the one-step ratio (error / spread) and the
   Reflow coefficient, over env steps;
 - for task= (default dmc_point_mass) and seed=: the sampler probe of every checkpoint (every=k: each k-th) of every
-  method on the states its own N-step policy visits (refpo_warp/evaluation/one_step.py: one-step error, spread,
+  method on the states its own N-step policy visits (one_step_probes.py beside this script: one-step error, spread,
   distance of a_1 to the policy's mean action, a_1's own spread, saturation), <task>_probe_seed<k>.png; the
   velocity error by flow time of the last checkpoints along the sampler's paths and on independent pairs,
   <task>_velocity_by_tau_seed<k>.png; and, for dmc_point_mass, the paths the 1-step and 10-step policies drive from
@@ -133,7 +133,7 @@ def visited_states(actor, env, count: int, flow_steps: int):
 
 
 def probe_run(run: Path, options: dict) -> dict:
-    from refpo_warp.evaluation.one_step import sampler_probe, velocity_error_by_tau
+    from one_step_probes import sampler_probe, velocity_error_by_tau
 
     loaded = CheckpointPolicy(run, options["device"])
     if not loaded.checkpoints:
@@ -163,7 +163,7 @@ def point_mass_paths(loaded: CheckpointPolicy, actor) -> dict:
     """Positions, distance to the target (the origin) and |action| of the 1-step and 10-step policies, the same 8
     initial states (one env seed) and the same noise stream."""
     from refpo_warp.envs.registry import make_env
-    from refpo_warp.evaluation.one_step import drive
+    from one_step_probes import drive
 
     out = {}
     for n in (1, actor.num_flow_steps):
@@ -261,7 +261,7 @@ def intervene(run: Path, iteration: int, iterations: int, options: dict, variant
     import io
 
     from refpo_warp.config.saved import load_run_config
-    from refpo_warp.evaluation.one_step import sampler_probe, velocity_error_by_tau
+    from one_step_probes import sampler_probe, velocity_error_by_tau
     from refpo_warp.runner.build import build_runner, seed_everything
 
     checkpoint = run / f"model_{iteration}.pt"

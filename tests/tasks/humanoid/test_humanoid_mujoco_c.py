@@ -10,6 +10,11 @@ from refpo_warp.motion import skeleton as sk
 from refpo_warp.tasks.humanoid import mujoco_c
 
 
+def qpos_qvel(model, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``qpos`` and ``qvel`` out of full-physics states (..., nstate): the state starts with time, qpos, qvel."""
+    return states[..., 1 : 1 + model.nq], states[..., 1 + model.nq : 1 + model.nq + model.nv]
+
+
 @pytest.fixture(scope="module")
 def env():
     return make_env("humanoid_all", num_envs=4, device="cpu", seed=3)
@@ -39,7 +44,7 @@ def _one_step_difference(env, actions):
     env.step(actions)
     assert not (env._terminated | env._truncated).any()  # every world still holds the stepped state
     out = mujoco_c.rollout(model, states, sim.joint_target.numpy()[:, None, 7:], sim.substeps)
-    qpos, qvel = mujoco_c.qpos_qvel(model, out[:, -1])
+    qpos, qvel = qpos_qvel(model, out[:, -1])
     ours = mujoco_c.newton_to_mujoco(sim.joint_q.numpy(), sim.joint_qd.numpy(), sim.body_com.numpy()[0])
     # Quaternion entries compare directly: both start from the same sign and move by less than a degree.
     return np.abs(qpos - ours[0]).max(), np.abs(qvel - ours[1]).max(), np.abs(ours[1]).max()
