@@ -1,23 +1,8 @@
 """The layers a run's config is merged from, generic to specific, each named by the file (and section) it comes from.
 
-For task T, algorithm A (whose algo file may name a ``base`` algorithm: A's chain is base first, then A) and the
-device type D (cpu | cuda), later layers win:
-
-1. ``configs/default.yaml``: every run option and its default;
-2. T's task file, after the task files it names in ``base``: settings for every algorithm;
-3. their ``by_device.D``: the device profile for every algorithm;
-4. for each algorithm a of A's chain, base first: ``configs/algo/<a>.yaml``, then the task files' ``by_algo.<a>``,
-   then their ``by_device.D.by_algo.<a>``;
-5. the command line (``refpo_warp.config.resolve``).
-
-So an algorithm's file beats what a task sets for every algorithm, and what a task sets for that algorithm beats
-its file. A derived algorithm is its base with its own file's changes, on every task: ``fpo.yaml`` is ``base: refpo``
-with ``reflow_coef: 0``, so FPO takes whatever a task sets for ReFPO (``by_algo.refpo``) except the coefficient.
-An option no layer sets takes its constructor's default (for ``actor``, ``critic`` and ``algorithm``) or its env
-cfg's default. Top-level keys of a task file that start with ``_`` are YAML anchors for reuse inside that file.
-
-Task, algo and base files are looked up along the config path (``refpo_warp/config/config_path.py``): the user's
-folders, then the shipped ``configs/``.
+Their order and what each holds is described once, in ``docs/cli.md`` ("The layers, generic to specific");
+``generic_layers`` and ``specific_layers`` below build them in that order. Task, algo and base files are looked up along the config path
+(``refpo_warp/config/config_path.py``): the user's folders, then the shipped ``configs/``.
 """
 
 from __future__ import annotations
