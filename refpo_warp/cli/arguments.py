@@ -6,7 +6,8 @@
 - a subject: the one or two things a command acts on, where it has them (``refpo sweep cpu_dmc``,
   ``refpo report runs/sweeps/cpu_dmc``, ``refpo bench dmc``).
 
-A command declares its subjects and flags; anything else is an error naming the argument and the valid flags.
+A command declares its subjects and flags; anything else is an error naming the argument and the valid flags. A
+spelling a command once took (``RENAMED``: ``--out`` -> ``out=DIR``) is refused with the name it has now.
 """
 
 from __future__ import annotations
@@ -46,19 +47,35 @@ class Arguments:
     def flag(self, name: str, default: Any = None) -> Any:
         return self.flags.get(name, default)
 
+    def values(self, key: str) -> list[str]:
+        """Every value given to ``key=`` (a key a command takes more than once, e.g. ``run_dir=``), as text."""
+        return [option.partition("=")[2] for option in self.options if option.partition("=")[0] == key]
+
+    def only(self, command: str, keys: tuple[str, ...]) -> None:
+        """Refuse any ``key=`` but ``keys``, naming the closest valid one."""
+        for option in self.options:
+            key = option.partition("=")[0]
+            if key not in keys:
+                raise unknown(f"option of refpo {command}", key, keys)
+
 
 def wants_help(argv: list[str]) -> bool:
     return any(a in HELP for a in argv)
 
 
-def parse_arguments(command: str, argv: list[str], flags: tuple[Flag, ...] = (), subjects: int = 0) -> Arguments:
-    """Split ``argv``; a flag not declared, a missing flag value or an extra subject raises ``ConfigError``."""
+def parse_arguments(command: str, argv: list[str], flags: tuple[Flag, ...] = (), subjects: int = 0,
+                    renamed: dict[str, str] | None = None) -> Arguments:  # fmt: skip
+    """Split ``argv``; a flag not declared, a missing flag value, an extra subject or an old spelling (``renamed``:
+    ``--flag`` or ``key=`` -> its name now) raises ``ConfigError``."""
     declared = {flag.name: flag for flag in flags}
     out = Arguments()
     i = 0
     while i < len(argv):
         arg = argv[i]
         i += 1
+        old = arg.partition("=")[0] if arg.startswith("--") else arg.partition("=")[0] + "=" if "=" in arg else None
+        if renamed and old in renamed:
+            raise ConfigError(f"refpo {command}: '{old}' is spelled '{renamed[old]}' now; see refpo {command} --help")
         if arg.startswith("--"):
             name, has_value, value = arg.partition("=")
             if name not in declared:

@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         if passes_on:
             args = Arguments(rest[:1], rest[1:]) if rest and not rest[0].startswith("-") else Arguments([], rest)
         else:
-            args = parse_arguments(name, rest, command.FLAGS, command.SUBJECTS)
+            args = parse_arguments(name, rest, command.FLAGS, command.SUBJECTS, getattr(command, "RENAMED", {}))
         return command.run(args)
 
     return run_guarded(run)
