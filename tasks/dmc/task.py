@@ -1,7 +1,8 @@
 """What one DMC task adds to the shared Newton env: its model file, sizes, and reset/reward/observation kernels.
 
 A task is a module of ``tasks/dmc/suite/`` that defines one subclass (the module's name is the task's name). The
-subclass sets the class attributes and launches its kernels over the env (= world) index. Kernels read the
+subclass sets the class attributes and launches its kernels over the env (= world) index; its reset kernel is
+``reset_kernel`` of a ``wp.func`` that draws one env's initial state. Kernels read the
 simulation through ``self.views`` (per-world views of joint coordinates, body poses, controls; see
 ``refpo_warp.sim.WorldViews``) and write only the arrays they are given. All launches must be graph-capturable.
 """
@@ -19,23 +20,48 @@ from refpo_warp.utils.warp_setup import wp
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 
 
-@wp.kernel
-def reset_uniform(
-    mask: wp.array(dtype=wp.bool),
-    rng: wp.array(dtype=wp.uint32),
-    lower: wp.array(dtype=float),
-    upper: wp.array(dtype=float),
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-):
+def reset_kernel(draw: wp.Function, params_type) -> wp.Kernel:
+    """The reset kernel of a task: in each env i where ``mask[i]`` is set, ``draw(i, state, params, joint_q,
+    joint_qd) -> state`` writes the initial joint coordinates and velocities (and any task state that ``params``
+    holds), drawing from env i's random stream ``state``, and returns the advanced stream. ``params`` is one
+    argument of Warp type ``params_type`` (a ``wp.struct`` for several)."""
+
+    def reset(
+        mask: wp.array(dtype=wp.bool),
+        rng: wp.array(dtype=wp.uint32),
+        params: object,
+        joint_q: wp.array2d(dtype=float),
+        joint_qd: wp.array2d(dtype=float),
+    ):
+        i = wp.tid()
+        if mask[i]:
+            rng[i] = draw(i, rng[i], params, joint_q, joint_qd)
+
+    # Set here: a (postponed) string annotation cannot name the closure's argument.
+    reset.__annotations__["params"] = params_type
+    # In the Warp module of ``draw`` (the task's): building one task's kernel leaves the others' modules as they are.
+    return wp.Kernel(reset, key=f"reset_{draw.func.__name__}", module=draw.module)
+
+
+@wp.struct
+class UniformRanges:
+    lower: wp.array(dtype=float)
+    upper: wp.array(dtype=float)
+
+
+@wp.func
+def draw_uniform(
+    i: int, state: wp.uint32, ranges: UniformRanges, joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float)
+) -> wp.uint32:
     """Joint coordinate j ~ U(lower[j], upper[j]) (exactly lower[j] where the two are equal), zero velocities."""
-    i = wp.tid()
-    if mask[i]:
-        s = rng[i]
-        for j in range(joint_q.shape[1]):
-            joint_q[i, j] = wp.randf(s, lower[j], upper[j])
-            joint_qd[i, j] = 0.0
-        rng[i] = s
+    s = state
+    for j in range(joint_q.shape[1]):
+        joint_q[i, j] = wp.randf(s, ranges.lower[j], ranges.upper[j])
+        joint_qd[i, j] = 0.0
+    return s
+
+
+reset_uniform = reset_kernel(draw_uniform, UniformRanges)
 
 
 class DmcTask:
@@ -69,15 +95,21 @@ class DmcTask:
         """Copies of the joint limits (Newton coordinates, i.e. qpos - ref), to edit into reset ranges."""
         return self.views.limit_lower.copy(), self.views.limit_upper.copy()
 
-    def uniform_ranges(self, lower, upper) -> tuple[wp.array, wp.array]:
+    def uniform_ranges(self, lower, upper) -> UniformRanges:
         """Per-joint reset ranges for ``reset_uniform_joints`` (one entry per joint coordinate)."""
-        return (wp.array(np.asarray(lower, dtype=np.float32), dtype=float, device=self.device),
-                wp.array(np.asarray(upper, dtype=np.float32), dtype=float, device=self.device))  # fmt: skip
+        ranges = UniformRanges()
+        ranges.lower = wp.array(np.asarray(lower, dtype=np.float32), dtype=float, device=self.device)
+        ranges.upper = wp.array(np.asarray(upper, dtype=np.float32), dtype=float, device=self.device)
+        return ranges
 
-    def reset_uniform_joints(self, mask, ranges: tuple[wp.array, wp.array]) -> None:
-        """Draw every joint coordinate of the masked envs uniformly in ``ranges``; zero their velocities."""
+    def launch_reset(self, kernel: wp.Kernel, mask, params) -> None:
+        """Launch a kernel of ``reset_kernel`` on the masked envs with the task's ``params``."""
         v = self.views
-        self.launch(reset_uniform, [mask, self.rng, ranges[0], ranges[1], v.joint_q, v.joint_qd])
+        self.launch(kernel, [mask, self.rng, params, v.joint_q, v.joint_qd])
+
+    def reset_uniform_joints(self, mask, ranges: UniformRanges) -> None:
+        """Draw every joint coordinate of the masked envs uniformly in ``ranges``; zero their velocities."""
+        self.launch_reset(reset_uniform, mask, ranges)
 
     # ------------------------------------------------------------------------------------------ task contract
     def prepare(self) -> None:

@@ -13,7 +13,7 @@ both - velocities 0.01 N(0,1).
 from __future__ import annotations
 
 from refpo_warp.tasks.dmc.rewards import DEFAULT_VALUE_AT_MARGIN, GAUSSIAN, small_control, tolerance
-from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.tasks.dmc.task import DmcTask, reset_kernel
 from refpo_warp.utils.warp_setup import wp
 
 
@@ -23,18 +23,11 @@ def pole_cos_sin(body_q: wp.array2d(dtype=wp.transform), i: int, pole: int) -> w
     return wp.vec2(r[2, 2], r[0, 2])
 
 
-@wp.kernel
-def reset_cartpole(
-    mask: wp.array(dtype=wp.bool),
-    rng: wp.array(dtype=wp.uint32),
-    swing_up: int,
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-):
-    i = wp.tid()
-    if not mask[i]:
-        return
-    s = rng[i]
+@wp.func
+def draw_cartpole(
+    i: int, state: wp.uint32, swing_up: int, joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float)
+) -> wp.uint32:
+    s = state
     if swing_up != 0:
         joint_q[i, 0] = 0.01 * wp.randn(s)
         joint_q[i, 1] = wp.pi + 0.01 * wp.randn(s)
@@ -43,7 +36,10 @@ def reset_cartpole(
         joint_q[i, 1] = wp.randf(s, -0.034, 0.034)
     joint_qd[i, 0] = 0.01 * wp.randn(s)
     joint_qd[i, 1] = 0.01 * wp.randn(s)
-    rng[i] = s
+    return s
+
+
+reset_cartpole = reset_kernel(draw_cartpole, int)
 
 
 @wp.kernel
@@ -91,8 +87,7 @@ class CartpoleBalance(DmcTask):
         self.pole = self.views.body_index("pole_1")
 
     def reset(self, mask) -> None:
-        v = self.views
-        self.launch(reset_cartpole, [mask, self.rng, self.swing_up, v.joint_q, v.joint_qd])
+        self.launch_reset(reset_cartpole, mask, self.swing_up)
 
     def reward(self, rewards) -> None:
         v = self.views

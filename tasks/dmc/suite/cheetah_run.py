@@ -16,7 +16,7 @@ import torch
 
 from refpo_warp.sim import world_com_velocity
 from refpo_warp.tasks.dmc.rewards import LINEAR, tolerance
-from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.tasks.dmc.task import DmcTask, reset_kernel
 from refpo_warp.utils.warp_setup import wp
 
 RUN_SPEED = wp.constant(10.0)
@@ -24,23 +24,25 @@ SETTLE_STEPS = 200
 NUM_ROOT = 3  # rootx, rootz, rooty
 
 
-@wp.kernel
-def reset_from_bank(
-    mask: wp.array(dtype=wp.bool),
-    rng: wp.array(dtype=wp.uint32),
-    bank_q: wp.array2d(dtype=float),
-    bank_qd: wp.array2d(dtype=float),
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-):
-    i = wp.tid()
-    if mask[i]:
-        s = rng[i]
-        k = wp.randi(s, 0, bank_q.shape[0])
-        rng[i] = s
-        for j in range(joint_q.shape[1]):
-            joint_q[i, j] = bank_q[k, j]
-            joint_qd[i, j] = bank_qd[k, j]
+@wp.struct
+class Bank:
+    q: wp.array2d(dtype=float)
+    qd: wp.array2d(dtype=float)
+
+
+@wp.func
+def draw_from_bank(
+    i: int, state: wp.uint32, bank: Bank, joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float)
+) -> wp.uint32:
+    s = state
+    k = wp.randi(s, 0, bank.q.shape[0])
+    for j in range(joint_q.shape[1]):
+        joint_q[i, j] = bank.q[k, j]
+        joint_qd[i, j] = bank.qd[k, j]
+    return s
+
+
+reset_from_bank = reset_kernel(draw_from_bank, Bank)
 
 
 @wp.kernel
@@ -86,11 +88,11 @@ class CheetahRun(DmcTask):
             sim.simulate_many(SETTLE_STEPS // self.substeps)
             bank_q[r * n : (r + 1) * n] = wp.to_torch(v.joint_q)
             bank_qd[r * n : (r + 1) * n] = wp.to_torch(v.joint_qd)
-        self.bank_q, self.bank_qd = wp.from_torch(bank_q[:size]), wp.from_torch(bank_qd[:size])
+        self.bank = Bank()
+        self.bank.q, self.bank.qd = wp.from_torch(bank_q[:size]), wp.from_torch(bank_qd[:size])
 
     def reset(self, mask) -> None:
-        v = self.views
-        self.launch(reset_from_bank, [mask, self.rng, self.bank_q, self.bank_qd, v.joint_q, v.joint_qd])
+        self.launch_reset(reset_from_bank, mask, self.bank)
 
     def reward(self, rewards) -> None:
         self.launch(cheetah_reward, [self.views.body_qd, self.views.body_mass, rewards])

@@ -11,35 +11,36 @@ from __future__ import annotations
 import numpy as np
 
 from refpo_warp.tasks.dmc.rewards import GAUSSIAN, tolerance
-from refpo_warp.tasks.dmc.task import DmcTask
+from refpo_warp.tasks.dmc.task import DmcTask, reset_kernel
 from refpo_warp.utils.warp_setup import wp
 
 TARGET_RADIUS = 0.05  # easy; hard would be 0.015
 FINGER_RADIUS = 0.01
 
 
-@wp.kernel
-def reset_reacher(
-    mask: wp.array(dtype=wp.bool),
-    rng: wp.array(dtype=wp.uint32),
-    wrist_lower: float,
-    wrist_upper: float,
-    joint_q: wp.array2d(dtype=float),
-    joint_qd: wp.array2d(dtype=float),
-    target: wp.array(dtype=wp.vec2),
-):
-    i = wp.tid()
-    if not mask[i]:
-        return
-    s = rng[i]
+@wp.struct
+class ReacherReset:
+    wrist_lower: float
+    wrist_upper: float
+    target: wp.array(dtype=wp.vec2)  # written: each env's target
+
+
+@wp.func
+def draw_reacher(
+    i: int, state: wp.uint32, p: ReacherReset, joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float)
+) -> wp.uint32:
+    s = state
     joint_q[i, 0] = wp.randf(s, -wp.pi, wp.pi)
-    joint_q[i, 1] = wp.randf(s, wrist_lower, wrist_upper)
+    joint_q[i, 1] = wp.randf(s, p.wrist_lower, p.wrist_upper)
     joint_qd[i, 0] = 0.0
     joint_qd[i, 1] = 0.0
     angle = wp.randf(s) * 2.0 * wp.pi
     radius = wp.randf(s, 0.05, 0.2)
-    target[i] = radius * wp.vec2(wp.sin(angle), wp.cos(angle))
-    rng[i] = s
+    p.target[i] = radius * wp.vec2(wp.sin(angle), wp.cos(angle))
+    return s
+
+
+reset_reacher = reset_kernel(draw_reacher, ReacherReset)
 
 
 @wp.func
@@ -92,11 +93,12 @@ class ReacherEasy(DmcTask):
         self.finger = self.views.body_index("finger")
         self.target = wp.zeros(self.num_envs, dtype=wp.vec2, device=self.device)
         lower, upper = self.joint_limits()
-        self.wrist_range = (float(lower[1]), float(upper[1]))
+        self.reset_params = ReacherReset()
+        self.reset_params.wrist_lower, self.reset_params.wrist_upper = float(lower[1]), float(upper[1])
+        self.reset_params.target = self.target
 
     def reset(self, mask) -> None:
-        v = self.views
-        self.launch(reset_reacher, [mask, self.rng, *self.wrist_range, v.joint_q, v.joint_qd, self.target])
+        self.launch_reset(reset_reacher, mask, self.reset_params)
 
     def reward(self, rewards) -> None:
         self.launch(reacher_reward, [self.views.body_q, self.target, self.finger, TARGET_RADIUS + FINGER_RADIUS,
