@@ -6,7 +6,7 @@ import contextlib
 from pathlib import Path
 
 from refpo_warp.cli.arguments import Arguments
-from refpo_warp.cli.train import EXPLAIN, explain_run
+from refpo_warp.cli.explain import EXPLAIN, explain_or_run
 from refpo_warp.utils.errors import ConfigError
 
 SUMMARY = "evaluate a trained run: eval.json with the returns at each flow-step count and the flow diagnostics"
@@ -21,10 +21,7 @@ SUBJECTS = 0
 
 
 def run(args: Arguments) -> None:
-    if "--explain" in args.flags:
-        explain_run("eval", args.options, args.flag("--explain"))
-    else:
-        evaluate(args.options)
+    explain_or_run("eval", args, evaluate)
 
 
 def evaluate(options: list[str]) -> None:

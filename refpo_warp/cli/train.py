@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 
 from refpo_warp.cli.arguments import Arguments, Flag
-from refpo_warp.utils.errors import ConfigError
+from refpo_warp.cli.explain import EXPLAIN, explain_or_run
 
 SUMMARY = "train a policy and evaluate it; --tasks lists the task ids, --explain KEY says who set an option"
 USAGE = """Train a policy: refpo train task=<task id> [algo=<algo: refpo, fpo, ppo, ...>] [key=value ...]
@@ -22,7 +21,6 @@ Any config key can be overridden (the run options: configs/default.yaml, install
 config_dir=DIR (or REFPO_CONFIG_PATH) adds your own task, algo and sweep files (docs/cli.md).
 Flags: --tasks, --explain [KEY,KEY,...] (without keys: every option; nothing is trained).
 """
-EXPLAIN = Flag("--explain", str, "the keys to explain, comma-separated; none: every option", optional_value=True)
 FLAGS = (Flag("--tasks", doc="list the task ids"), EXPLAIN)
 SUBJECTS = 0
 
@@ -30,10 +28,8 @@ SUBJECTS = 0
 def run(args: Arguments) -> None:
     if args.flag("--tasks"):
         list_tasks(args.options)
-    elif "--explain" in args.flags:
-        explain_run("train", args.options, args.flag("--explain"))
     else:
-        train(args.options)
+        explain_or_run("train", args, train)
 
 
 def train(options: list[str]) -> None:
@@ -59,21 +55,3 @@ def list_tasks(options: list[str]) -> None:
     run_config_path(parse_overrides(options))
     for task in list_tasks():
         print(f"{task:28s} {get_task(task).description}")
-
-
-def explain_run(command: str, options: list[str], keys: str) -> None:
-    """Print where each option of the run the options describe gets its value (a resumed or evaluated run: its
-    saved config with the options over it)."""
-    from refpo_warp.config.dotted import flatten, parse_overrides
-    from refpo_warp.config.explain import explain
-    from refpo_warp.config.resolve import resolve
-    from refpo_warp.config.saved import read_saved_config
-
-    flat = parse_overrides(options)
-    flat.pop("checkpoint", None)
-    if command == "eval" or flat.get("resume") is True:
-        if not flat.get("run_dir"):
-            raise ConfigError("--explain of a saved run needs run_dir=PATH")
-        flat = {**flatten(read_saved_config(Path(str(flat["run_dir"])))), **flat}
-    chosen = [k.strip() for k in keys.split(",") if k.strip()]
-    print(explain(resolve(flat), chosen or None), flush=True)
