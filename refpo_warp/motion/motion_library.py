@@ -8,7 +8,6 @@ joint, x then y then z); ``dof_vel`` their rates. See ``docs/motion.md``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -26,16 +25,17 @@ _WARP_DTYPES = {"body_pos": wp.vec3, "body_rot": wp.quat, "body_vel": wp.vec3, "
                 "dof_pos": float, "dof_vel": float}  # fmt: skip
 
 
-@dataclass
+@wp.struct
 class MotionFrames:
-    """Per-env reference states written by ``MotionLibrary.sample`` (Warp arrays, first axis = env)."""
+    """Reference states, one row per env (written by ``MotionLibrary.sample``) or per frame (the library's own
+    ``frames_device``): one argument of every kernel that reads or writes them."""
 
-    body_pos: wp.array2d  # (N, 24) vec3
-    body_rot: wp.array2d  # (N, 24) quat xyzw
-    body_vel: wp.array2d  # (N, 24) vec3
-    body_angvel: wp.array2d  # (N, 24) vec3
-    dof_pos: wp.array2d  # (N, 69) float
-    dof_vel: wp.array2d  # (N, 69) float
+    body_pos: wp.array2d(dtype=wp.vec3)  # (rows, 24)
+    body_rot: wp.array2d(dtype=wp.quat)  # (rows, 24) xyzw
+    body_vel: wp.array2d(dtype=wp.vec3)  # (rows, 24)
+    body_angvel: wp.array2d(dtype=wp.vec3)  # (rows, 24)
+    dof_pos: wp.array2d(dtype=float)  # (rows, 69)
+    dof_vel: wp.array2d(dtype=float)  # (rows, 69)
 
 
 class MotionLibrary:
@@ -63,8 +63,9 @@ class MotionLibrary:
         self.clip_start = wp.array(start.astype(np.int32), dtype=int, device=dev)
         self.clip_frames = wp.array(self.clip_num_frames.astype(np.int32), dtype=int, device=dev)
         self.clip_duration_device = wp.array(self.clip_duration.astype(np.float32), dtype=float, device=dev)
+        self.frames_device = MotionFrames()
         for key, dtype in _WARP_DTYPES.items():
-            setattr(self, key, wp.array(self.frames[key], dtype=dtype, device=dev))
+            setattr(self.frames_device, key, wp.array(self.frames[key], dtype=dtype, device=dev))
 
     # ------------------------------------------------------------------------------------------------ building
     @classmethod
@@ -112,17 +113,11 @@ class MotionLibrary:
         """Output buffers for ``sample`` (allocate once, reuse every step)."""
         dev = self.device
 
-        def zeros(dtype, width):
-            return wp.zeros((num_envs, width), dtype=dtype, device=dev)
-
-        return MotionFrames(
-            body_pos=zeros(wp.vec3, NUM_BODIES),
-            body_rot=zeros(wp.quat, NUM_BODIES),
-            body_vel=zeros(wp.vec3, NUM_BODIES),
-            body_angvel=zeros(wp.vec3, NUM_BODIES),
-            dof_pos=zeros(float, NUM_DOFS),
-            dof_vel=zeros(float, NUM_DOFS),
-        )
+        out = MotionFrames()
+        for key, dtype in _WARP_DTYPES.items():
+            width = NUM_BODIES if key.startswith("body") else NUM_DOFS
+            setattr(out, key, wp.zeros((num_envs, width), dtype=dtype, device=dev))
+        return out
 
     def sample(self, clip_ids: wp.array, times: wp.array, out: MotionFrames, mask: wp.array | None = None) -> None:
         """Reference states at ``times`` seconds into each env's clip (one launch over (env, body); no host sync).
@@ -141,10 +136,9 @@ class MotionLibrary:
         wp.launch(
             _sample_kernel,
             dim=(num_envs, NUM_BODIES),
-            inputs=[self.clip_start, self.clip_frames, self.num_clips, self.fps, self.body_pos, self.body_rot,
-                    self.body_vel, self.body_angvel, self.dof_pos, self.dof_vel, clip_ids, times,
+            inputs=[self.clip_start, self.clip_frames, self.num_clips, self.fps, self.frames_device, clip_ids, times,
                     int(mask is not None), mask],  # fmt: skip
-            outputs=[out.body_pos, out.body_rot, out.body_vel, out.body_angvel, out.dof_pos, out.dof_vel],
+            outputs=[out],
             device=self.device,
         )
 
@@ -191,22 +185,12 @@ def _sample_kernel(
     clip_frames: wp.array(dtype=int),
     num_clips: int,
     fps: float,
-    body_pos: wp.array2d(dtype=wp.vec3),
-    body_rot: wp.array2d(dtype=wp.quat),
-    body_vel: wp.array2d(dtype=wp.vec3),
-    body_angvel: wp.array2d(dtype=wp.vec3),
-    dof_pos: wp.array2d(dtype=float),
-    dof_vel: wp.array2d(dtype=float),
+    frames: MotionFrames,
     clip_ids: wp.array(dtype=int),
     times: wp.array(dtype=float),
     use_mask: int,
     mask: wp.array(dtype=wp.bool),
-    out_body_pos: wp.array2d(dtype=wp.vec3),
-    out_body_rot: wp.array2d(dtype=wp.quat),
-    out_body_vel: wp.array2d(dtype=wp.vec3),
-    out_body_angvel: wp.array2d(dtype=wp.vec3),
-    out_dof_pos: wp.array2d(dtype=float),
-    out_dof_vel: wp.array2d(dtype=float),
+    out: MotionFrames,
 ):
     env, body = wp.tid()
     if use_mask != 0:
@@ -220,17 +204,17 @@ def _sample_kernel(
     f = wp.clamp(times[env] * fps, 0.0, float(last))
     k0 = wp.clamp(int(f), 0, last)
     a = wp.clamp(f - float(k0), 0.0, 1.0)
-    total = body_pos.shape[0] - 1
+    total = frames.body_pos.shape[0] - 1
     g0 = wp.clamp(clip_start[clip] + k0, 0, total)
     g1 = wp.clamp(clip_start[clip] + wp.min(k0 + 1, last), 0, total)
 
-    out_body_pos[env, body] = wp.lerp(body_pos[g0, body], body_pos[g1, body], a)
-    out_body_rot[env, body] = _slerp(body_rot[g0, body], body_rot[g1, body], a)
-    out_body_vel[env, body] = wp.lerp(body_vel[g0, body], body_vel[g1, body], a)
-    out_body_angvel[env, body] = wp.lerp(body_angvel[g0, body], body_angvel[g1, body], a)
+    out.body_pos[env, body] = wp.lerp(frames.body_pos[g0, body], frames.body_pos[g1, body], a)
+    out.body_rot[env, body] = _slerp(frames.body_rot[g0, body], frames.body_rot[g1, body], a)
+    out.body_vel[env, body] = wp.lerp(frames.body_vel[g0, body], frames.body_vel[g1, body], a)
+    out.body_angvel[env, body] = wp.lerp(frames.body_angvel[g0, body], frames.body_angvel[g1, body], a)
     if body > 0:  # the joint of body b (> 0) owns dofs 3(b-1) .. 3(b-1)+2
         for axis in range(3):
             d = 3 * (body - 1) + axis
-            x0 = dof_pos[g0, d]
-            out_dof_pos[env, d] = _wrap(x0 + a * _wrap(dof_pos[g1, d] - x0))
-            out_dof_vel[env, d] = wp.lerp(dof_vel[g0, d], dof_vel[g1, d], a)
+            x0 = frames.dof_pos[g0, d]
+            out.dof_pos[env, d] = _wrap(x0 + a * _wrap(frames.dof_pos[g1, d] - x0))
+            out.dof_vel[env, d] = wp.lerp(frames.dof_vel[g0, d], frames.dof_vel[g1, d], a)

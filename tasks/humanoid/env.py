@@ -90,22 +90,19 @@ class HumanoidTrackingEnv(WarpVecEnv):
         b, c, s, n = self.buffers, self.cfg, self.sim, self.num_envs
         # self.ref holds the reference of the observed frame (sampled at obs_time by the last step or reset).
         wp.launch(apply_actions_kernel, dim=(n, sk.NUM_DOFS),
-                  inputs=[b.actions, self.action_scale, self.frozen_dof, int(c.residual_actions), self.ref.dof_pos,
-                          s.joint_q],
+                  inputs=[b.actions, self.action_scale, self.frozen_dof, int(c.residual_actions), self.ref, s.joint_q],
                   outputs=[s.joint_target])  # fmt: skip
         s.simulate()
         wp.launch(advance_time_kernel, dim=n, inputs=[self.start_time, b.episode_length, self.step_dt],
                   outputs=[self.ref_time])  # fmt: skip
         self.motion.sample(self.clip_id, self.ref_time, self.ref)
-        r = self.ref
         wp.launch(
             reward_and_termination_kernel,
             dim=n,
             inputs=[s.body_q, s.body_qd, s.body_com, s.joint_q, s.joint_qd, s.joint_target, self.kp, self.kd,
-                    EFFORT_LIMIT, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, self.eval_body, self.clip_id,
-                    self.ref_time, self.motion.clip_duration_device, b.episode_length, int(c.eval_mode),
-                    c.termination_distance, c.eval_termination_distance, c.max_joint_speed, self.reward_params,
-                    self.mpjpe_sum],
+                    EFFORT_LIMIT, self.ref, self.eval_body, self.clip_id, self.ref_time,
+                    self.motion.clip_duration_device, b.episode_length, int(c.eval_mode), c.termination_distance,
+                    c.eval_termination_distance, c.max_joint_speed, self.reward_params, self.mpjpe_sum],
             outputs=[b.rewards, b.terminated, b.truncated, b.metrics["success"], b.metrics["mpjpe_mm"],
                      b.metrics["alive_steps"], b.reward_terms],
         )  # fmt: skip
@@ -123,15 +120,13 @@ class HumanoidTrackingEnv(WarpVecEnv):
         # Only the starting envs need the reference at their (new) start; every row is resampled below.
         self.motion.sample(self.clip_id, self.ref_time, r, mask=s.reset_mask)
         wp.launch(write_reference_state_kernel, dim=n,
-                  inputs=[s.reset_mask, r.body_pos, r.body_rot, r.body_vel, r.body_angvel, r.dof_pos, r.dof_vel,
-                          s.root_com],
+                  inputs=[s.reset_mask, r, s.root_com],
                   outputs=[s.joint_q, s.joint_qd])  # fmt: skip
         s.after_reset()
         wp.launch(_shift_time_kernel, dim=n, inputs=[self.ref_time, self.step_dt], outputs=[self.obs_time])
         self.motion.sample(self.clip_id, self.obs_time, r)
         wp.launch(observation_kernel, dim=(n, sk.NUM_BODIES),
-                  inputs=[s.body_q, s.body_qd, s.body_com, r.body_pos, r.body_rot, r.body_vel, r.body_angvel,
-                          self.mask],
+                  inputs=[s.body_q, s.body_qd, s.body_com, r, self.mask],
                   outputs=[b.obs["critic"], b.obs["policy"]])  # fmt: skip
 
     # ------------------------------------------------------------------------------------------------ inspection

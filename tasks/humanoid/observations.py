@@ -6,6 +6,7 @@ The critic group gets the full observation, the policy group the same values tim
 
 from __future__ import annotations
 
+from refpo_warp.motion.motion_library import MotionFrames
 from refpo_warp.tasks.humanoid.obs_layout import OFFSET
 from refpo_warp.tasks.humanoid.rotation_funcs import heading_inverse, normal, origin_velocity, tangent
 from refpo_warp.utils.warp_setup import wp
@@ -48,10 +49,7 @@ def observation_kernel(
     body_q: wp.array2d(dtype=wp.transform),
     body_qd: wp.array2d(dtype=wp.spatial_vector),
     body_com: wp.array(dtype=wp.vec3),
-    ref_pos: wp.array2d(dtype=wp.vec3),
-    ref_rot: wp.array2d(dtype=wp.quat),
-    ref_vel: wp.array2d(dtype=wp.vec3),
-    ref_angvel: wp.array2d(dtype=wp.vec3),
+    ref: MotionFrames,
     mask: wp.array(dtype=float),
     critic: wp.array2d(dtype=float),
     policy: wp.array2d(dtype=float),
@@ -76,11 +74,11 @@ def observation_kernel(
     put3(critic, policy, mask, i, O_BODY_ANGVEL + 3 * b, wp.quat_rotate(hinv, angvel))
 
     # Task observation against the reference one control step ahead.
-    rp = ref_pos[i, b]
-    rr = ref_rot[i, b]
+    rp = ref.body_pos[i, b]
+    rr = ref.body_rot[i, b]
     put3(critic, policy, mask, i, O_DIFF_POS + 3 * b, wp.quat_rotate(hinv, rp - pos))
     put6(critic, policy, mask, i, O_DIFF_ROT + 6 * b, hinv * (rr * wp.quat_inverse(rot)) * heading)
-    put3(critic, policy, mask, i, O_DIFF_VEL + 3 * b, wp.quat_rotate(hinv, ref_vel[i, b] - vel))
-    put3(critic, policy, mask, i, O_DIFF_ANGVEL + 3 * b, wp.quat_rotate(hinv, ref_angvel[i, b] - angvel))
+    put3(critic, policy, mask, i, O_DIFF_VEL + 3 * b, wp.quat_rotate(hinv, ref.body_vel[i, b] - vel))
+    put3(critic, policy, mask, i, O_DIFF_ANGVEL + 3 * b, wp.quat_rotate(hinv, ref.body_angvel[i, b] - angvel))
     put3(critic, policy, mask, i, O_REF_POS + 3 * b, wp.quat_rotate(hinv, rp - root_pos))
     put6(critic, policy, mask, i, O_REF_ROT + 6 * b, hinv * rr)

@@ -10,6 +10,7 @@ episode's first 3 steps.
 from __future__ import annotations
 
 from refpo_warp.motion import skeleton as sk
+from refpo_warp.motion.motion_library import MotionFrames
 from refpo_warp.tasks.humanoid.model import FREE_COORDS, FREE_DOFS
 from refpo_warp.tasks.humanoid.reward_terms import RewardParams, imitation_term, term_vector, write_terms
 from refpo_warp.tasks.humanoid.rotation_funcs import com_velocity, origin_velocity, quat_angle
@@ -29,7 +30,7 @@ def apply_actions_kernel(
     scale: wp.array(dtype=float),
     frozen: wp.array(dtype=wp.bool),
     residual: int,
-    ref_dof_pos: wp.array2d(dtype=float),
+    ref: MotionFrames,
     joint_q: wp.array2d(dtype=float),
     joint_target: wp.array2d(dtype=float),
 ):
@@ -43,7 +44,7 @@ def apply_actions_kernel(
     target = scale[d] * wp.clamp(a, -1.0, 1.0)
     if residual != 0:
         q = joint_q[i, QS + d]
-        target = wp.clamp(ref_dof_pos[i, d] + target, q - HALF_PI, q + HALF_PI)
+        target = wp.clamp(ref.dof_pos[i, d] + target, q - HALF_PI, q + HALF_PI)
     if frozen[d]:
         target = 0.0
     joint_target[i, QS + d] = target
@@ -110,10 +111,7 @@ def reward_and_termination_kernel(
     kp: wp.array(dtype=float),
     kd: wp.array(dtype=float),
     effort_limit: float,
-    ref_pos: wp.array2d(dtype=wp.vec3),
-    ref_rot: wp.array2d(dtype=wp.quat),
-    ref_vel: wp.array2d(dtype=wp.vec3),
-    ref_angvel: wp.array2d(dtype=wp.vec3),
+    ref: MotionFrames,
     eval_body: wp.array(dtype=float),
     clip_id: wp.array(dtype=int),
     ref_time: wp.array(dtype=float),
@@ -145,10 +143,10 @@ def reward_and_termination_kernel(
     for b in range(NB):
         pos = wp.transform_get_translation(body_q[i, b])
         rot = wp.transform_get_rotation(body_q[i, b])
-        dp = ref_pos[i, b] - pos
-        dv = ref_vel[i, b] - origin_velocity(body_q[i, b], body_qd[i, b], body_com[b])
-        dw = ref_angvel[i, b] - wp.spatial_bottom(body_qd[i, b])
-        angle = quat_angle(ref_rot[i, b] * wp.quat_inverse(rot))
+        dp = ref.body_pos[i, b] - pos
+        dv = ref.body_vel[i, b] - origin_velocity(body_q[i, b], body_qd[i, b], body_com[b])
+        dw = ref.body_angvel[i, b] - wp.spatial_bottom(body_qd[i, b])
+        angle = quat_angle(ref.body_rot[i, b] * wp.quat_inverse(rot))
         dist = wp.length(dp)
         pos_err += wp.dot(dp, dp)
         rot_err += angle * angle
@@ -209,12 +207,7 @@ def reward_and_termination_kernel(
 @wp.kernel
 def write_reference_state_kernel(
     mask: wp.array(dtype=wp.bool),
-    ref_pos: wp.array2d(dtype=wp.vec3),
-    ref_rot: wp.array2d(dtype=wp.quat),
-    ref_vel: wp.array2d(dtype=wp.vec3),
-    ref_angvel: wp.array2d(dtype=wp.vec3),
-    ref_dof_pos: wp.array2d(dtype=float),
-    ref_dof_vel: wp.array2d(dtype=float),
+    ref: MotionFrames,
     root_com: wp.vec3,
     joint_q: wp.array2d(dtype=float),
     joint_qd: wp.array2d(dtype=float),
@@ -223,10 +216,10 @@ def write_reference_state_kernel(
     i = wp.tid()
     if not mask[i]:
         return
-    p = ref_pos[i, 0]
-    r = ref_rot[i, 0]
-    w = ref_angvel[i, 0]
-    v = com_velocity(r, ref_vel[i, 0], w, root_com)
+    p = ref.body_pos[i, 0]
+    r = ref.body_rot[i, 0]
+    w = ref.body_angvel[i, 0]
+    v = com_velocity(r, ref.body_vel[i, 0], w, root_com)
     for a in range(3):
         joint_q[i, a] = p[a]
         joint_qd[i, a] = v[a]
@@ -234,5 +227,5 @@ def write_reference_state_kernel(
     for a in range(4):
         joint_q[i, 3 + a] = r[a]
     for d in range(NDOF):
-        joint_q[i, QS + d] = ref_dof_pos[i, d]
-        joint_qd[i, DS + d] = ref_dof_vel[i, d]
+        joint_q[i, QS + d] = ref.dof_pos[i, d]
+        joint_qd[i, DS + d] = ref.dof_vel[i, d]

@@ -56,8 +56,9 @@ def test_library_shapes(library):
     np.testing.assert_array_equal(library.clip_num_frames, [121, 91, 76])
     np.testing.assert_allclose(library.clip_duration, [4.0, 3.0, 2.5])
     np.testing.assert_array_equal(library.clip_start.numpy(), [0, 121, 212])
-    assert library.body_pos.shape == (288, 24) and library.body_rot.dtype == wp.quat
-    assert library.dof_pos.shape == (288, 69) and library.dof_vel.shape == (288, 69)
+    frames = library.frames_device
+    assert frames.body_pos.shape == (288, 24) and frames.body_rot.dtype == wp.quat
+    assert frames.dof_pos.shape == (288, 69) and frames.dof_vel.shape == (288, 69)
 
 
 def test_sample_kernel_matches_numpy_interpolation(library):

@@ -73,8 +73,7 @@ def set_sim_to_reference(env, ref):
     s = env.sim
     all_envs = wp.array(np.ones(env.num_envs, bool), dtype=wp.bool, device="cpu")
     wp.launch(write_reference_state_kernel, dim=env.num_envs,
-              inputs=[all_envs, ref.body_pos, ref.body_rot, ref.body_vel, ref.body_angvel, ref.dof_pos, ref.dof_vel,
-                      s.root_com],
+              inputs=[all_envs, ref, s.root_com],
               outputs=[s.joint_q, s.joint_qd], device="cpu")  # fmt: skip
     newton.eval_fk(s.model, s.state.joint_q, s.state.joint_qd, s.state)
 
@@ -113,10 +112,9 @@ def test_kinematic_replay_gives_zero_error_and_maximal_reward(env):
         s.joint_target.assign(s.joint_q.numpy())  # targets at the current pose; the power term uses them
         wp.launch(reward_and_termination_kernel, dim=env.num_envs,
                   inputs=[s.body_q, s.body_qd, s.body_com, s.joint_q, s.joint_qd, s.joint_target, env.kp, env.kd,
-                          500.0, ref.body_pos, ref.body_rot, ref.body_vel, ref.body_angvel, env.eval_body,
-                          env.clip_id, env.ref_time, env.motion.clip_duration_device, b.episode_length, 0,
-                          c.termination_distance, c.eval_termination_distance, c.max_joint_speed, no_power,
-                          env.mpjpe_sum],
+                          500.0, ref, env.eval_body, env.clip_id, env.ref_time, env.motion.clip_duration_device,
+                          b.episode_length, 0, c.termination_distance, c.eval_termination_distance,
+                          c.max_joint_speed, no_power, env.mpjpe_sum],
                   outputs=[b.rewards, b.terminated, b.truncated, b.metrics["success"], b.metrics["mpjpe_mm"],
                            b.metrics["alive_steps"], b.reward_terms],
                   device="cpu")  # fmt: skip
@@ -183,6 +181,7 @@ def test_actions_map_to_pd_targets(env):
 
 def test_observation_is_heading_invariant(env):
     """Turning the whole scene (simulator and reference) about the vertical and shifting it gives the same obs."""
+    from refpo_warp.motion.motion_library import MotionFrames
     from refpo_warp.tasks.humanoid.observations import observation_kernel
 
     env.step(0.3 * torch.ones(3, 69))
@@ -198,11 +197,13 @@ def test_observation_is_heading_invariant(env):
     bq2 = np.concatenate([moved(bq[..., :3]), quat_mul(turn, bq[..., 3:])], -1)
     bqd2 = np.concatenate([quat_rotate(turn, bqd[..., :3]), quat_rotate(turn, bqd[..., 3:])], -1)
     rpos, rrot, rvel, romega = frames(ref)
+    ref2 = MotionFrames()  # the body arrays: the observation reads no joint angles or rates
+    ref2.body_pos = wp.array(moved(rpos).astype(np.float32), dtype=wp.vec3)
+    ref2.body_rot = wp.array(quat_mul(turn, rrot).astype(np.float32), dtype=wp.quat)
+    ref2.body_vel = wp.array(quat_rotate(turn, rvel).astype(np.float32), dtype=wp.vec3)
+    ref2.body_angvel = wp.array(quat_rotate(turn, romega).astype(np.float32), dtype=wp.vec3)
     arrays = [wp.array(bq2.astype(np.float32), dtype=wp.transform), wp.array(bqd2.astype(np.float32),
-              dtype=wp.spatial_vector), s.body_com, wp.array(moved(rpos).astype(np.float32), dtype=wp.vec3),
-              wp.array(quat_mul(turn, rrot).astype(np.float32), dtype=wp.quat),
-              wp.array(quat_rotate(turn, rvel).astype(np.float32), dtype=wp.vec3),
-              wp.array(quat_rotate(turn, romega).astype(np.float32), dtype=wp.vec3), env.mask]  # fmt: skip
+              dtype=wp.spatial_vector), s.body_com, ref2, env.mask]  # fmt: skip
     critic, policy = wp.zeros((3, 934), dtype=float), wp.zeros((3, 934), dtype=float)
     wp.launch(observation_kernel, dim=(3, 24), inputs=arrays, outputs=[critic, policy])
     np.testing.assert_allclose(critic.numpy(), env._obs["critic"].numpy(), atol=2e-4)

@@ -21,6 +21,7 @@ def _launch(params, episode_length=5):
     simulated body at rest with identity rotation; the reference 0.1 m further along x, turned 0.2 rad about z, moving
     at 1 m/s along x and spinning at 2 rad/s about z; every hinge at angle 0 with rate 1 rad/s and PD target 0.01 rad
     (kp 100, kd 10)."""
+    from refpo_warp.motion.motion_library import MotionFrames
     from refpo_warp.tasks.humanoid.tracking_kernels import reward_and_termination_kernel
 
     n = 2
@@ -35,18 +36,18 @@ def _launch(params, episode_length=5):
         joint_qd=wp.array(np.concatenate([np.zeros((n, 6)), np.ones((n, NDOF))], 1).astype(np.float32)),
         joint_target=wp.array(np.concatenate([np.zeros((n, 7)), np.full((n, NDOF), 0.01)], 1).astype(np.float32)),
     )
-    ref = [
-        wp.array(np.tile(pos + [0.1, 0.0, 0.0], (n, 1, 1)).astype(np.float32), dtype=wp.vec3),
-        wp.array(np.tile([0.0, 0.0, math.sin(half), math.cos(half)], (n, NB, 1)).astype(np.float32), dtype=wp.quat),
-        wp.array(np.tile([1.0, 0.0, 0.0], (n, NB, 1)).astype(np.float32), dtype=wp.vec3),
-        wp.array(np.tile([0.0, 0.0, 2.0], (n, NB, 1)).astype(np.float32), dtype=wp.vec3),
-    ]
+    ref = MotionFrames()  # the body arrays: the reward reads no joint angles or rates
+    ref.body_pos = wp.array(np.tile(pos + [0.1, 0.0, 0.0], (n, 1, 1)).astype(np.float32), dtype=wp.vec3)
+    turned = np.tile([0.0, 0.0, math.sin(half), math.cos(half)], (n, NB, 1))
+    ref.body_rot = wp.array(turned.astype(np.float32), dtype=wp.quat)
+    ref.body_vel = wp.array(np.tile([1.0, 0.0, 0.0], (n, NB, 1)).astype(np.float32), dtype=wp.vec3)
+    ref.body_angvel = wp.array(np.tile([0.0, 0.0, 2.0], (n, NB, 1)).astype(np.float32), dtype=wp.vec3)
     rewards, step_terms = wp.zeros(n, dtype=float), wp.zeros((n, len(TERMS)), dtype=float)
     flags = [wp.zeros(n, dtype=wp.bool) for _ in range(2)]  # terminated, clip end
     metrics = [wp.zeros(n, dtype=float) for _ in range(3)]
     wp.launch(reward_and_termination_kernel, dim=n,
               inputs=[*arrays.values(), wp.full(NDOF, 100.0, dtype=float), wp.full(NDOF, 10.0, dtype=float), 500.0,
-                      *ref, wp.ones(NB, dtype=float), wp.zeros(n, dtype=int), wp.zeros(n, dtype=float),
+                      ref, wp.ones(NB, dtype=float), wp.zeros(n, dtype=int), wp.zeros(n, dtype=float),
                       wp.array([10.0], dtype=float), wp.full(n, episode_length - 1, dtype=wp.int32), 0, 0.25, 0.5,
                       100.0, params, wp.zeros(n, dtype=float)],
               outputs=[rewards, *flags, *metrics, step_terms], device="cpu")  # fmt: skip
