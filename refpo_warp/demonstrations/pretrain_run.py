@@ -114,7 +114,8 @@ def _clone_and_evaluate(cfg, runner, actor, groups, dataset, train_data, val_dat
     writer = _tensorboard(run_dir)
 
     def report(row: dict) -> None:
-        append_line(progress_path(run_dir), json.dumps(row))
+        # "iteration" is the epoch, so the run's tools (refpo eval, refpo plot) read the file as any progress log
+        append_line(progress_path(run_dir), json.dumps({"iteration": row["epoch"], **row}))
         if writer is not None:
             writer.add_scalar("BC/train_loss", row["train_loss"], row["epoch"])
             writer.add_scalar("BC/val_loss", row["val_loss"], row["epoch"])

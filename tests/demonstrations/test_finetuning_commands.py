@@ -160,3 +160,14 @@ def test_a_bad_pretrain_option_is_refused_before_the_dataset_is_read(tmp_path):
                      f"dataset={tmp_path / 'nowhere'}", f"run_dir={run}")  # fmt: skip
     assert_refused(proc, USAGE, "pretrain.validation_fraction=1")
     assert not run.exists()
+
+
+def test_refpo_eval_reads_a_pretrain_run(workflow, tmp_path):
+    """A pretrain run is a run: refpo eval evaluates its checkpoint again, to the same numbers."""
+    import shutil
+
+    clone = shutil.copytree(workflow / "clone", tmp_path / "clone")
+    before = json.loads((clone / "eval.json").read_text())["results"]
+    proc = call_tool("eval", f"run_dir={clone}")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert json.loads((clone / "eval.json").read_text())["results"] == before
