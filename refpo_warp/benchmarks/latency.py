@@ -12,7 +12,6 @@ after reset; each timing is the median of ``repeats`` calls after warm-up, synch
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import datetime
 import io
@@ -21,6 +20,7 @@ from pathlib import Path
 
 import torch
 
+from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.timing import print_table, time_call
 
@@ -58,16 +58,20 @@ def policy_latency(task: str, algo: str, device: str, batches: list[int], flow_s
     return rows
 
 
+FLAGS = (
+    Flag("--tasks", str, "comma-separated task ids", default="dmc_cheetah_run"),
+    Flag("--algos", str, "comma-separated algo names", default="ppo,fpo,refpo"),
+    Flag("--batch", str, "observations per call, comma-separated; num_envs: the profile's", default="1,num_envs"),
+    Flag("--flow-steps", str, "comma-separated N", default="10,1"),
+    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
+    Flag("--repeats", int, "timed calls per case", default=50),
+    Flag("--json", str, "also write the rows to this JSON file (refpo report's latency=)"),
+)
+USAGE = usage("refpo bench latency [flags]", __doc__.split("\n\n")[0], FLAGS)
+
+
 def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="refpo bench latency", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--tasks", default="dmc_cheetah_run", help="comma-separated task ids")
-    parser.add_argument("--algos", default="ppo,fpo,refpo", help="comma-separated algo names")
-    parser.add_argument("--batch", default="1,num_envs", help="observations per call; 'num_envs': the profile's")
-    parser.add_argument("--flow-steps", default="10,1")
-    parser.add_argument("--device", default="auto")
-    parser.add_argument("--repeats", type=int, default=50)
-    parser.add_argument("--json", default=None, help="also write the rows to this JSON file")
-    args = parser.parse_args(argv)
+    args, _ = parse_flags("bench latency", argv, FLAGS)
 
     from refpo_warp.config.resolve import resolve_config
     from refpo_warp.utils.atomic_files import write_json

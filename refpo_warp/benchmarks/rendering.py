@@ -8,7 +8,6 @@ the overlay, tiling and encoding, so the ratio says what a recording adds to dra
 
 from __future__ import annotations
 
-import argparse
 import tempfile
 import time
 from pathlib import Path
@@ -19,6 +18,7 @@ from refpo_warp.envs.registry import family_module, make_env
 from refpo_warp.render.frames import overlay, tile
 from refpo_warp.render.gl import select_gl_platform
 from refpo_warp.render.video import write_video
+from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.timing import print_table
 
 CASES = (("dmc_cheetah_run", {}, {}), ("humanoid_all", {"eval_mode": True}, {"reference": True}),
@@ -67,13 +67,17 @@ def video_seconds(env, source, fps: float, seconds: float, width: int, height: i
     return out
 
 
+FLAGS = (
+    Flag("--width", int, "frame width", default=640),
+    Flag("--height", int, "frame height", default=480),
+    Flag("--frames", int, "timed frames per case", default=60),
+    Flag("--seconds", float, "length of the timed video, at 30 frames/s", default=10.0),
+)
+USAGE = usage("refpo bench render [flags]", __doc__.split("\n\n")[0], FLAGS)
+
+
 def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="refpo bench render", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--width", type=int, default=640)
-    parser.add_argument("--height", type=int, default=480)
-    parser.add_argument("--frames", type=int, default=60, help="timed frames per case")
-    parser.add_argument("--seconds", type=float, default=10.0, help="length of the timed video, at 30 frames/s")
-    args = parser.parse_args(argv)
+    args, _ = parse_flags("bench render", argv, FLAGS)
     platform = select_gl_platform()
     rows = []
     for task, env_options, render_options in CASES:

@@ -1,4 +1,4 @@
-"""Update time of every algorithm on one batch size: refpo bench algorithms [--task T] [--envs E] ...
+"""Update time of every algorithm on one batch size: refpo bench algorithms [--task T] [--num-envs E] ...
 
 Each algorithm is built from its config for the task (its own actor, pairs/chain and losses), collects one rollout
 of ``envs x steps`` transitions and times ``update()`` (median of ``--repeats`` fresh rollouts, 5 by default) with
@@ -12,14 +12,15 @@ built as the algo plus their overrides, as ``configs/sweep/cpu_reflow_pairs.yaml
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import time
 
 import torch
 
+from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.errors import unknown
 from refpo_warp.utils.timing import print_table, synchronize
 
 # table order; other algos follow, sorted
@@ -80,17 +81,27 @@ def update_time(alg, env, device: str, repeats: int) -> float:
     return sorted(times)[len(times) // 2]
 
 
+FLAGS = (
+    Flag("--task", str, "a task id", default="dmc_cheetah_run"),
+    Flag("--num-envs", int, "envs, a multiple of 8 (Flow-GRPO's groups)", default=256),
+    Flag("--steps", int, "policy steps per env and rollout", default=60),
+    Flag("--minibatches", int, "minibatches per pass", default=8),
+    Flag("--passes", int, "passes over the rollout", default=2),
+    Flag("--repeats", int, "fresh rollouts timed (the median is reported)", default=5),
+    Flag("--algos", str, "comma-separated algos and variants (default: every algorithm)"),
+    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
+)
+USAGE = usage("refpo bench algorithms [flags]", __doc__.split("\n\n")[0], FLAGS)
+
+
 def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="refpo bench algorithms", description=__doc__)
-    parser.add_argument("--task", default="dmc_cheetah_run")
-    parser.add_argument("--envs", type=int, default=256, help="a multiple of 8 (Flow-GRPO's groups)")
-    parser.add_argument("--steps", type=int, default=60, help="policy steps per env and rollout")
-    parser.add_argument("--minibatches", type=int, default=8)
-    parser.add_argument("--passes", type=int, default=2)
-    parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--algos", nargs="+", default=algorithms(), choices=[*algorithms(), *VARIANTS])
-    parser.add_argument("--device", default="auto")
-    args = parser.parse_args(argv)
+    args, _ = parse_flags("bench algorithms", argv, FLAGS, renamed={"--envs": "--num-envs"})
+    choices = [*algorithms(), *VARIANTS]
+    args.algos = [a.strip() for a in args.algos.split(",") if a.strip()] if args.algos else algorithms()
+    for algo in args.algos:
+        if algo not in choices:
+            raise unknown("algorithm of refpo bench algorithms", algo, choices)
+    args.envs = args.num_envs
     device = resolve_device(args.device)
     if "fpo" not in args.algos:
         args.algos = ["fpo", *args.algos]

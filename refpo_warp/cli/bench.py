@@ -5,16 +5,16 @@ from __future__ import annotations
 import importlib
 import importlib.util
 
-from refpo_warp.cli.arguments import Arguments
+from refpo_warp.utils.command_line import Arguments, wants_help
 from refpo_warp.utils.errors import ConfigError, unknown
 
 SUMMARY = "env speed vs gymnasium, action latency, update cost of every algorithm, rendering speed"
 USAGE = """Benchmarks: refpo bench <gridworld|dmc|humanoid|all|latency|algorithms|render> [--flags of that benchmark]
 
 Each task family with a benchmark has it in tasks/<family>/bench.py (found there, not listed here);
-`refpo bench dmc --help` shows its flags. `all` runs every family's benchmark. `latency`
-(refpo_warp/benchmarks/latency.py) times action generation at N = 10 vs N = 1 for chosen tasks and algorithms;
-`--json PATH` writes the rows for `refpo report` (the latency figure). `algorithms`
+`refpo bench dmc --help` shows its flags, read by the convention of every refpo command. `all` runs every
+family's benchmark. `latency` (refpo_warp/benchmarks/latency.py) times action generation at N = 10 vs N = 1 for
+chosen tasks and algorithms; `--json PATH` writes the rows for `refpo report` (its latency=). `algorithms`
 (refpo_warp/benchmarks/update_time.py) times the update of every algorithm on one batch size, as ratios to FPO.
 `render` (refpo_warp/benchmarks/rendering.py): frames per second of each family's frames and the cost of a video.
 """
@@ -40,12 +40,15 @@ def run(args: Arguments) -> None:
     name, rest = args.subjects[0], args.options
     if name not in choices:
         raise unknown("benchmark", name, choices)
+    modules = [OTHERS[name]] if name in OTHERS else [f"refpo_warp.tasks.{f}.bench"
+                                                     for f in (families if name == "all" else (name,))]  # fmt: skip
+    if wants_help(rest):  # a benchmark's own flags, from the same convention as every command
+        print("\n\n".join(importlib.import_module(m).USAGE for m in modules))
+        return
     from refpo_warp.utils.device import set_torch_threads
 
     set_torch_threads()
-    if name in OTHERS:
-        importlib.import_module(OTHERS[name]).main(rest)
-        return
-    for family in families if name == "all" else (name,):
-        print(f"\n## {family}", flush=True)  # each family's tables follow as ### blocks
-        importlib.import_module(f"refpo_warp.tasks.{family}.bench").main(rest)
+    for module in modules:
+        if name not in OTHERS:
+            print(f"\n## {module.split('.')[-2]}", flush=True)  # each family's tables follow as ### blocks
+        importlib.import_module(module).main(rest)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from refpo_warp.cli.arguments import Arguments
+from refpo_warp.utils.command_line import Arguments
 
 SUMMARY = "roll out a trained policy (or a scripted demonstrator) and write a Minari demonstration dataset"
 USAGE = """Collect demonstrations: refpo collect run_dir=<trained run> episodes=K out=PATH [key=value ...]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from refpo_warp.cli.arguments import Arguments, Flag
+from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
 
 SUMMARY = "convert AMASS motion files (a file or a folder) into a motion library file"

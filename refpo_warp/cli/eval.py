@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 from pathlib import Path
 
-from refpo_warp.cli.arguments import Arguments
+from refpo_warp.utils.command_line import Arguments
 from refpo_warp.cli.explain import EXPLAIN, explain_or_run
 from refpo_warp.utils.errors import ConfigError
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from refpo_warp.cli.arguments import Arguments, Flag
+from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
 
 EXPLAIN = Flag("--explain", str, "the keys to explain, comma-separated; none: every option", optional_value=True)

@@ -1,5 +1,5 @@
 """``refpo``, the command of the installed package (``python -m refpo_warp`` and the checkout's ``tools/*.py`` are the
-same): ``refpo <command> [SUBJECT] [key=value ...] [--flags]`` (``refpo_warp/cli/arguments.py``).
+same): ``refpo <command> [SUBJECT] [key=value ...] [--flags]`` (``refpo_warp/utils/command_line.py``).
 
 Every command runs through ``refpo_warp/cli/guard.py``: one message and a documented exit code per failure.
 """
@@ -9,7 +9,7 @@ from __future__ import annotations
 import importlib
 import sys
 
-from refpo_warp.cli.arguments import HELP, Arguments, parse_arguments, wants_help
+from refpo_warp.utils.command_line import HELP, Arguments, parse_arguments, wants_help
 from refpo_warp.cli.guard import EXIT_OK, EXIT_USAGE, run_guarded
 from refpo_warp.utils.errors import unknown
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from refpo_warp.cli.arguments import Arguments, Flag
+from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError, unknown
 
 SUMMARY = "write procedural AMASS-format clips (the shipped synthetic set, or random variants)"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from refpo_warp.cli.arguments import Arguments
+from refpo_warp.utils.command_line import Arguments
 from refpo_warp.utils.errors import ConfigError, DataFileError
 
 SUMMARY = "training-curve figures of runs (progress.jsonl) or of a sweep"

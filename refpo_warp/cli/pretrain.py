@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from refpo_warp.cli.arguments import Arguments
+from refpo_warp.utils.command_line import Arguments
 
 SUMMARY = "clone an algorithm's actor from a demonstration dataset (flow: CFM loss, Gaussian: max. likelihood)"
 USAGE = """Behaviour cloning: refpo pretrain task=<task> algo=<algo> dataset=PATH [key=value ...]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from refpo_warp.cli.arguments import Arguments
+from refpo_warp.utils.command_line import Arguments
 from refpo_warp.utils.errors import ConfigError
 
 SUMMARY = "the paper's tables (Markdown, CSV) and figures of a sweep dir"

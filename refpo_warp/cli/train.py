@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 
-from refpo_warp.cli.arguments import Arguments, Flag
+from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.cli.explain import EXPLAIN, explain_or_run
 
 SUMMARY = "train a policy and evaluate it; --tasks lists the task ids, --explain KEY says who set an option"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import signal
 
-from refpo_warp.cli.arguments import Arguments, Flag
+from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.cli.guard import EXIT_INTERRUPTED
 from refpo_warp.utils.errors import ConfigError
 

@@ -13,14 +13,15 @@ one ``MjData`` per world. Physics only: no observation or reward work on the C s
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import numpy as np
 import torch
 
 from refpo_warp.envs.registry import make_env
+from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.timing import env_steps_per_second, print_table
 
 
@@ -83,25 +84,30 @@ def mujoco_c(env, seconds: float) -> tuple[float, float]:
     return rollout_rate, loop_rate
 
 
+FLAGS = (
+    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
+    Flag("--num-envs", int, "envs (default: 256 on CPU, 4096 on CUDA)"),
+    Flag("--tasks", str, "comma-separated suite names (default: all)"),
+    Flag("--seconds", float, "approximate timing window per measurement", default=3.0),
+    Flag("--no-mujoco-c", doc="skip the MuJoCo C comparison", default=False),
+)
+USAGE = usage("refpo bench dmc [flags]", __doc__.split("\n\n")[0], FLAGS)
+
+
 def main(argv: list[str]) -> None:
     from refpo_warp.tasks.dmc.suite import task_names
 
     TASKS = task_names()
 
-    parser = argparse.ArgumentParser(prog="refpo bench dmc", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--device", default="auto")
-    parser.add_argument("--num-envs", type=int, default=None, help="default: 256 on CPU, 4096 on CUDA")
-    parser.add_argument("--tasks", default=",".join(TASKS), help="comma-separated suite names")
-    parser.add_argument("--seconds", type=float, default=3.0, help="approximate timing window per measurement")
-    parser.add_argument("--no-mujoco-c", action="store_true", help="skip the MuJoCo C comparison")
-    args = parser.parse_args(argv)
+    args, _ = parse_flags("bench dmc", argv, FLAGS)
+    args.tasks = args.tasks or ",".join(TASKS)
 
     device = resolve_device(args.device)
     num_envs = args.num_envs or (256 if device == "cpu" else 4096)
     tasks = [t.strip() for t in args.tasks.split(",") if t.strip()]
     unknown = [t for t in tasks if t not in TASKS]
     if unknown:
-        raise SystemExit(f"unknown DMC task(s) {unknown}; choose from {', '.join(TASKS)}")
+        raise ConfigError(f"unknown DMC task(s) {unknown}; choose from {', '.join(TASKS)}")
     torch.manual_seed(0)
     print(f"DMC env steps/s on {device}: {num_envs} envs, random actions, graph-captured step"
           + ("" if args.no_mujoco_c else "; MuJoCo C on the same model and number of worlds (1 thread)"), flush=True)

@@ -1,6 +1,6 @@
 """GridWorld benchmark: the Warp env against the same dynamics in numpy under gymnasium's SyncVectorEnv.
 
-    refpo bench gridworld [--envs 4096] [--device auto]
+    refpo bench gridworld [--num-envs 4096] [--device auto] [--gym-steps 20]
 
 Action latency and update time on the GridWorld config: ``refpo bench latency --tasks gridworld`` and
 ``refpo bench algorithms --task gridworld``.
@@ -8,13 +8,13 @@ Action latency and update time on the GridWorld config: ``refpo bench latency --
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import numpy as np
 import torch
 
 from refpo_warp.envs.registry import make_env
+from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.timing import env_steps_per_second, print_table
 
@@ -37,20 +37,24 @@ def gym_steps_per_second(num_envs: int, steps: int) -> float:
     return steps * num_envs / elapsed
 
 
-def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="refpo bench gridworld", description=__doc__)
-    parser.add_argument("--envs", type=int, default=4096)
-    parser.add_argument("--device", default="auto")
-    parser.add_argument("--gym-steps", type=int, default=20)
-    args = parser.parse_args(argv)
-    device = resolve_device(args.device)
-    print(f"GridWorld benchmark on {device}, {args.envs} envs, torch threads {torch.get_num_threads()}", flush=True)
+FLAGS = (
+    Flag("--num-envs", int, "envs of both", default=4096),
+    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
+    Flag("--gym-steps", int, "timed steps of the gymnasium baseline", default=20),
+)
+USAGE = usage("refpo bench gridworld [flags]", __doc__.split("\n\n")[0], FLAGS)
 
-    env = make_env("gridworld", num_envs=args.envs, device=device)
+
+def main(argv: list[str]) -> None:
+    args, _ = parse_flags("bench gridworld", argv, FLAGS, renamed={"--envs": "--num-envs"})
+    device = resolve_device(args.device)
+    print(f"GridWorld benchmark on {device}, {args.num_envs} envs, torch threads {torch.get_num_threads()}", flush=True)
+
+    env = make_env("gridworld", num_envs=args.num_envs, device=device)
     warp_sps = env_steps_per_second(env, steps=500)
-    gym_sps = gym_steps_per_second(args.envs, args.gym_steps)
+    gym_sps = gym_steps_per_second(args.num_envs, args.gym_steps)
     print_table([
         {"env": "refpo_warp GridWorld (Warp kernel)", "env steps/s": f"{warp_sps:,.0f}"},
         {"env": "gymnasium SyncVectorEnv (numpy)", "env steps/s": f"{gym_sps:,.0f}"},
         {"env": "speed-up", "env steps/s": f"{warp_sps / gym_sps:,.0f}x"},
-    ], ["env", "env steps/s"], title=f"Env steps per second, {args.envs} envs, uniform random actions")  # fmt: skip
+    ], ["env", "env steps/s"], title=f"Env steps per second, {args.num_envs} envs, uniform random actions")  # fmt: skip

@@ -16,7 +16,6 @@ sampling.
 
 from __future__ import annotations
 
-import argparse
 import ast
 import json
 import time
@@ -25,6 +24,7 @@ import numpy as np
 import torch
 
 from refpo_warp.envs.registry import make_env
+from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.timing import env_steps_per_second, print_title
 
@@ -93,34 +93,34 @@ def mujoco_c(env, steps: int, episode_length: int, seed: int = 0) -> dict:
     return {"c_env_steps_per_s": run(episodes), "c_episode_length": length, "c_settings": mc.solver_settings(model)}
 
 
-def key_value_option(item: str) -> tuple[str, object]:
-    key, sep, value = item.partition("=")
-    if not sep:
-        raise SystemExit(f"--env expects KEY=VALUE, got {item!r}")
+def _literal(value: str) -> object:
     try:
-        return key, ast.literal_eval(value)
+        return ast.literal_eval(value)
     except (ValueError, SyntaxError):
-        return key, value
+        return value
+
+
+FLAGS = (
+    Flag("--task", str, "a humanoid task id", default="humanoid_all"),
+    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
+    Flag("--num-envs", int, "envs (default: 64 on CPU, 4096 on CUDA)"),
+    Flag("--steps", int, "timed steps (default: 30 on CPU, 300 on CUDA)"),
+    Flag("--warmup", int, "untimed steps first", default=3),
+    Flag("--no-mujoco-c", doc="skip the MuJoCo C anchor", default=False),
+    Flag("--json", doc="print the result as one JSON line", default=False),
+)
+USAGE = usage("refpo bench humanoid [flags] [env.<option>=VALUE ...]", __doc__.split("\n\n")[0]
+              + " env.<option>=VALUE sets an env cfg option (e.g. env.njmax=320).", FLAGS)  # fmt: skip
 
 
 def main(argv: list[str]) -> None:
-    parser = argparse.ArgumentParser(prog="refpo bench humanoid", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--task", default="humanoid_all")
-    parser.add_argument("--device", default="auto")
-    parser.add_argument("--num-envs", type=int, default=None, help="default: 64 on CPU, 4096 on CUDA")
-    parser.add_argument("--steps", type=int, default=None, help="timed steps (default: 30 on CPU, 300 on CUDA)")
-    parser.add_argument("--warmup", type=int, default=3)
-    parser.add_argument("--env", action="append", default=[], metavar="KEY=VALUE",
-                        help="env cfg option, e.g. --env njmax=320 (repeatable)")  # fmt: skip
-    parser.add_argument("--no-mujoco-c", action="store_true", help="skip the MuJoCo C anchor")
-    parser.add_argument("--json", action="store_true", help="print the result as one JSON line")
-    args = parser.parse_args(argv)
+    args, given = parse_flags("bench humanoid", argv, FLAGS, options=("env.",), renamed={"--env": "env.<option>="})
 
     device = resolve_device(args.device)
     cpu = device == "cpu"
     num_envs = args.num_envs or (64 if cpu else 4096)
     steps = args.steps or (30 if cpu else 300)
-    env_cfg = dict(key_value_option(item) for item in args.env)
+    env_cfg = {key.removeprefix("env."): _literal(value) for key, value in given.items()}
     result = measure(args.task, num_envs, device, steps, args.warmup, with_c=not args.no_mujoco_c, **env_cfg)
     if args.json:
         print(json.dumps(result))

@@ -17,6 +17,12 @@ from refpo_warp.sweeps.spec import fingerprint
     (["plot", "sweep=runs/x"], "'sweep=' is spelled 'refpo plot <sweep dir>'"),
     (["report", "runs/x", "outt=o"], "Did you mean 'out'"),
     (["plot", "run_dir=a", "ou=b"], "Did you mean 'out'"),
+    # the benchmarks read the same convention: one name for the env count, env options as env.<option>=
+    (["bench", "gridworld", "--envs", "4"], "'--envs' is spelled '--num-envs'"),
+    (["bench", "algorithms", "--envs=8"], "'--envs' is spelled '--num-envs'"),
+    (["bench", "humanoid", "--env", "njmax=3"], "'--env' is spelled 'env.<option>='"),
+    (["bench", "dmc", "--num-env", "4"], "Did you mean '--num-envs'"),
+    (["bench", "algorithms", "--algos", "refpoo"], "Did you mean 'refpo'"),
 ])  # fmt: skip
 def test_old_spellings_and_typos_are_refused_with_the_name_now(argv, message, capsys):
     assert main(argv) == 2
@@ -51,3 +57,9 @@ def test_report_and_plot_take_the_sweep_dir_and_out(sweep_dir, tmp_path):
     assert (tmp_path / "report" / "report.md").exists() and (tmp_path / "report" / "main.csv").exists()
     assert main(["plot", str(sweep_dir), f"out={tmp_path / 'curves'}"]) == 0
     assert list((tmp_path / "curves").glob("*_curves.png"))
+
+
+def test_a_benchmarks_help_lists_its_flags(capsys):
+    assert main(["bench", "dmc", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("refpo bench dmc [flags]") and "--num-envs NUM_ENVS" in out and "--no-mujoco-c" in out

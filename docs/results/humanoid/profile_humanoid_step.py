@@ -15,13 +15,23 @@ only: it patches ``warp``'s launch function for the profile.
 from __future__ import annotations
 
 import argparse
+import ast
 import collections
 import time
 
 import numpy as np
 import torch
 
-from refpo_warp.tasks.humanoid.bench import key_value_option
+
+def key_value_option(item: str) -> tuple[str, object]:
+    """``KEY=VALUE`` with VALUE read as a Python literal where it is one."""
+    key, sep, value = item.partition("=")
+    if not sep:
+        raise SystemExit(f"expected KEY=VALUE, got {item!r}")
+    try:
+        return key, ast.literal_eval(value)
+    except (ValueError, SyntaxError):
+        return key, value
 
 
 def _patch_solver(extra: dict) -> None:

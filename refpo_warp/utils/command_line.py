@@ -13,6 +13,7 @@ spelling a command once took (``RENAMED``: ``--out`` -> ``out=DIR``) is refused 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from typing import Any
 
 from refpo_warp.utils.errors import ConfigError, unknown
@@ -28,6 +29,13 @@ class Flag:
     kind: type | None = None
     doc: str = ""
     optional_value: bool = False  # --explain [KEYS]: the next argument is its value unless it is an option or flag
+    default: Any = None  # what ``Arguments.get`` returns when the flag is not given
+
+    def line(self) -> str:
+        """The flag's line in a command's help."""
+        value = "" if self.kind is None else f" {self.name.lstrip('-').replace('-', '_').upper()}"
+        default = "" if self.default is None else f" (default {self.default})"
+        return f"    {self.name + value:24s}{self.doc}{default}"
 
     def convert(self, text: str) -> Any:
         try:
@@ -46,6 +54,10 @@ class Arguments:
 
     def flag(self, name: str, default: Any = None) -> Any:
         return self.flags.get(name, default)
+
+    def get(self, flag: Flag) -> Any:
+        """A declared flag's value, or its default."""
+        return self.flags.get(flag.name, flag.default)
 
     def values(self, key: str) -> list[str]:
         """Every value given to ``key=`` (a key a command takes more than once, e.g. ``run_dir=``), as text."""
@@ -104,3 +116,25 @@ def parse_arguments(command: str, argv: list[str], flags: tuple[Flag, ...] = (),
                               + (f" and the flags {', '.join(declared)}" if declared else "")
                               + "; see refpo " + command + " --help")  # fmt: skip
     return out
+
+
+def usage(synopsis: str, summary: str, flags: tuple[Flag, ...]) -> str:
+    """A command's help: its synopsis, what it does and one line per flag."""
+    return "\n".join([synopsis, "", summary.strip(), "", "Flags:", *(f.line() for f in flags)])
+
+
+def parse_flags(command: str, argv: list[str], flags: tuple[Flag, ...], options: tuple[str, ...] = (),
+                renamed: dict[str, str] | None = None) -> tuple[SimpleNamespace, dict[str, str]]:  # fmt: skip
+    """A benchmark's arguments through the convention: its flags as attributes (``--num-envs 8`` ->
+    ``.num_envs``, the declared default when not given) and its ``key=value`` options whose key starts with one of
+    ``options`` (e.g. ``env.``), as text."""
+    args = parse_arguments(command, argv, flags, 0, renamed)
+    given = {}
+    for option in args.options:
+        key, _, value = option.partition("=")
+        if not key.startswith(options) or not options:
+            raise ConfigError(f"refpo {command} takes " + (f"{', '.join(o + '<key>=' for o in options)} options and "
+                              if options else "") + f"flags, not {option!r}; see refpo {command} --help")  # fmt: skip
+        given[key] = value
+    values = {f.name.lstrip("-").replace("-", "_"): args.get(f) for f in flags}
+    return SimpleNamespace(**values), given
