@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR, shown
 
 ENV_VAR = "REFPO_CONFIG_PATH"
@@ -49,6 +49,19 @@ class ConfigPath:
     def find(self, kind: str, name: str) -> Path | None:
         """The file ``<kind>/<name>.yaml`` of the first folder that has it, or None."""
         return self.files(kind).get(name)
+
+    def named_or_path(self, kind: str, source: str) -> Path:
+        """A file named by ``source``: a path to a YAML file, or the name of a ``<kind>/<name>.yaml`` of the
+        folders (a sweep, a tuning); a missing one names the valid names."""
+        path = Path(source)
+        if path.suffix in (".yaml", ".yml") or path.exists():
+            if not path.is_file():
+                raise ConfigError(f"{kind.capitalize()} file '{source}' not found")
+            return path
+        named = self.find(kind, source)
+        if named is None:
+            raise unknown(kind, source, self.names(kind))
+        return named
 
     def names(self, kind: str) -> list[str]:
         """The choices of ``kind`` (``algo=`` values, sweep names, task files): names not starting with ``_``."""

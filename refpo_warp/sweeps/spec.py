@@ -32,7 +32,7 @@ from typing import Any
 
 import yaml
 
-from refpo_warp.config.config_path import ConfigPath, config_path
+from refpo_warp.config.config_path import config_path
 from refpo_warp.config.dotted import LEAF_KEYS, parse_overrides
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
@@ -81,18 +81,6 @@ class Sweep:
     report: dict[str, list[str]]
     runs: list[Run] = field(default_factory=list)
 
-
-def sweep_file(source: str, folders: ConfigPath) -> Path:
-    """A named sweep (``sweep/<name>.yaml`` of the config folders) or a path to a sweep YAML file."""
-    path = Path(source)
-    if path.suffix in (".yaml", ".yml") or path.exists():
-        if not path.is_file():
-            raise ConfigError(f"Sweep file '{source}' not found")
-        return path
-    named = folders.find("sweep", source)
-    if named is None:
-        raise unknown("sweep", source, folders.names("sweep"))
-    return named
 
 
 def _flat_overrides(values: Any, where: str, prefix: str = "") -> dict[str, Any]:
@@ -243,7 +231,7 @@ def load_sweep(source: str, args: list[str] | None = None) -> Sweep:
     from refpo_warp.config.resolve import resolve_config  # here: a Ray worker imports this module without torch
 
     cli = parse_overrides(args or [])
-    path = sweep_file(source, config_path(cli.get("config_dir")))  # the runs' config folders
+    path = config_path(cli.get("config_dir")).named_or_path("sweep", source)  # the runs' config folders
     spec = load_yaml(path)
     where = str(path)
     for key in spec:

@@ -209,17 +209,6 @@ def _evaluation(spec: Any, labels: list[str], where: str) -> Evaluation | None:
     return Evaluation([str(t) for t in tasks], [_int(s, "evaluate.seeds", where, 0) for s in seeds], variants)
 
 
-def tuning_file(source: str, folders) -> Path:
-    path = Path(source)
-    if path.suffix in (".yaml", ".yml") or path.exists():
-        if not path.is_file():
-            raise ConfigError(f"Tuning file '{source}' not found")
-        return path
-    named = folders.find("tune", source)
-    if named is None:
-        raise unknown("tuning", source, folders.names("tune"))
-    return named
-
 
 def _int(value: Any, key: str, where: str, low: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < low:
@@ -232,7 +221,7 @@ def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
     ``config_dir=`` (the runs' config folders)."""
     cli = parse_overrides(args or [])
     folders = {"config_dir": cli.pop("config_dir")} if "config_dir" in cli else {}
-    path = tuning_file(source, config_path(folders.get("config_dir")))
+    path = config_path(folders.get("config_dir")).named_or_path("tune", source)
     spec = load_yaml(path)
     where = str(path)
     for key in spec:
