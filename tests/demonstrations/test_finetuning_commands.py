@@ -171,3 +171,18 @@ def test_refpo_eval_reads_a_pretrain_run(workflow, tmp_path):
     proc = call_tool("eval", f"run_dir={clone}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert json.loads((clone / "eval.json").read_text())["results"] == before
+
+
+def test_a_resumed_fine_tuning_run_finishes_its_warmup(workflow, tmp_path):
+    """Stopped inside the critic's warm-up, a resumed run keeps the actor frozen until the warm-up ends."""
+    clone = torch.load(workflow / "clone" / "model_0.pt", weights_only=True)["actor_state_dict"]
+    run = tmp_path / "tuned"
+    common = [*TINY, "algo=refpo", "runner.save_interval=1", "eval.at_end=false"]
+    proc = call_tool("train", *common, f"init_from={workflow / 'clone'}", "critic_warmup_iterations=3",
+                     "max_iterations=2", f"run_dir={run}")  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    proc = call_tool("train", f"run_dir={run}", "resume=true", "max_iterations=4")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    actors = [torch.load(run / f"model_{i}.pt", weights_only=True)["actor_state_dict"] for i in range(4)]
+    assert all(torch.equal(actors[2][k], v) for k, v in clone.items())  # iteration 2: still the warm-up
+    assert any(not torch.equal(actors[3][k], v) for k, v in clone.items())
