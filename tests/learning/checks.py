@@ -8,9 +8,9 @@ changed); a check's bound must fail there. ``docs/results/learning_checks.md`` g
 (seeds 1-5 on one torch thread, 1-3 on two, the null control on seeds 1-3) and where its bound sits between them;
 ``tests/learning/measure.py`` makes those runs and that table.
 
-CI's default test command runs five of them: ReFPO on GridWorld (N = 1 and 10), on the humanoid and on mjlab's
-cartpole (in the mjlab job), ReFPO's one-step configuration on point_mass (a whole 1M-step profile), and ReinFlow on
-GridWorld. The DMC cartpole's five run on demand (``--all-checks``; ``in_ci=False``), to keep CI's whole run within
+CI's default test command runs six of them: ReFPO on GridWorld (N = 1 and 10), on the humanoid and on mjlab's
+cartpole (in the mjlab job), ReFPO's one-step configuration on point_mass (a whole 1M-step profile), ReinFlow on
+GridWorld, and ReFPO fine-tuning a flow clone of GridWorld demonstrations. The DMC cartpole's five run on demand (``--all-checks``; ``in_ci=False``), to keep CI's whole run within
 its 25 minutes: ReFPO, Gaussian PPO, the advantage-weighted ReFPO, FPO++ and Flow-GRPO (the first four share ReFPO's
 or rsl_rl's update loop, and each loss term of their own has hand-worked unit tests).
 
@@ -66,7 +66,8 @@ class LearningCheck:
     initial_eval: bool = True
     describe: str = ""
     properties: Callable[[dict], list[str]] = field(default=lambda record: [])  # failures of non-learning asserts
-    runner: str = "refpo_warp"  # or "mjlab": mjlab's own train command, in an mjlab environment
+    runner: str = "refpo_warp"  # or "mjlab": mjlab's own train command, in an mjlab environment; or "finetune":
+    # refpo_warp's, from a clone of demonstrations (run_finetune_check)
     minutes: float = 3.0  # its wall time in CI (the slow marker's, which orders the run), from a fresh-clone run's
     # pytest --durations
     in_ci: bool = True  # run by the default test command (CI's); False: on demand with --all-checks
@@ -136,6 +137,22 @@ def gridworld_properties(record: dict) -> list[str]:
     return failures
 
 
+def finetuning_gains(record: dict) -> dict[str, float]:
+    """Fine-tuning from a clone: the episode length at N = 1 and 10 relative to the clone's (the clone's flow wanders,
+    most at N = 1; the fine-tuned one walks to a band), and, unbounded, the change of the data's minority band's
+    (bottom) share at N = 10."""
+    final, initial = record["final"], record["initial"]
+    out = {f"length_ratio_{s}": final[s]["length_mean"] / initial[s]["length_mean"] for s in ("N=1", "N=10")}
+    out["bottom_share_change_N=10"] = final["N=10"]["bottom_share"] - initial["N=10"]["bottom_share"]
+    return out
+
+
+def both_bands_kept(record: dict) -> list[str]:
+    """Fine-tuning keeps the demonstrations' two modes: each goal band keeps a real share of the successes."""
+    return [f"{s}: {record['final'][s]}" for s in ("N=1", "N=10")
+            if min(record["final"][s]["top_share"], record["final"][s]["bottom_share"]) < 0.2]  # fmt: skip
+
+
 def length_trend(record: dict) -> dict[str, float]:
     t, rise = linear_trend([row["episode_length_mean"] for row in record["rows"]])
     return {"length_trend_t": t, "length_rise": rise}
@@ -148,6 +165,10 @@ def rate_gain(record: dict) -> dict[str, float]:
 
 # ------------------------------------------------------------------------------------------------------ the checks
 CARTPOLE = ("task=dmc_cartpole_balance",)
+# The fine-tuning check's clone: GridWorld's scripted demonstrator (top 0.63 / bottom 0.37 of its episodes), cloned by
+# refpo pretrain; each seed collects and clones its own (the clone is the policy its fine-tuning starts from).
+FINETUNE_COLLECT = ("episodes=500", "num_envs=64")
+FINETUNE_PRETRAIN = ("pretrain.epochs=30", "pretrain.num_pairs=8")
 MJLAB_ITERATIONS = 100
 CHECKS: dict[str, LearningCheck] = {
     check.name: check
@@ -203,6 +224,15 @@ CHECKS: dict[str, LearningCheck] = {
             minutes=2.3,
             describe="ReinFlow on GridWorld (the paper's 260k env steps): deterministic K = 4 chain's episode length "
                      "over the initial policy's"),
+        LearningCheck(
+            "gridworld_finetune_refpo",
+            ("task=gridworld", "algo=refpo", "max_iterations=24", "critic_warmup_iterations=4",
+             "eval.flow_steps=[1, 10]", "eval.interval=0"), finetuning_gains,
+            (Bound("length_ratio_N=1", "<=", 0.7), Bound("length_ratio_N=10", "<=", 0.9)), runner="finetune",
+            minutes=1.2, properties=both_bands_kept,
+            describe="ReFPO fine-tuned from a flow clone of GridWorld's scripted two-mode demonstrator (24 iterations, "
+                     "the first 4 the critic's warm-up): the episode length at N = 1 and 10 against the clone's; both "
+                     "goal bands keep a share"),
         LearningCheck(
             "humanoid_refpo", ("task=humanoid_all_residual", "algo=refpo", "max_iterations=40", "eval.at_end=false"),
             length_trend, (Bound("length_trend_t", ">=", 3.0), Bound("length_rise", ">=", 0.05)), initial_eval=False,
@@ -268,10 +298,43 @@ def run_mjlab_check(check: LearningCheck, seed: int, run_dir: Path, null: bool =
             "final": final, "diagnostics": {}, "rows": []}
 
 
+def run_finetune_check(check: LearningCheck, seed: int, run_dir: Path, null: bool = False) -> dict:
+    """Collect the scripted demonstrations and clone them (``FINETUNE_COLLECT``, ``FINETUNE_PRETRAIN``; seeded by
+    ``seed``), then fine-tune the clone with the check's overrides; ``initial`` is the clone's evaluation in the same
+    protocol. The null control switches the fine-tuning's learning off (the clone is what it starts from)."""
+    from refpo_warp.demonstrations.collect import collect
+    from refpo_warp.demonstrations.pretrain_run import pretrain
+    from refpo_warp.runner.progress import read_rows
+    from refpo_warp.training import train
+
+    run_dir = Path(run_dir)
+    data, clone = run_dir.with_name(f"{run_dir.name}_data"), run_dir.with_name(f"{run_dir.name}_clone")
+    task = next(o for o in check.overrides if o.startswith("task="))
+    protocol = [o for o in check.overrides if o.startswith(("task=", "algo=", "eval.flow_steps="))]
+    with contextlib.redirect_stdout(io.StringIO()):
+        collect({**parse_options([task, *FINETUNE_COLLECT]), "demonstrator": "scripted", "seed": seed,
+                 "out": str(data)})  # fmt: skip
+        cloned = pretrain([*protocol, *FINETUNE_PRETRAIN, f"seed={seed}", "device=cpu", f"dataset={data}",
+                           f"run_dir={clone}"])  # fmt: skip
+    out = train([*overrides_of(check, seed, run_dir, null), f"init_from={clone}"])
+    rows = [{k: row[k] for k in ROW_KEYS if k in row} for row in read_rows(run_dir)]
+    return {"check": check.name, "overrides": list(check.overrides), "seed": seed, "null": null,
+            "initial": cloned["results"], "final": out.get("results", {}), "diagnostics": out.get("diagnostics", {}),
+            "rows": rows}  # fmt: skip
+
+
+def parse_options(options) -> dict:
+    from refpo_warp.config.dotted import parse_overrides
+
+    return parse_overrides(list(options))
+
+
 def run_check(check: LearningCheck, seed: int, run_dir: Path, null: bool = False) -> dict:
     """Train the check's run and return its record: initial and final evaluation, diagnostics, the training curve."""
     if check.runner == "mjlab":
         return run_mjlab_check(check, seed, run_dir, null)
+    if check.runner == "finetune":
+        return run_finetune_check(check, seed, run_dir, null)
     from refpo_warp.runner.progress import read_rows
     from refpo_warp.training import train
 

@@ -19,6 +19,8 @@ def marks(check):
         out.append(pytest.mark.skip(reason="mjlab is not installed: the mjlab job runs it in its venv (.ci/mjlab)"))
     elif check.runner != "mjlab" and importlib.util.find_spec("warp") is None:
         out.append(pytest.mark.skip(reason="needs the sim extra (warp, newton)"))
+    elif check.runner == "finetune" and importlib.util.find_spec("minari") is None:
+        out.append(pytest.mark.skip(reason="needs the data extra (minari) for its demonstrations"))
     return out
 
 
@@ -35,6 +37,6 @@ def test_learning_check(name, tmp_run_dir, null_control):
         return
     assert passed, f"{name}: {shown} against {', '.join(map(str, check.bounds))}"
     assert not check.properties(record), check.properties(record)
-    if check.runner == "refpo_warp":  # mjlab's evaluation reports one return rate, not per-setting summaries
+    if check.runner != "mjlab":  # mjlab's evaluation reports one return rate, not per-setting summaries
         nonfinite = [s for s, summary in record["final"].items() if summary.get("nonfinite_resets_mean", 0) > 0]
         assert not nonfinite, f"non-finite env states reset during evaluation: {nonfinite}"
