@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # DMC from a weaker demonstrator (docs/results/finetuning/README.md), from the repository root, one process at a time:
 #   bash docs/results/finetuning/dmc.sh [dmc_point_mass] [dmc_reacher_easy]
-# Per task, under $OUT/<task> (default runs/finetuning/dmc): demonstrator/ (PPO at the task's CPU profile, a
-# checkpoint at every evaluation), data/ (200 episodes of the checkpoint nearest half the final return, its mean action
-# plus Gaussian noise 0.3), clone_refpo/ and clone_ppo/ (refpo pretrain), then the sweep finetune_<task> (ReFPO and
+# Per task, under $OUT/<task> (default runs/finetuning/dmc): demonstrator/ (PPO at the task's CPU profile, stopped once
+# an evaluation reaches half the from-scratch final return), data/ (200 episodes of the evaluated checkpoint nearest
+# that half, half_return_checkpoint.py; its mean
+# action plus Gaussian noise 0.3), clone_refpo/ and clone_ppo/ (refpo pretrain), then the sweep finetune_<task> (ReFPO and
 # refpo_onestep from the flow clone, PPO from the Gaussian clone, half the CPU profile's env steps, seeds 1-3) into
 # runs/sweeps/finetune_<task>. Every step is skipped when its output exists, so the script resumes where it stopped
 # (a sweep resumes its own runs).
@@ -11,13 +12,21 @@ set -euo pipefail
 OUT=${OUT:-runs/finetuning/dmc}
 TASKS=("${@:-dmc_point_mass dmc_reacher_easy}")
 refpo() { nice -n 10 python -m refpo_warp "$@"; }
+# Half of PPO's final return from scratch at the CPU profile (docs/results/cpu_dmc/per_task.csv: 869 and 782)
+declare -A TARGET=([dmc_point_mass]=435 [dmc_reacher_easy]=391)
 for task in ${TASKS[@]}; do
   D="$OUT/$task"
-  if [ ! -f "$D/demonstrator/eval.json" ]; then
-    refpo train task=$task algo=ppo seed=1 runner.save_interval=4 eval.interval=4 run_dir="$D/demonstrator" \
-      $( [ -d "$D/demonstrator" ] && echo resume=true )
-  fi
-  CK=$(python docs/results/finetuning/half_return_checkpoint.py "$D/demonstrator")
+  # the demonstrator trains 8 iterations at a time (a checkpoint and an evaluation every 4) until one reaches the target
+  iterations=8
+  until CK=$(python docs/results/finetuning/half_return_checkpoint.py "$D/demonstrator" ${TARGET[$task]} 2>/dev/null); do
+    if [ -d "$D/demonstrator" ]; then
+      iterations=$(( $(ls "$D/demonstrator" | sed -n 's/^model_\([0-9]*\)\.pt$/\1/p' | sort -n | tail -1) + 9 ))
+      refpo train run_dir="$D/demonstrator" resume=true max_iterations=$iterations eval.interval=4
+    else
+      refpo train task=$task algo=ppo seed=1 max_iterations=$iterations runner.save_interval=4 eval.interval=4 \
+        run_dir="$D/demonstrator"
+    fi
+  done
   [ -d "$D/data" ] || refpo collect run_dir="$D/demonstrator" checkpoint="$CK" episodes=200 noise=0.3 sample=mean \
     out="$D/data"
   for algo in refpo ppo; do
