@@ -20,6 +20,12 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 KEPT = HERE / "gridworld"
 BEGIN, END = "<!-- gridworld table: begin (python docs/results/finetuning/tables.py) -->", "<!-- gridworld table: end -->"
+DMC_BEGIN, DMC_END = "<!-- dmc table: begin (python docs/results/finetuning/tables.py --dmc) -->", "<!-- dmc table: end -->"
+DMC_KEPT = HERE / "dmc"
+DMC_TASKS = ("dmc_point_mass", "dmc_reacher_easy")
+DMC_METHODS = (("refpo", "ReFPO from the flow clone"), ("refpo_onestep", "refpo_onestep from the flow clone"),
+               ("ppo", "PPO from the Gaussian clone"))  # fmt: skip
+FROM_SCRATCH = HERE.parent / "cpu_dmc" / "per_task.csv"  # the committed from-scratch runs (1M env steps)
 ROWS = [  # (run folder, what it is)
     ("clone_flow", "flow clone (refpo pretrain algo=refpo)"),
     ("clone_gauss", "Gaussian clone (refpo pretrain algo=ppo)"),
@@ -96,20 +102,87 @@ def table(source: Path, runs: Path) -> str:
     return "\n".join(lines) + "\n" + "\n".join(notes)
 
 
+def _returns(path: Path) -> str:
+    results = json.loads(path.read_text())["results"]
+    if "mean_action" in results:
+        return f"{results['mean_action']['return_mean']:.0f} (mean action)"
+    return f"{results['N=10']['return_mean']:.0f} / {results['N=1']['return_mean']:.0f}"
+
+
+def keep_dmc(runs: Path, sweeps: Path) -> None:
+    """The DMC study's small files: each stage's and each finished fine-tuning run's config, eval.json, progress."""
+    for task in DMC_TASKS:
+        stages = [(runs / task / name, DMC_KEPT / task / name) for name in ("demonstrator", "clone_refpo", "clone_ppo")]
+        stages += [(run, DMC_KEPT / task / run.parent.name / run.name)
+                   for run in sorted((sweeps / f"finetune_{task[4:]}" / task).glob("*/seed*"))]  # fmt: skip
+        for src, dst in stages:
+            if (src / "eval.json").exists():
+                dst.mkdir(parents=True, exist_ok=True)
+                for file in FILES:
+                    if (src / file).exists():
+                        shutil.copyfile(src / file, dst / file)
+        if (runs / task / "data" / "metadata.json").exists():
+            (DMC_KEPT / task / "data").mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(runs / task / "data" / "metadata.json", DMC_KEPT / task / "data" / "metadata.json")
+
+
+def dmc_table() -> str:
+    import csv
+
+    scratch = {(r["task"], r["label"]): r for r in csv.DictReader(FROM_SCRATCH.open())}
+    lines = ["| task | policy | env steps | return N = 10 / N = 1 |", "|---|---|---|---|"]
+    for task in DMC_TASKS:
+        root = DMC_KEPT / task
+        if not (root / "data" / "metadata.json").exists():
+            lines.append(f"| {task} | not run yet | | |")
+            continue
+        meta = json.loads((root / "data" / "metadata.json").read_text())["refpo"]
+        data = json.loads((root / "clone_refpo" / "eval.json").read_text())["dataset"] if (
+            root / "clone_refpo" / "eval.json").exists() else None
+        demo = Path(meta["policy"]["checkpoint"]).stem
+        shown = f"{data['return_mean']:.0f} over {data['episodes']} episodes" if data else "-"
+        lines.append(f"| {task} | demonstrations: PPO's {demo} (mean action + noise {meta['policy']['action_noise_std']:g}) "
+                     f"| - | {shown} |")  # fmt: skip
+        for name, what in (("clone_refpo", "flow clone"), ("clone_ppo", "Gaussian clone")):
+            if (root / name / "eval.json").exists():
+                lines.append(f"| {task} | {what} | 0 | {_returns(root / name / 'eval.json')} |")
+        for label, what in DMC_METHODS:
+            for run in sorted((root / label).glob("seed*")):
+                out = json.loads((run / "eval.json").read_text())
+                lines.append(f"| {task} | {what}, {run.name} | {out['env_steps']:,} | {_returns(run / 'eval.json')} |")
+            ref = scratch.get((task, label))
+            if ref is not None:
+                one = f" / {float(ref['return_1_mean']):.0f}" if ref["return_1_mean"] else ""
+                lines.append(f"| {task} | {label} from scratch (cpu_dmc, mean of 3 seeds) | 1,013,760 | "
+                             f"{float(ref['return_multi_mean']):.0f}{one} |")  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+def write_between(begin: str, end: str, text: str) -> None:
+    readme = HERE / "README.md"
+    page = readme.read_text()
+    head, rest = page.split(begin)
+    _, tail = rest.split(end)
+    readme.write_text(f"{head}{begin}\n\n{text}\n{end}{tail}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", type=Path, default=Path("runs/finetuning/gridworld"))
     parser.add_argument("--keep", action="store_true")
+    parser.add_argument("--dmc", action="store_true", help="the DMC study's table (its files kept first)")
     args = parser.parse_args()
+    if args.dmc:
+        keep_dmc(Path("runs/finetuning/dmc"), Path("runs/sweeps"))
+        text = dmc_table()
+        write_between(DMC_BEGIN, DMC_END, text)
+        print(text)
+        return
     if args.keep:
         keep(args.runs)
     source = KEPT if (KEPT / "clone_flow" / "eval.json").exists() else args.runs
     text = table(source, args.runs)
-    readme = HERE / "README.md"
-    page = readme.read_text()
-    head, rest = page.split(BEGIN)
-    _, tail = rest.split(END)
-    readme.write_text(f"{head}{BEGIN}\n\n{text}\n{END}{tail}")
+    write_between(BEGIN, END, text)
     print(text)
 
 
