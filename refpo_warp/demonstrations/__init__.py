@@ -1,0 +1,1 @@
+"""Demonstration datasets (Minari format), collecting them from a policy, and behaviour cloning (docs/finetuning.md)."""
