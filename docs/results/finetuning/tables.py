@@ -109,6 +109,16 @@ def _returns(path: Path) -> str:
     return f"{results['N=10']['return_mean']:.0f} / {results['N=1']['return_mean']:.0f}"
 
 
+def first_reaching(run: Path, value: float) -> str:
+    """Env steps at the first periodic evaluation (N = 10, or the mean action) whose return reaches ``value``."""
+    for line in (run / "progress.jsonl").read_text().splitlines():
+        row = json.loads(line)
+        got = row.get("eval/return_N10", row.get("eval/return"))
+        if got is not None and got >= value:
+            return f"{row['env_steps']:,}"
+    return "not reached"
+
+
 def keep_dmc(runs: Path, sweeps: Path) -> None:
     """The DMC study's small files: each stage's and each finished fine-tuning run's config, eval.json, progress."""
     for task in DMC_TASKS:
@@ -130,11 +140,12 @@ def dmc_table() -> str:
     import csv
 
     scratch = {(r["task"], r["label"]): r for r in csv.DictReader(FROM_SCRATCH.open())}
-    lines = ["| task | policy | env steps | return N = 10 / N = 1 |", "|---|---|---|---|"]
+    header = "| task | policy | env steps | return N = 10 / N = 1 | env steps to the data's return / to PPO's final |"
+    lines = [header, "|---|---|---|---|---|"]
     for task in DMC_TASKS:
         root = DMC_KEPT / task
         if not (root / "data" / "metadata.json").exists():
-            lines.append(f"| {task} | not run yet | | |")
+            lines.append(f"| {task} | not run yet | | | |")
             continue
         meta = json.loads((root / "data" / "metadata.json").read_text())["refpo"]
         data = json.loads((root / "clone_refpo" / "eval.json").read_text())["dataset"] if (
@@ -142,19 +153,23 @@ def dmc_table() -> str:
         demo = Path(meta["policy"]["checkpoint"]).stem
         shown = f"{data['return_mean']:.0f} over {data['episodes']} episodes" if data else "-"
         lines.append(f"| {task} | demonstrations: PPO's {demo} (mean action + noise {meta['policy']['action_noise_std']:g}) "
-                     f"| - | {shown} |")  # fmt: skip
+                     f"| - | {shown} | |")  # fmt: skip
+        ppo_final = float(scratch[(task, "ppo")]["return_multi_mean"]) if (task, "ppo") in scratch else float("inf")
         for name, what in (("clone_refpo", "flow clone"), ("clone_ppo", "Gaussian clone")):
             if (root / name / "eval.json").exists():
-                lines.append(f"| {task} | {what} | 0 | {_returns(root / name / 'eval.json')} |")
+                lines.append(f"| {task} | {what} | 0 | {_returns(root / name / 'eval.json')} | |")
         for label, what in DMC_METHODS:
             for run in sorted((root / label).glob("seed*")):
                 out = json.loads((run / "eval.json").read_text())
-                lines.append(f"| {task} | {what}, {run.name} | {out['env_steps']:,} | {_returns(run / 'eval.json')} |")
+                reach = (f"{first_reaching(run, data['return_mean']) if data else '-'} / "
+                         f"{first_reaching(run, ppo_final)}")
+                lines.append(f"| {task} | {what}, {run.name} | {out['env_steps']:,} | {_returns(run / 'eval.json')} | "
+                             f"{reach} |")  # fmt: skip
             ref = scratch.get((task, label))
             if ref is not None:
                 one = f" / {float(ref['return_1_mean']):.0f}" if ref["return_1_mean"] else ""
                 lines.append(f"| {task} | {label} from scratch (cpu_dmc, mean of 3 seeds) | 1,013,760 | "
-                             f"{float(ref['return_multi_mean']):.0f}{one} |")  # fmt: skip
+                             f"{float(ref['return_multi_mean']):.0f}{one} | |")  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
