@@ -4,7 +4,9 @@
 Rewrites the table between the markers in README.md ("Measured: learning") from
 - docs/results/learning_checks/records/gridworld_refpo.jsonl: ReFPO on GridWorld, the learning check's runs;
 - docs/results/*/per_task.csv of the DMC sweeps below (`refpo report`'s output): the CPU profiles' returns per task,
-  mean ± population std over seeds 1-3.
+  mean ± population std over seeds 1-3;
+- docs/results/finetuning/: the GridWorld clones and fine-tuned runs (eval.json each) and the DMC fine-tuning runs
+  from a weaker demonstrator (dmc/<task>/<method>/seed<k>/eval.json).
 Each row names its data file; nothing here is typed in by hand.
 """
 
@@ -79,10 +81,54 @@ def sweep_rows(relative: str, labels: list[str] | None) -> list[str]:
     return out
 
 
+def _eval(path: Path) -> dict | None:
+    return json.loads(path.read_text())["results"] if path.exists() else None
+
+
+def finetuning_gridworld_row() -> str | None:
+    """Success and the bands' shares of the clones and the fine-tuned flows on GridWorld's two-mode demonstrations."""
+    folder = RESULTS / "finetuning" / "gridworld"
+    runs = {name: _eval(folder / name / "eval.json") for name in
+            ("clone_flow", "clone_gauss", "refpo_from_flow", "fpo_from_flow", "ppo_from_gauss")}  # fmt: skip
+    if any(r is None for r in runs.values()):
+        return None
+
+    def flow(r: dict) -> str:
+        return " / ".join(f"{r[s]['success_rate']:.2f} ({r[s]['top_share']:.2f} top)" for s in ("N=10", "N=1"))
+
+    gauss = runs["clone_gauss"]["mean_action"]
+    return (f"| GridWorld from scripted two-mode demonstrations, seed 1 (`{folder.relative_to(README.parent)}`), "
+            f"success at N = 10 / N = 1 (the top band's share) | flow clone {flow(runs['clone_flow'])}; Gaussian clone "
+            f"{gauss['success_rate']:.2f}; fine-tuned: ReFPO {flow(runs['refpo_from_flow'])}, FPO "
+            f"{flow(runs['fpo_from_flow'])}, PPO from its clone {runs['ppo_from_gauss']['mean_action']['success_rate']:.2f} |")  # fmt: skip
+
+
+def finetuning_dmc_rows() -> list[str]:
+    """Per task: each fine-tuned method's final N = 10 (N = 1) return over its seeds."""
+    out = []
+    for task_dir in sorted((RESULTS / "finetuning" / "dmc").glob("dmc_*")):
+        cells = []
+        for method in ("ppo", "refpo_onestep", "refpo"):
+            runs = [_eval(p) for p in sorted((task_dir / method).glob("seed*/eval.json"))]
+            if not runs:
+                continue
+            multi = [r.get("N=10", r.get("mean_action", {})).get("return_mean") for r in runs]
+            one = [r["N=1"]["return_mean"] for r in runs if "N=1" in r]
+            cells.append(f"{method} {min(multi):.0f}-{max(multi):.0f}"
+                         + (f" ({min(one):.0f}-{max(one):.0f} at N = 1)" if one else ""))  # fmt: skip
+        if cells:
+            seeds = len(list((task_dir / "ppo").glob("seed*/eval.json")))
+            out.append(f"| {task_dir.name.removeprefix('dmc_')} fine-tuned from a half-return PPO's demonstrations, "
+                       f"half the CPU profile's env steps, {seeds} seeds (`{task_dir.relative_to(README.parent)}`), "
+                       f"final return range | " + "; ".join(cells) + " |")  # fmt: skip
+    return out
+
+
 def table() -> str:
     rows = [r for r in [gridworld_row()] if r]
     for relative, labels in SWEEPS:
         rows += sweep_rows(relative, labels)
+    rows += [r for r in [finetuning_gridworld_row()] if r] + finetuning_dmc_rows()
     return "\n".join([BEGIN, "| Learning result (data file) | Measured |", "|---|---|", *rows, END])
 
 
