@@ -96,11 +96,11 @@ def finetuning_gridworld_row() -> str | None:
     def flow(r: dict) -> str:
         return " / ".join(f"{r[s]['success_rate']:.2f} ({r[s]['top_share']:.2f} top)" for s in ("N=10", "N=1"))
 
-    gauss = runs["clone_gauss"]["mean_action"]
+    gauss, ppo = runs["clone_gauss"]["mean_action"], runs["ppo_from_gauss"]["mean_action"]
     return (f"| GridWorld from scripted two-mode demonstrations, seed 1 (`{folder.relative_to(README.parent)}`), "
             f"success at N = 10 / N = 1 (the top band's share) | flow clone {flow(runs['clone_flow'])}; Gaussian clone "
             f"{gauss['success_rate']:.2f}; fine-tuned: ReFPO {flow(runs['refpo_from_flow'])}, FPO "
-            f"{flow(runs['fpo_from_flow'])}, PPO from its clone {runs['ppo_from_gauss']['mean_action']['success_rate']:.2f} |")  # fmt: skip
+            f"{flow(runs['fpo_from_flow'])}, PPO from its clone {ppo['success_rate']:.2f} |")  # fmt: skip
 
 
 def finetuning_dmc_rows() -> list[str]:
