@@ -6,7 +6,8 @@ per task on the tuning seed, scored by the objective the tuning file states befo
   TPE samples the declared space; the sampler is seeded from (tuning seed, method, trial), so a resumed search draws
   what an uninterrupted one would.
 - **Pruning.** After each periodic evaluation that every task's run has reached, the trial reports the objective on
-  those evaluations (its intermediate values, also without a pruner); a trial in the lowest ``percentile`` of earlier trials at that evaluation (after
+  those evaluations (its intermediate values, also without a pruner); a trial in the lowest ``percentile`` of
+  earlier trials at that evaluation (after
   ``warmup_evaluations``) is stopped.
 - **Resumable.** The studies live in ``<out>/journal.log`` (Optuna's journal storage: one JSON line per event). A
   trial cut off (Ctrl-C, a killed session) is trained again with the same values in the same folder, where a run that
@@ -60,14 +61,18 @@ def _duration(seconds: float) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ config values
-def _resolve(tuning: Tuning, method: TunedMethod, task: str, values: dict[str, Any]) -> dict:
+def run_config(tuning: Tuning, run: Run) -> dict:
+    """A trial run's config, resolved as its ``refpo train`` process will."""
     from refpo_warp.config.dotted import parse_overrides
     from refpo_warp.config.resolve import resolve_config
     from refpo_warp.sweeps.spec import device_type
 
-    run = tuning.trial_runs(method, 0, values)[tuning.tasks.index(task)]
     return resolve_config(parse_overrides([*run.args, f"device={tuning.device}"]),
                           device_type=device_type(tuning.device))  # fmt: skip
+
+
+def _resolve(tuning: Tuning, method: TunedMethod, task: str, values: dict[str, Any]) -> dict:
+    return run_config(tuning, tuning.trial_runs(method, 0, values)[tuning.tasks.index(task)])
 
 
 def option_value(cfg: dict, key: str) -> Any:
@@ -179,18 +184,9 @@ class TrialRunner:
         self.tuning, self.jobs, self.echo = tuning, max(1, jobs), echo
         self.host = hostname()
 
-    def _print(self, run: Run) -> str:
-        from refpo_warp.config.dotted import parse_overrides
-        from refpo_warp.config.resolve import resolve_config
-        from refpo_warp.sweeps.spec import device_type
-
-        cfg = resolve_config(parse_overrides([*run.args, f"device={self.tuning.device}"]),
-                             device_type=device_type(self.tuning.device))  # fmt: skip
-        return fingerprint(cfg)
-
     def run(self, runs: list[Run], trial, header: str) -> TrialResult:
         started = time.monotonic()
-        prints = {run.task: self._print(run) for run in runs}
+        prints = {run.task: fingerprint(run_config(self.tuning, run)) for run in runs}
         todo = [run for run in runs if run_state(run, prints[run.task]) != "done"]
         kept = [run.task for run in runs if run not in todo]
         if kept:
@@ -214,8 +210,8 @@ class TrialRunner:
                     del running[task]
                     if proc.returncode != 0 or run_state(run, prints[task]) != "done":
                         stop_training([p for _, p in running.values()])
-                        return TrialResult("failed", None, {}, time.monotonic() - started,
-                                           f"{task} exited {proc.returncode}; log {run.run_dir / LOG_FILE}")  # fmt: skip
+                        why = f"{task} exited {proc.returncode}; log {run.run_dir / LOG_FILE}"
+                        return TrialResult("failed", None, {}, time.monotonic() - started, why)
                 curves = {run.task: periodic_returns(run.run_dir) for run in runs}
                 common = min(len(c) for c in curves.values())
                 while reported < common:
@@ -461,7 +457,8 @@ def chosen_values(tuning: Tuning, studies: dict[str, Any]) -> dict[str, dict[str
             continue
         best = max(complete, key=lambda t: t.value)
         out[method.label] = {"algo": method.algo, "trial": best.user_attrs.get("slot"), "score": best.value,
-                             "trials_spent": len(_spent(study)), "overrides": {**method.overrides, **best.params}}  # fmt: skip
+                             "trials_spent": len(_spent(study)),
+                             "overrides": {**method.overrides, **best.params}}  # fmt: skip
     return out
 
 
@@ -483,10 +480,11 @@ def evaluation_sweep(tuning: Tuning, studies: dict[str, Any]) -> str | None:
 
     ev = tuning.evaluation
     chosen = chosen_values(tuning, studies)
-    if ev is None or any(len(_spent(studies[m.label])) < tuning.trials or m.label not in chosen for m in tuning.methods):
+    done = all(len(_spent(studies[m.label])) >= tuning.trials and m.label in chosen for m in tuning.methods)
+    if ev is None or not done:
         return None
-    methods = [{"label": m.label, "algo": m.algo, "name": f"{m.name} (tuned)", "overrides": chosen[m.label]["overrides"]}
-               for m in tuning.methods]  # fmt: skip
+    methods = [{"label": m.label, "algo": m.algo, "name": f"{m.name} (tuned)",
+                "overrides": chosen[m.label]["overrides"]} for m in tuning.methods]  # fmt: skip
     for v in ev.variants:
         methods.append({"label": v["label"], "algo": v["algo"], "name": f"{v['name']} (tuned {v['of']})",
                         "overrides": chosen[v["of"]]["overrides"]})  # fmt: skip
