@@ -26,8 +26,9 @@ from refpo_warp.envs.gym_adapter import GymVectorEnv
 
 
 def mlp(inputs: int, outputs: int, hidden: int = 64) -> nn.Sequential:
-    return nn.Sequential(nn.Linear(inputs, hidden), nn.Tanh(), nn.Linear(hidden, hidden), nn.Tanh(),
-                         nn.Linear(hidden, outputs))  # fmt: skip
+    return nn.Sequential(
+        nn.Linear(inputs, hidden), nn.Tanh(), nn.Linear(hidden, hidden), nn.Tanh(), nn.Linear(hidden, outputs)
+    )
 
 
 class Agent(nn.Module):
@@ -70,9 +71,18 @@ def ppo_update(agent, optimizer, batch: dict, epochs: int = 4, minibatches: int 
             optimizer.step()
 
 
-def train(task: str = "gridworld", num_envs: int = 64, steps: int = 32, iterations: int = 60, seed: int = 0,
-          gamma: float = 0.99, lam: float = 0.95, lr: float = 3e-4, max_episode_length: int = 30,
-          quiet: bool = False) -> list[float]:  # fmt: skip
+def train(
+    task: str = "gridworld",
+    num_envs: int = 64,
+    steps: int = 32,
+    iterations: int = 60,
+    seed: int = 0,
+    gamma: float = 0.99,
+    lam: float = 0.95,
+    lr: float = 3e-4,
+    max_episode_length: int = 30,
+    quiet: bool = False,
+) -> list[float]:
     """Run PPO; returns the mean episode return of each iteration (NaN where no episode ended)."""
     torch.manual_seed(seed)
     warp_env = make_env(task, num_envs=num_envs, device="cpu", seed=seed, max_episode_length=max_episode_length)
@@ -108,14 +118,20 @@ def train(task: str = "gridworld", num_envs: int = 64, steps: int = 32, iteratio
             delta = data["rewards"][t] + gamma * data["next_values"][t] - data["values"][t]
             running = delta + gamma * lam * (1.0 - data["dones"][t]) * running
             advantages[t] = running
-        batch = {"obs": data["obs"].flatten(0, 1), "actions": data["actions"].flatten(0, 1),
-                 "logp": data["logp"].flatten(), "advantages": advantages.flatten(),
-                 "returns": (advantages + data["values"]).flatten()}  # fmt: skip
+        batch = {
+            "obs": data["obs"].flatten(0, 1),
+            "actions": data["actions"].flatten(0, 1),
+            "logp": data["logp"].flatten(),
+            "advantages": advantages.flatten(),
+            "returns": (advantages + data["values"]).flatten(),
+        }
         ppo_update(agent, optimizer, batch)
         history.append(float(np.mean(returns)) if returns else float("nan"))
         if not quiet:
-            print(f"iteration {it:3d}/{iterations - 1}  episodes {len(returns):4d}  mean return {history[-1]:6.2f}",
-                  flush=True)  # fmt: skip
+            print(
+                f"iteration {it:3d}/{iterations - 1}  episodes {len(returns):4d}  mean return {history[-1]:6.2f}",
+                flush=True,
+            )
     env.close()
     return history
 
@@ -130,8 +146,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--max-episode-length", type=int, default=30)
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
-    train(args.task, args.num_envs, args.steps, args.iterations, args.seed,
-          max_episode_length=args.max_episode_length)  # fmt: skip
+    train(args.task, args.num_envs, args.steps, args.iterations, args.seed, max_episode_length=args.max_episode_length)
     return 0
 
 

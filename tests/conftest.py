@@ -26,12 +26,18 @@ def cuda_available() -> bool:
 
 
 def pytest_addoption(parser):
-    parser.addoption("--null-control", action="store_true",
-                     help="run each learning check with learning switched off (tests/learning/checks.py NULL_CONTROL) "
-                          "and assert that its bound is NOT met")  # fmt: skip
-    parser.addoption("--all-checks", action="store_true",
-                     help="also run the learning checks that CI leaves to be run on demand (in_ci=False in "
-                          "tests/learning/checks.py)")  # fmt: skip
+    parser.addoption(
+        "--null-control",
+        action="store_true",
+        help="run each learning check with learning switched off (tests/learning/checks.py NULL_CONTROL) "
+        "and assert that its bound is NOT met",
+    )
+    parser.addoption(
+        "--all-checks",
+        action="store_true",
+        help="also run the learning checks that CI leaves to be run on demand (in_ci=False in "
+        "tests/learning/checks.py)",
+    )
 
 
 @pytest.fixture
@@ -84,9 +90,20 @@ def tmp_run_dir(tmp_path):
 
 # A 3-iteration GridWorld ReFPO run of a few seconds with checkpoints at iterations 0 and 2 (the last): for the tests of
 # what training and evaluation print and write.
-QUICK_RUN = ["task=gridworld", "algo=refpo", "num_envs=8", "runner.num_steps_per_env=16", "max_iterations=3",
-             "algorithm.num_mc_samples=4", "algorithm.num_learning_epochs=1", "runner.save_interval=2",
-             "eval.num_envs=8", "eval.flow_steps=[1, 2]", "eval.interval=0", "device=cpu"]  # fmt: skip
+QUICK_RUN = [
+    "task=gridworld",
+    "algo=refpo",
+    "num_envs=8",
+    "runner.num_steps_per_env=16",
+    "max_iterations=3",
+    "algorithm.num_mc_samples=4",
+    "algorithm.num_learning_epochs=1",
+    "runner.save_interval=2",
+    "eval.num_envs=8",
+    "eval.flow_steps=[1, 2]",
+    "eval.interval=0",
+    "device=cpu",
+]
 
 
 @pytest.fixture

@@ -10,4 +10,3 @@ def read_video(path: str | Path) -> np.ndarray:
     import imageio.v2 as imageio
 
     return np.stack([np.asarray(f)[..., :3] for f in imageio.mimread(str(path), memtest=False)])
-

@@ -24,8 +24,12 @@ def main(argv: list[str]) -> int:
     from refpo_warp.utils.layering import LAYERS, first_party_modules, import_graph, layer_of, upward_imports
 
     graph = import_graph(first_party_modules())
-    edges = Counter((layer_of(m), layer_of(t)) for m, ts in graph.items() for t in ts
-                    if layer_of(m) and layer_of(t) and layer_of(m) != layer_of(t))  # fmt: skip
+    edges = Counter(
+        (layer_of(m), layer_of(t))
+        for m, ts in graph.items()
+        for t in ts
+        if layer_of(m) and layer_of(t) and layer_of(m) != layer_of(t)
+    )
     counts = Counter(m.split(".")[1] for m in graph if layer_of(m))
     shown: dict[str, str] = {}
     layers = list(LAYERS)
@@ -45,8 +49,11 @@ def main(argv: list[str]) -> int:
     ax.set_ylim(-0.2, y[layers[0]] + height + 0.2)
     ax.axis("off")
     upward = len(upward_imports(graph))
-    ax.set_title("Layers of refpo_warp (folder/ and its module count; tasks/ installs as refpo_warp.tasks); "
-                 f"arrows: imports between layers, downward only (upward: {upward})", fontsize=10)  # fmt: skip
+    ax.set_title(
+        "Layers of refpo_warp (folder/ and its module count; tasks/ installs as refpo_warp.tasks); "
+        f"arrows: imports between layers, downward only (upward: {upward})",
+        fontsize=10,
+    )
     save_figure(fig, out, dpi=110, bbox_inches="tight")
     plt.close(fig)
     print(out)

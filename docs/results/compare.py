@@ -84,19 +84,50 @@ def rows_of(spec: str) -> list[tuple[dict, list[dict], Path]]:
 
 def table(specs: list[str]) -> str:
     rows = [entry for spec in specs for entry in rows_of(spec)]
-    header = ["task", "method", "runs", "10-step", "1-step", "10-step, zero noise", "1-step, zero noise",
-              "own headline", "1-step ≥ 0.9 × 10-step", "Straightness", "Explosion", "one-step error", "cliffs", "train min.", "source"]
+    header = [
+        "task",
+        "method",
+        "runs",
+        "10-step",
+        "1-step",
+        "10-step, zero noise",
+        "1-step, zero noise",
+        "own headline",
+        "1-step ≥ 0.9 × 10-step",
+        "Straightness",
+        "Explosion",
+        "one-step error",
+        "cliffs",
+        "train min.",
+        "source",
+    ]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for task in TASK_ORDER:
         for row, runs, folder in (r for r in rows if r[0]["task"] == task):
             mine = [r for r in runs if r["task"] == task and r["label"] == row["label"] and r["status"] == "ok"]
-            lines.append("| " + " | ".join([
-                task.removeprefix("dmc_"), row["method"], f"{row['runs_finished']}/{row['runs_total']}",
-                stat(row, "return_multi"), stat(row, "return_1"), stat(row, "return_multi_zero"),
-                stat(row, "return_1_zero"), headline_cell(mine), one_step_holds(mine),
-                stat(row, "straightness", False), stat(row, "explosion", False), stat(row, "one_step", False),
-                cliff_cell(mine), stat(row, "minutes", False),
-                f"`{folder.as_posix()}`"]) + " |")  # fmt: skip
+            lines.append(
+                "| "
+                + " | ".join(
+                    [
+                        task.removeprefix("dmc_"),
+                        row["method"],
+                        f"{row['runs_finished']}/{row['runs_total']}",
+                        stat(row, "return_multi"),
+                        stat(row, "return_1"),
+                        stat(row, "return_multi_zero"),
+                        stat(row, "return_1_zero"),
+                        headline_cell(mine),
+                        one_step_holds(mine),
+                        stat(row, "straightness", False),
+                        stat(row, "explosion", False),
+                        stat(row, "one_step", False),
+                        cliff_cell(mine),
+                        stat(row, "minutes", False),
+                        f"`{folder.as_posix()}`",
+                    ]
+                )
+                + " |"
+            )
     return "\n".join([BEGIN, *lines, END])
 
 

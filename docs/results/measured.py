@@ -25,8 +25,11 @@ SWEEPS = [  # (per-task CSV, methods in the order shown)
     ("fpo_pp/report/per_task.csv", ["fpo_pp", "refpo_pp"]),
     ("one_step/search/report/per_task.csv", ["onestep_c03"]),
 ]
-TASKS = {"dmc_cartpole_balance": "cartpole_balance (450k env steps)", "dmc_point_mass": "point_mass (1M)",
-         "dmc_reacher_easy": "reacher_easy (1M)"}  # fmt: skip
+TASKS = {
+    "dmc_cartpole_balance": "cartpole_balance (450k env steps)",
+    "dmc_point_mass": "point_mass (1M)",
+    "dmc_reacher_easy": "reacher_easy (1M)",
+}
 
 
 def number(text: str) -> float | None:
@@ -49,10 +52,12 @@ def gridworld_row() -> str | None:
     length = {s: statistics.fmean(f[s]["length_mean"] for f in final) for s in ("N=1", "N=10")}
     share = [min(f[s]["top_share"], f[s]["bottom_share"]) for f in final for s in ("N=1", "N=10")]
     seeds = ", ".join(str(r["seed"]) for r in sorted(runs, key=lambda r: r["seed"]))
-    return (f"| ReFPO on GridWorld, the paper's 260k env steps, seeds {seeds} (`{path.relative_to(README.parent)}`) | "
-            f"success ≥ {min(success):.3f} at N = 1 and 10; episode length {length['N=1']:.1f} / {length['N=10']:.1f} "
-            f"(N = 1 / 10); the smaller goal band's share of successes "
-            f"{min(share):.2f}-{max(share):.2f} |")  # fmt: skip
+    return (
+        f"| ReFPO on GridWorld, the paper's 260k env steps, seeds {seeds} (`{path.relative_to(README.parent)}`) | "
+        f"success ≥ {min(success):.3f} at N = 1 and 10; episode length {length['N=1']:.1f} / {length['N=10']:.1f} "
+        f"(N = 1 / 10); the smaller goal band's share of successes "
+        f"{min(share):.2f}-{max(share):.2f} |"
+    )
 
 
 def sweep_rows(relative: str, labels: list[str] | None) -> list[str]:
@@ -70,14 +75,21 @@ def sweep_rows(relative: str, labels: list[str] | None) -> list[str]:
                 continue
             single = row["runs_finished"] == "1"  # no spread to show
             multi = cell(number(row["return_multi_mean"]), None if single else number(row["return_multi_std"]))
-            one = row.get("return_1_mean") and cell(number(row["return_1_mean"]),
-                                                    None if single else number(row["return_1_std"]))
+            one = row.get("return_1_mean") and cell(
+                number(row["return_1_mean"]), None if single else number(row["return_1_std"])
+            )
             partial = row["runs_finished"] != row["runs_total"]
-            cells.append(f"{row['method']} {multi}" + (f" / {one}" if one else "")
-                         + (f" ({row['runs_finished']} of {row['runs_total']} seeds)" if partial else ""))
+            cells.append(
+                f"{row['method']} {multi}"
+                + (f" / {one}" if one else "")
+                + (f" ({row['runs_finished']} of {row['runs_total']} seeds)" if partial else "")
+            )
         if cells:
-            out.append(f"| {title}, 10-step / 1-step return, seeds 1-3 (`{path.relative_to(README.parent)}`) | "
-                       + "; ".join(cells) + " |")  # fmt: skip
+            out.append(
+                f"| {title}, 10-step / 1-step return, seeds 1-3 (`{path.relative_to(README.parent)}`) | "
+                + "; ".join(cells)
+                + " |"
+            )
     return out
 
 
@@ -88,8 +100,10 @@ def _eval(path: Path) -> dict | None:
 def finetuning_gridworld_row() -> str | None:
     """Success and the bands' shares of the clones and the fine-tuned flows on GridWorld's two-mode demonstrations."""
     folder = RESULTS / "finetuning" / "gridworld"
-    runs = {name: _eval(folder / name / "eval.json") for name in
-            ("clone_flow", "clone_gauss", "refpo_from_flow", "fpo_from_flow", "ppo_from_gauss")}  # fmt: skip
+    runs = {
+        name: _eval(folder / name / "eval.json")
+        for name in ("clone_flow", "clone_gauss", "refpo_from_flow", "fpo_from_flow", "ppo_from_gauss")
+    }
     if any(r is None for r in runs.values()):
         return None
 
@@ -97,10 +111,12 @@ def finetuning_gridworld_row() -> str | None:
         return " / ".join(f"{r[s]['success_rate']:.2f} ({r[s]['top_share']:.2f} top)" for s in ("N=10", "N=1"))
 
     gauss, ppo = runs["clone_gauss"]["mean_action"], runs["ppo_from_gauss"]["mean_action"]
-    return (f"| GridWorld from scripted two-mode demonstrations, seed 1 (`{folder.relative_to(README.parent)}`), "
-            f"success at N = 10 / N = 1 (the top band's share) | flow clone {flow(runs['clone_flow'])}; Gaussian clone "
-            f"{gauss['success_rate']:.2f}; fine-tuned: ReFPO {flow(runs['refpo_from_flow'])}, FPO "
-            f"{flow(runs['fpo_from_flow'])}, PPO from its clone {ppo['success_rate']:.2f} |")  # fmt: skip
+    return (
+        f"| GridWorld from scripted two-mode demonstrations, seed 1 (`{folder.relative_to(README.parent)}`), "
+        f"success at N = 10 / N = 1 (the top band's share) | flow clone {flow(runs['clone_flow'])}; Gaussian clone "
+        f"{gauss['success_rate']:.2f}; fine-tuned: ReFPO {flow(runs['refpo_from_flow'])}, FPO "
+        f"{flow(runs['fpo_from_flow'])}, PPO from its clone {ppo['success_rate']:.2f} |"
+    )
 
 
 def finetuning_dmc_rows() -> list[str]:
@@ -114,13 +130,17 @@ def finetuning_dmc_rows() -> list[str]:
                 continue
             multi = [r.get("N=10", r.get("mean_action", {})).get("return_mean") for r in runs]
             one = [r["N=1"]["return_mean"] for r in runs if "N=1" in r]
-            cells.append(f"{method} {min(multi):.0f}-{max(multi):.0f}"
-                         + (f" ({min(one):.0f}-{max(one):.0f} at N = 1)" if one else ""))  # fmt: skip
+            cells.append(
+                f"{method} {min(multi):.0f}-{max(multi):.0f}"
+                + (f" ({min(one):.0f}-{max(one):.0f} at N = 1)" if one else "")
+            )
         if cells:
             seeds = len(list((task_dir / "ppo").glob("seed*/eval.json")))
-            out.append(f"| {task_dir.name.removeprefix('dmc_')} fine-tuned from a half-return PPO's demonstrations, "
-                       f"half the CPU profile's env steps, {seeds} seeds (`{task_dir.relative_to(README.parent)}`), "
-                       f"final return range | " + "; ".join(cells) + " |")  # fmt: skip
+            out.append(
+                f"| {task_dir.name.removeprefix('dmc_')} fine-tuned from a half-return PPO's demonstrations, "
+                f"half the CPU profile's env steps, {seeds} seeds (`{task_dir.relative_to(README.parent)}`), "
+                f"final return range | " + "; ".join(cells) + " |"
+            )
     return out
 
 

@@ -48,6 +48,7 @@ class GroupStd(str, Enum):
     GLOBAL = "global"  # over all envs at a time step (Flow-GRPO's default)
     GROUP = "group"  # within the group
 
+
 NO_CRITIC = "refpo_warp.models:NoCritic"
 
 
@@ -61,8 +62,9 @@ def discounted_reward_to_go(rewards: torch.Tensor, dones: torch.Tensor, gamma: f
     return out
 
 
-def group_advantages(returns: torch.Tensor, group_size: int, std_mode: str = "global", clip: float | None = 8.0,
-                     eps: float = 1e-4) -> torch.Tensor:  # fmt: skip
+def group_advantages(
+    returns: torch.Tensor, group_size: int, std_mode: str = "global", clip: float | None = 8.0, eps: float = 1e-4
+) -> torch.Tensor:
     """Group-relative advantages of (T, E) returns; groups are ``group_size`` consecutive envs (see module docstring).
 
     The std is the population std (Flow-GRPO's ``np.std``) over all E envs at each time step (``"global"``) or over
@@ -92,25 +94,45 @@ class FlowGRPO(OnPolicyAlgorithm):
     class Options:
         """Flow-GRPO's options, besides the shared ones (``OnPolicyAlgorithm.Options``) and rsl_rl's PPO arguments."""
 
-        noise_level: float = option(1.0, Real(0, 100, lo_open=True), "a, the SDE noise level (table (c): 1.0; "
-                                    "Flow-GRPO's default 0.7); the log-probabilities need noise")
-        feather_std: float = option(0.05, Real(0, 100), "std of the Gaussian noise added to the sampled action "
-                                                        "(table (c): 0.05)")
-        feather_in_chain: bool = option(True, Flag(), "the feathered action replaces x_N in the chain (FPO's "
-                                                      "denoising_mdp); else it stays outside the likelihood")
+        noise_level: float = option(
+            1.0,
+            Real(0, 100, lo_open=True),
+            "a, the SDE noise level (table (c): 1.0; Flow-GRPO's default 0.7); the log-probabilities need noise",
+        )
+        feather_std: float = option(
+            0.05, Real(0, 100), "std of the Gaussian noise added to the sampled action (table (c): 0.05)"
+        )
+        feather_in_chain: bool = option(
+            True,
+            Flag(),
+            "the feathered action replaces x_N in the chain (FPO's "
+            "denoising_mdp); else it stays outside the likelihood",
+        )
         kl_coef: float = option(5e-3, Real(0, 1e6), "beta of the KL term (table (c): 5e-3); 0 turns it off")
-        kl_reference: KlReference = option("rollout", OneOf(KlReference), "rollout: the policy that collected the "
-                                           "batch; initial: a frozen copy of the policy at construction")
-        group_size: int | None = option(None, Int(2, 1_000_000, optional=True),
-                                        "envs per group; null: the env's reset_group_size")
-        group_std: GroupStd = option("global", OneOf(GroupStd), "advantage std over all envs at a time step "
-                                     "(global, Flow-GRPO's default) or within the group")
-        adv_clip: float | None = option(8.0, Real(0, None, lo_open=True, optional=True),
-                                        "clip of the advantages (table (c): 8); null: no clip")
-        timestep_fraction: float = option(1.0, Real(0, 1, lo_open=True), "train the first int(N * fraction) "
-                                          "denoising steps (Flow-GRPO: 0.99, i.e. 9 of 10)")
-        explosion_threshold: float = option(3.0, Real(0, None, lo_open=True),
-                                            "|log rho| above which a step counts in Flow/explosion_rate")
+        kl_reference: KlReference = option(
+            "rollout",
+            OneOf(KlReference),
+            "rollout: the policy that collected the batch; initial: a frozen copy of the policy at construction",
+        )
+        group_size: int | None = option(
+            None, Int(2, 1_000_000, optional=True), "envs per group; null: the env's reset_group_size"
+        )
+        group_std: GroupStd = option(
+            "global",
+            OneOf(GroupStd),
+            "advantage std over all envs at a time step (global, Flow-GRPO's default) or within the group",
+        )
+        adv_clip: float | None = option(
+            8.0, Real(0, None, lo_open=True, optional=True), "clip of the advantages (table (c): 8); null: no clip"
+        )
+        timestep_fraction: float = option(
+            1.0,
+            Real(0, 1, lo_open=True),
+            "train the first int(N * fraction) denoising steps (Flow-GRPO: 0.99, i.e. 9 of 10)",
+        )
+        explosion_threshold: float = option(
+            3.0, Real(0, None, lo_open=True), "|log rho| above which a step counts in Flow/explosion_rate"
+        )
         clip_param: float = option(0.1, doc="PPO clip range (table (c))")
         learning_rate: float = option(1e-4, doc="learning rate (table (c))")
         schedule: str = option("fixed", doc="learning-rate schedule (rsl_rl's default: adaptive)")
@@ -146,19 +168,24 @@ class FlowGRPO(OnPolicyAlgorithm):
         if self.group_size is None:
             self.group_size = env_group_size
         elif self.group_size != env_group_size:
-            raise ValueError(f"algorithm.group_size={self.group_size} but the env's reset_group_size is "
-                             f"{env_group_size}: group members must share their initial states; set env."
-                             "reset_group_size to the group size (and leave algorithm.group_size null)")  # fmt: skip
+            raise ValueError(
+                f"algorithm.group_size={self.group_size} but the env's reset_group_size is "
+                f"{env_group_size}: group members must share their initial states; set env."
+                "reset_group_size to the group size (and leave algorithm.group_size null)"
+            )
         if self.group_size < 2:
-            raise ValueError("Flow-GRPO needs groups of envs that start from the same states: set "
-                             "env.reset_group_size (e.g. 8, table (c)) to a divisor of num_envs")  # fmt: skip
+            raise ValueError(
+                "Flow-GRPO needs groups of envs that start from the same states: set "
+                "env.reset_group_size (e.g. 8, table (c)) to a divisor of num_envs"
+            )
 
     # ---------------------------------------------------------------------------------------------- rollout
     def act(self, obs: TensorDict) -> torch.Tensor:
         actor = self.actor
         obs_feat = actor.velocity.project_obs(actor.encode(obs))
-        action, chain, means, log_probs = sample_sde_chain(actor.velocity, obs_feat, actor.action_dim, self.grid,
-                                                           self.feather_std, self.feather_in_chain)  # fmt: skip
+        action, chain, means, log_probs = sample_sde_chain(
+            actor.velocity, obs_feat, actor.action_dim, self.grid, self.feather_std, self.feather_in_chain
+        )
         self.store.write(self.storage.step, chain=chain, old_mean=means, old_log_prob=log_probs)
         t = self.transition
         t.actions = action
@@ -201,13 +228,15 @@ class FlowGRPO(OnPolicyAlgorithm):
             loss = loss + self.kl_coef * kl
             stats["kl"] = kl
         with torch.no_grad():
-            stats.update({
-                "Flow/ratio_mean": ratio.mean(),
-                "Flow/ratio_max": ratio.max(),
-                "Flow/clip_fraction": ((ratio - 1.0).abs() > self.clip_param).float().mean(),
-                "Flow/explosion_rate": (log_ratio.abs() > self.explosion_threshold).float().mean(),
-                "Flow/approx_kl": ((ratio - 1.0) - log_ratio).mean(),
-            })  # fmt: skip
+            stats.update(
+                {
+                    "Flow/ratio_mean": ratio.mean(),
+                    "Flow/ratio_max": ratio.max(),
+                    "Flow/clip_fraction": ((ratio - 1.0).abs() > self.clip_param).float().mean(),
+                    "Flow/explosion_rate": (log_ratio.abs() > self.explosion_threshold).float().mean(),
+                    "Flow/approx_kl": ((ratio - 1.0) - log_ratio).mean(),
+                }
+            )
         return loss, stats
 
     def kl_estimate(self, stats: dict[str, torch.Tensor]) -> torch.Tensor | None:

@@ -74,8 +74,14 @@ def sde_means(velocity_field, obs_feat: torch.Tensor, chain: torch.Tensor, grid:
 
 
 @torch.no_grad()
-def sample_sde_chain(velocity_field, obs_feat: torch.Tensor, action_dim: int, grid: SdeGrid, feather_std: float = 0.0,
-                     feather_in_chain: bool = True) -> tuple[torch.Tensor, ...]:
+def sample_sde_chain(
+    velocity_field,
+    obs_feat: torch.Tensor,
+    action_dim: int,
+    grid: SdeGrid,
+    feather_std: float = 0.0,
+    feather_in_chain: bool = True,
+) -> tuple[torch.Tensor, ...]:
     """Sample the SDE from x_0 ~ N(0, I) and add the feather noise to the last state.
 
     Returns (action, chain (B, N + 1, A), step means (B, N, A), step log-probs (B, N)). With ``feather_in_chain``

@@ -72,8 +72,9 @@ class Minibatch:
         return self.store.flat(name)[self.indices]
 
 
-def value_regression_loss(values: torch.Tensor, old_values: torch.Tensor, returns: torch.Tensor,
-                          clip: float | None) -> torch.Tensor:  # fmt: skip
+def value_regression_loss(
+    values: torch.Tensor, old_values: torch.Tensor, returns: torch.Tensor, clip: float | None
+) -> torch.Tensor:
     """Mean squared error to the returns; with ``clip``, PPO's pessimistic clipped form around the old values."""
     if clip is None:
         return (returns - values).pow(2).mean()
@@ -96,28 +97,52 @@ class OnPolicyAlgorithm(RslPPO):
     class Options:
         """Options every algorithm shares, besides rsl_rl's PPO arguments."""
 
-        reward_scale: float = option(1.0, Real(0, 1e6, lo_open=True),
-                                     "rewards x scale for learning; logged returns unscaled (Brax; DMC: 10)")
-        value_clip_param: float | None = option(None, Real(0, None, lo_open=True, optional=True),
-                                                "clip range of the clipped value loss; null: clip_param, as rsl_rl "
-                                                "(Puffer-PHC clips the ratio at 0.01, values at 0.2)")
-        reshuffle_each_epoch: bool = option(False, Flag(), "a new minibatch permutation on every pass (Brax / "
-                                                           "Playground; DMC: true) instead of one for all (rsl_rl)")
-        joint_grad_clip: bool = option(False, Flag(), "one gradient-norm clip over actor and critic (Puffer-PHC) "
-                                                      "instead of one each (rsl_rl)")
-        lr_decay_rate: float = option(0.0, Real(0, 10), "after update k the learning rate is lr * max(exp(-rate k), "
-                                                        "lr_decay_floor); 0 keeps it (Puffer-PHC: 1.5e-4)")
+        reward_scale: float = option(
+            1.0, Real(0, 1e6, lo_open=True), "rewards x scale for learning; logged returns unscaled (Brax; DMC: 10)"
+        )
+        value_clip_param: float | None = option(
+            None,
+            Real(0, None, lo_open=True, optional=True),
+            "clip range of the clipped value loss; null: clip_param, as rsl_rl "
+            "(Puffer-PHC clips the ratio at 0.01, values at 0.2)",
+        )
+        reshuffle_each_epoch: bool = option(
+            False,
+            Flag(),
+            "a new minibatch permutation on every pass (Brax / Playground; DMC: true) instead of one for all (rsl_rl)",
+        )
+        joint_grad_clip: bool = option(
+            False, Flag(), "one gradient-norm clip over actor and critic (Puffer-PHC) instead of one each (rsl_rl)"
+        )
+        lr_decay_rate: float = option(
+            0.0,
+            Real(0, 10),
+            "after update k the learning rate is lr * max(exp(-rate k), "
+            "lr_decay_floor); 0 keeps it (Puffer-PHC: 1.5e-4)",
+        )
         lr_decay_floor: float = option(0.2, Real(0, 1), "the floor of that decay (Puffer-PHC: 0.2)")
-        bound_coef: float = option(0.0, Real(0, 1e6), "soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on "
-                                                      "the predicted action; 0 turns it off (Puffer-PHC: 10)")
+        bound_coef: float = option(
+            0.0,
+            Real(0, 1e6),
+            "soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on "
+            "the predicted action; 0 turns it off (Puffer-PHC: 10)",
+        )
         bound: float = option(0.9, Real(0, None), "the bound of that loss, in the action range (Puffer-PHC: 0.9)")
-        weight_decay: float | None = option(None, Real(0, 1, optional=True), "the optimizer's weight decay; null: "
-                                            "its own default (adam 0, adamw 0.01) (FPO++: adamw, 1e-4)")
-        ema_decay: float | None = option(None, Real(0, 1, lo_open=True, hi_open=True, optional=True),
-                                         "an EMA of the actor's weights, which evaluation and export use after "
-                                         "its warm-up (FPO++: 0.95); null: off")
-        ema_warmup: int = option(500, Int(0, 10**9), "updates before the EMA starts from the live weights; until "
-                                                     "then the live actor is the policy (FPO++: 500)")
+        weight_decay: float | None = option(
+            None,
+            Real(0, 1, optional=True),
+            "the optimizer's weight decay; null: its own default (adam 0, adamw 0.01) (FPO++: adamw, 1e-4)",
+        )
+        ema_decay: float | None = option(
+            None,
+            Real(0, 1, lo_open=True, hi_open=True, optional=True),
+            "an EMA of the actor's weights, which evaluation and export use after its warm-up (FPO++: 0.95); null: off",
+        )
+        ema_warmup: int = option(
+            500,
+            Int(0, 10**9),
+            "updates before the EMA starts from the live weights; until then the live actor is the policy (FPO++: 500)",
+        )
 
     def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         for name in ("rnd_cfg", "symmetry_cfg"):
@@ -176,8 +201,9 @@ class OnPolicyAlgorithm(RslPPO):
         observations = st.observations.flatten(0, 1)
         actions, values = st.actions.flatten(0, 1), st.values.flatten(0, 1)
         returns, advantages = st.returns.flatten(0, 1), st.advantages.flatten(0, 1).squeeze(-1)
-        for idx in minibatch_indices(actions.shape[0], self.num_mini_batches, self.num_learning_epochs, self.device,
-                                     self.reshuffle_each_epoch):  # fmt: skip
+        for idx in minibatch_indices(
+            actions.shape[0], self.num_mini_batches, self.num_learning_epochs, self.device, self.reshuffle_each_epoch
+        ):
             adv = advantages[idx]
             if self.normalize_advantage_per_mini_batch:
                 adv = (adv - adv.mean()) / (adv.std() + 1e-8)
@@ -204,8 +230,9 @@ class OnPolicyAlgorithm(RslPPO):
             if self.is_multi_gpu:
                 self.reduce_parameters()
             if self.joint_grad_clip:
-                nn.utils.clip_grad_norm_(list(self.actor.parameters()) + list(self.critic.parameters()),
-                                         self.max_grad_norm)  # fmt: skip
+                nn.utils.clip_grad_norm_(
+                    list(self.actor.parameters()) + list(self.critic.parameters()), self.max_grad_norm
+                )
             else:
                 nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
                 if self.uses_critic:

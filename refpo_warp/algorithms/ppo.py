@@ -23,8 +23,9 @@ class PPO(OnPolicyAlgorithm):
         log_prob = self.actor.get_output_log_prob(batch.actions)
         entropy = self.actor.output_entropy.mean()
         ratio = torch.exp(log_prob - old_log_prob)
-        surrogate = torch.max(-batch.advantages * ratio,
-                              -batch.advantages * ratio.clamp(1.0 - self.clip_param, 1.0 + self.clip_param)).mean()  # fmt: skip
+        surrogate = torch.max(
+            -batch.advantages * ratio, -batch.advantages * ratio.clamp(1.0 - self.clip_param, 1.0 + self.clip_param)
+        ).mean()
         loss = surrogate - self.entropy_coef * entropy
         stats = {"surrogate": surrogate, "entropy": entropy}
         if self.bound_coef > 0:
@@ -32,5 +33,7 @@ class PPO(OnPolicyAlgorithm):
             loss = loss + self.bound_coef * stats["bound"]
         if self.desired_kl is not None and self.schedule == "adaptive":
             with torch.no_grad():
-                stats["approx_kl"] = self.actor.get_kl_divergence(old_params, self.actor.output_distribution_params).mean()
+                stats["approx_kl"] = self.actor.get_kl_divergence(
+                    old_params, self.actor.output_distribution_params
+                ).mean()
         return loss, stats

@@ -37,8 +37,9 @@ def coefficient_range(key: str, value) -> list[float]:
 class ReflowSchedule:
     """How lambda moves from one update to the next, given the one-step ratio of the coming update's rollout."""
 
-    def __init__(self, mode: str = "fixed", target: float = 0.25,
-                 coef_range: tuple[float, float] = (0.01, 0.2)) -> None:  # fmt: skip
+    def __init__(
+        self, mode: str = "fixed", target: float = 0.25, coef_range: tuple[float, float] = (0.01, 0.2)
+    ) -> None:
         if mode not in choices(ScheduleMode):
             raise ValueError(f"reflow_schedule must be one of {choices(ScheduleMode)}, got '{mode}'")
         self.mode, self.target = mode, float(target)

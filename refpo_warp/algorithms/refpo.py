@@ -74,12 +74,14 @@ class ReflowTauWeight(str, Enum):
     UNIFORM = "uniform"  # every pair alike (the paper's)
     TOWARDS_ZERO = "towards_zero"  # pairs weighted by 1 - tau (ours)
 
+
 TAU_INSET = 0.005  # "uniform_inset" keeps flow times this far from both ends (FPO++)
 DIAGNOSTIC_SEED_OFFSET = 7919  # the diagnostics' own random stream: they never move the training's
 
 
-def sample_tau(shape: tuple[int, ...], mode: str, num_flow_steps: int, logit_mean: float, logit_std: float,
-               device) -> torch.Tensor:  # fmt: skip
+def sample_tau(
+    shape: tuple[int, ...], mode: str, num_flow_steps: int, logit_mean: float, logit_std: float, device
+) -> torch.Tensor:
     """Flow times for the CFM pairs: U[0, 1); the sampler's Euler grid {0, 1/N, ..., (N-1)/N}; logit-normal,
     tau = 1 / (1 + exp(logit_std * n + logit_mean)), n ~ N(0, 1), clipped to [1e-4, 1] (Puffer-PHC; with its
     mean -1.2 and std 1.2 the median is 0.77, towards the action end); or U[0.005, 0.995] (FPO++)."""
@@ -105,44 +107,84 @@ class ReFPO(OnPolicyAlgorithm):
     class Options:
         """ReFPO's options, besides the shared ones (``OnPolicyAlgorithm.Options``) and rsl_rl's PPO arguments."""
 
-        reflow_coef: float = option(0.04, Real(0, 1e6), "lambda, the weight of the un-weighted CFM (Reflow) term; 0 "
-                                                        "gives FPO (0.04 DMC, 0.1 GridWorld / humanoid)")
-        num_mc_samples: int = option(8, Int(1, 1024), "K, (tau, eps) pairs stored per action (8 DMC, 50 GridWorld, "
-                                                      "1 humanoid)")
-        output_mode: str | None = option(None, OneOf(None, OUTPUT_MODES), "the CFM loss mode (u, eps, data); null: "
-                                                                          "the actor's output_mode")
-        tau_sampling: TauSampling = option("uniform", OneOf(TauSampling), "flow times of the pairs: uniform "
-                                           "U[0, 1), discrete k/N (Playground), logit_normal (Puffer-PHC), "
-                                           "uniform_inset U[0.005, 0.995] (FPO++)")
+        reflow_coef: float = option(
+            0.04,
+            Real(0, 1e6),
+            "lambda, the weight of the un-weighted CFM (Reflow) term; 0 gives FPO (0.04 DMC, 0.1 GridWorld / humanoid)",
+        )
+        num_mc_samples: int = option(
+            8, Int(1, 1024), "K, (tau, eps) pairs stored per action (8 DMC, 50 GridWorld, 1 humanoid)"
+        )
+        output_mode: str | None = option(
+            None, OneOf(None, OUTPUT_MODES), "the CFM loss mode (u, eps, data); null: the actor's output_mode"
+        )
+        tau_sampling: TauSampling = option(
+            "uniform",
+            OneOf(TauSampling),
+            "flow times of the pairs: uniform "
+            "U[0, 1), discrete k/N (Playground), logit_normal (Puffer-PHC), "
+            "uniform_inset U[0.005, 0.995] (FPO++)",
+        )
         tau_logit_mean: float = option(-1.2, Real(-10, 10), "mean of the logit-normal tau (Puffer-PHC: -1.2)")
         tau_logit_std: float = option(1.2, Real(0, 10, lo_open=True), "std of the logit-normal tau (Puffer-PHC: 1.2)")
-        ratio_mode: RatioMode = option("mean", OneOf(RatioMode), "mean: average the K losses before the exp; "
-                                                                 "per_sample: one ratio per pair")
-        log_ratio_clip: float | None = option(None, Real(0, 100, lo_open=True, optional=True),
-                                              "clamp each pair's log-ratio to [-c, c]; null: no clamp (GridWorld "
-                                              "reference: 3)")
-        explosion_threshold: float = option(3.0, Real(0, None, lo_open=True),
-                                            "|log-ratio| above which an action (or pair) counts in the Explosion Rate")
-        reflow_pairs: ReflowPairs = option("independent", OneOf(ReflowPairs), "independent: the Reflow term on the "
-                                           "ratio's pairs (the paper's); coupled: on the rollout's (eps_0, a)")
-        reflow_schedule: ScheduleMode = option("fixed", OneOf(ScheduleMode), "fixed lambda (the paper's), or "
-                                               "adaptive to the one-step ratio (reflow_schedule.py)")
-        one_step_target: float = option(0.25, Real(0, None, lo_open=True),
-                                        "the one-step ratio the adaptive schedule steers towards")
-        reflow_coef_range: tuple[float, float] = option((0.01, 0.2), Check(coefficient_range, "[min, max] with 0 "
-                                                        "<= min <= max"), "[min, max] of the adaptive lambda")
-        one_step_states: int = option(256, Int(0, 1_000_000), "rollout states of the per-update one-step "
-                                      "diagnostic; 0 turns it off (the adaptive schedule needs it)")
-        trust_region: TrustRegion = option("ppo", OneOf(TrustRegion), "ppo: PPO's clip (the paper's); spo: SPO's "
-                                           "penalty; aspo: clip for A > 0, penalty otherwise (FPO++; trust_region.py)")
-        reflow_tau_weight: ReflowTauWeight = option("uniform", OneOf(ReflowTauWeight), "uniform (the paper's), or "
-                                                    "towards_zero: Reflow pairs weighted by 1 - tau (ours)")
-        one_step_coef: float = option(0.0, Real(0, 1e6), "weight of the one-step consistency term |v(eps_0, 0) - "
-                                      "(a - eps_0)|^2 on the rollout's own noise and action (ours); 0: off")
+        ratio_mode: RatioMode = option(
+            "mean", OneOf(RatioMode), "mean: average the K losses before the exp; per_sample: one ratio per pair"
+        )
+        log_ratio_clip: float | None = option(
+            None,
+            Real(0, 100, lo_open=True, optional=True),
+            "clamp each pair's log-ratio to [-c, c]; null: no clamp (GridWorld reference: 3)",
+        )
+        explosion_threshold: float = option(
+            3.0, Real(0, None, lo_open=True), "|log-ratio| above which an action (or pair) counts in the Explosion Rate"
+        )
+        reflow_pairs: ReflowPairs = option(
+            "independent",
+            OneOf(ReflowPairs),
+            "independent: the Reflow term on the ratio's pairs (the paper's); coupled: on the rollout's (eps_0, a)",
+        )
+        reflow_schedule: ScheduleMode = option(
+            "fixed",
+            OneOf(ScheduleMode),
+            "fixed lambda (the paper's), or adaptive to the one-step ratio (reflow_schedule.py)",
+        )
+        one_step_target: float = option(
+            0.25, Real(0, None, lo_open=True), "the one-step ratio the adaptive schedule steers towards"
+        )
+        reflow_coef_range: tuple[float, float] = option(
+            (0.01, 0.2),
+            Check(coefficient_range, "[min, max] with 0 <= min <= max"),
+            "[min, max] of the adaptive lambda",
+        )
+        one_step_states: int = option(
+            256,
+            Int(0, 1_000_000),
+            "rollout states of the per-update one-step diagnostic; 0 turns it off (the adaptive schedule needs it)",
+        )
+        trust_region: TrustRegion = option(
+            "ppo",
+            OneOf(TrustRegion),
+            "ppo: PPO's clip (the paper's); spo: SPO's "
+            "penalty; aspo: clip for A > 0, penalty otherwise (FPO++; trust_region.py)",
+        )
+        reflow_tau_weight: ReflowTauWeight = option(
+            "uniform",
+            OneOf(ReflowTauWeight),
+            "uniform (the paper's), or towards_zero: Reflow pairs weighted by 1 - tau (ours)",
+        )
+        one_step_coef: float = option(
+            0.0,
+            Real(0, 1e6),
+            "weight of the one-step consistency term |v(eps_0, 0) - "
+            "(a - eps_0)|^2 on the rollout's own noise and action (ours); 0: off",
+        )
         clip_param: float = option(0.05, doc="PPO clip range (rsl_rl's default: 0.2)")
         learning_rate: float = option(3e-4, doc="learning rate (rsl_rl's default: 1e-3)")
-        schedule: str = option("fixed", doc="learning-rate schedule (rsl_rl's default: adaptive, which the proxy "
-                                            "ratio's KL would drive to its bounds)")
+        schedule: str = option(
+            "fixed",
+            doc="learning-rate schedule (rsl_rl's default: adaptive, which the proxy "
+            "ratio's KL would drive to its bounds)",
+        )
         entropy_coef: float = option(0.0, doc="ignored: a flow policy has no closed-form entropy (rsl_rl's: 0.01)")
         use_clipped_value_loss: bool = option(False, doc="PPO's clipped value loss (rsl_rl's default: true)")
 
@@ -181,8 +223,9 @@ class ReFPO(OnPolicyAlgorithm):
     def sample_pairs(self, batch: int, device) -> tuple[torch.Tensor, torch.Tensor]:
         """Draw K (tau, eps) pairs per action: tau (batch, K), eps (batch, K, A)."""
         k, a = self.num_mc_samples, self.actor.action_dim
-        tau = sample_tau((batch, k), self.tau_sampling, self.actor.num_flow_steps, self.tau_logit_mean,
-                         self.tau_logit_std, device)  # fmt: skip
+        tau = sample_tau(
+            (batch, k), self.tau_sampling, self.actor.num_flow_steps, self.tau_logit_mean, self.tau_logit_std, device
+        )
         return tau, torch.randn(batch, k, a, device=device)
 
     def act(self, obs: TensorDict) -> torch.Tensor:
@@ -206,16 +249,18 @@ class ReFPO(OnPolicyAlgorithm):
         terms = self.actor.cfm_terms(obs, actions, tau, eps)
         return cfm_loss(terms, tau, self.output_mode, self.actor.loss_scale), terms
 
-    def pair_log_ratios(self, old_loss: torch.Tensor, new_loss: torch.Tensor,
-                        advantages: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
+    def pair_log_ratios(
+        self, old_loss: torch.Tensor, new_loss: torch.Tensor, advantages: torch.Tensor | None = None
+    ) -> torch.Tensor:
         """L_old,k - L_new,k per pair (B, K), clamped by ``log_ratio_clip`` (``advantages``: for subclasses' caps)."""
         diff = old_loss - new_loss
         if self.log_ratio_clip is not None:
             diff = diff.clamp(-self.log_ratio_clip, self.log_ratio_clip)
         return diff
 
-    def log_ratio(self, old_loss: torch.Tensor, new_loss: torch.Tensor,
-                  advantages: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
+    def log_ratio(
+        self, old_loss: torch.Tensor, new_loss: torch.Tensor, advantages: torch.Tensor | None = None
+    ) -> torch.Tensor:
         """log rho: (B,) for ratio_mode "mean", (B, K) for "per_sample"."""
         diff = self.pair_log_ratios(old_loss, new_loss, advantages)
         if self.ratio_mode == "per_sample":
@@ -258,8 +303,9 @@ class ReFPO(OnPolicyAlgorithm):
         gen = self.diagnostic_generator
         rows = torch.randperm(obs.shape[0], generator=gen)[: self.one_step_states].to(obs.device)
         actor = uncompiled(self, "actor")
-        self.one_step = one_step_consistency(actor, obs[rows], actor.num_flow_steps, self.action_transform,
-                                             generator=gen)  # fmt: skip
+        self.one_step = one_step_consistency(
+            actor, obs[rows], actor.num_flow_steps, self.action_transform, generator=gen
+        )
         self.reflow_coef = self.reflow_schedule.step(self.reflow_coef, self.one_step["one_step_ratio"])
 
     def before_update(self, chunk: int = 65536) -> None:
@@ -269,8 +315,14 @@ class ReFPO(OnPolicyAlgorithm):
         actions = self.storage.actions.flatten(0, 1)
         tau, eps = self.store.flat("tau"), self.store.flat("eps")
         with torch.inference_mode():
-            old = torch.cat([self.cfm_losses(obs[i : i + chunk], actions[i : i + chunk], tau[i : i + chunk],
-                                             eps[i : i + chunk])[0] for i in range(0, actions.shape[0], chunk)])  # fmt: skip
+            old = torch.cat(
+                [
+                    self.cfm_losses(obs[i : i + chunk], actions[i : i + chunk], tau[i : i + chunk], eps[i : i + chunk])[
+                        0
+                    ]
+                    for i in range(0, actions.shape[0], chunk)
+                ]
+            )
             self.store.write_all(old_loss=old)
 
     def policy_loss(self, batch: Minibatch) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:

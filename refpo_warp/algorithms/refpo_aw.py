@@ -71,8 +71,11 @@ class AdvantageWeightedReFPO(ReFPO):
 
     @dataclass(frozen=True)
     class Options:
-        reflow_weighting: ReflowWeighting = option("positive", OneOf(ReflowWeighting), "which actions' CFM loss the "
-                                                   "Reflow term weights, and how (module docstring)")
+        reflow_weighting: ReflowWeighting = option(
+            "positive",
+            OneOf(ReflowWeighting),
+            "which actions' CFM loss the Reflow term weights, and how (module docstring)",
+        )
 
     def before_update(self, chunk: int = 65536) -> None:
         super().before_update(chunk)

@@ -33,8 +33,9 @@ from refpo_warp.utils.option_rules import Check, Int, ListOf, Real
 from refpo_warp.utils.options import option
 
 
-def decayed_sigma_max(update: int, total: int, sigma_min: float, sigma_max: float, hold_ratio: float,
-                      decay_ratio: float) -> float:  # fmt: skip
+def decayed_sigma_max(
+    update: int, total: int, sigma_min: float, sigma_max: float, hold_ratio: float, decay_ratio: float
+) -> float:
     """ReinFlow's ``learn_decay`` upper bound after ``update`` of ``total`` updates (see the module docstring)."""
     floor = sigma_min + decay_ratio * (sigma_max - sigma_min)
     hold = hold_ratio * total
@@ -58,16 +59,19 @@ class ReinFlow(OnPolicyAlgorithm):
     class Options:
         """ReinFlow's options, besides the shared ones (``OnPolicyAlgorithm.Options``) and rsl_rl's PPO arguments."""
 
-        logprob_clip: tuple[float, float] | None = option((-1.0, 1.0), Check(log_prob_range, "null or [min, max] "
-                                                          "with min < max", optional=True),
-                                                          "[min, max] clamp of the old and new normalised "
-                                                          "log-probabilities; null: no clamp")
-        noise_decay_updates: int | None = option(None, Int(1, None, optional=True),
-                                                 "updates over which the noise bound decays; null: constant bounds")
+        logprob_clip: tuple[float, float] | None = option(
+            (-1.0, 1.0),
+            Check(log_prob_range, "null or [min, max] with min < max", optional=True),
+            "[min, max] clamp of the old and new normalised log-probabilities; null: no clamp",
+        )
+        noise_decay_updates: int | None = option(
+            None, Int(1, None, optional=True), "updates over which the noise bound decays; null: constant bounds"
+        )
         noise_hold_ratio: float = option(0.35, Real(0, 1), "ReinFlow's hold fraction of the decay")
         noise_decay_ratio: float = option(0.7, Real(0, 1), "ReinFlow's decayed-bound ratio")
-        explosion_threshold: float = option(3.0, Real(0, None, lo_open=True),
-                                            "|log rho| above which a sample counts in Flow/explosion_rate")
+        explosion_threshold: float = option(
+            3.0, Real(0, None, lo_open=True), "|log rho| above which a sample counts in Flow/explosion_rate"
+        )
         clip_param: float = option(0.1, doc="PPO clip range (table (d))")
         entropy_coef: float = option(0.05, doc="entropy bonus (table (d))")
         value_loss_coef: float = option(0.3, doc="value loss weight (table (d))")
@@ -80,8 +84,9 @@ class ReinFlow(OnPolicyAlgorithm):
 
     def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         if not (hasattr(actor, "sample_chain") and hasattr(actor, "chain_log_prob")):
-            raise TypeError("ReinFlow needs a noisy-chain actor; set actor.class_name to "
-                            "refpo_warp.models:ReinFlowActor")  # fmt: skip
+            raise TypeError(
+                "ReinFlow needs a noisy-chain actor; set actor.class_name to refpo_warp.models:ReinFlowActor"
+            )
         super().__init__(actor, critic, storage, **kwargs)
         if self.bound_coef > 0:
             warnings.warn("ReinFlow ignores bound_coef: its chain already clamps the action to [-1, 1].")
@@ -129,8 +134,14 @@ class ReinFlow(OnPolicyAlgorithm):
     def update(self) -> dict[str, float]:
         out = super().update()
         if self.noise_decay_updates is not None:
-            value = decayed_sigma_max(self.num_updates, self.noise_decay_updates, self.actor.sigma_min,
-                                      self.initial_sigma_max, self.noise_hold_ratio, self.noise_decay_ratio)
+            value = decayed_sigma_max(
+                self.num_updates,
+                self.noise_decay_updates,
+                self.actor.sigma_min,
+                self.initial_sigma_max,
+                self.noise_hold_ratio,
+                self.noise_decay_ratio,
+            )
             self.actor.sigma_max.fill_(value)
         out["Flow/sigma_max"] = float(self.actor.sigma_max)
         return out

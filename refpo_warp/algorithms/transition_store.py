@@ -47,8 +47,9 @@ class TransitionStore:
         return name in self.fields
 
 
-def minibatch_indices(batch_size: int, num_mini_batches: int, num_epochs: int, device, reshuffle_each_epoch: bool
-                      ) -> Iterator[torch.Tensor]:  # fmt: skip
+def minibatch_indices(
+    batch_size: int, num_mini_batches: int, num_epochs: int, device, reshuffle_each_epoch: bool
+) -> Iterator[torch.Tensor]:
     """Index tensors of the minibatches of ``num_epochs`` passes over a batch of ``batch_size`` rows.
 
     One permutation for all passes is rsl_rl's rule (the same draw as its ``mini_batch_generator``, so runs match it

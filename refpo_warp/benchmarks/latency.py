@@ -35,8 +35,9 @@ def device_name(device: str) -> str:
     return platform.processor() or platform.machine() or "cpu"
 
 
-def policy_latency(task: str, algo: str, device: str, batches: list[int], flow_steps: list[int],
-                   repeats: int = 50) -> list[dict]:  # fmt: skip
+def policy_latency(
+    task: str, algo: str, device: str, batches: list[int], flow_steps: list[int], repeats: int = 50
+) -> list[dict]:
     """Latency rows (``latency_ms`` per call) of ``algo``'s actor on ``task`` for every batch size and N."""
     from refpo_warp.config.resolve import resolve_config
     from refpo_warp.evaluation.evaluate_policy import is_flow, make_policy
@@ -86,19 +87,32 @@ def main(argv: list[str]) -> None:
             rows += policy_latency(task, algo, device, batches, flow_steps, args.repeats)
     ratios = []
     for task, algo, batch in sorted({(r["task"], r["algo"], r["batch"]) for r in rows if r["flow_steps"]}):
-        by_n = {r["flow_steps"]: r["latency_ms"] for r in rows
-                if (r["task"], r["algo"], r["batch"]) == (task, algo, batch)}  # fmt: skip
+        by_n = {
+            r["flow_steps"]: r["latency_ms"] for r in rows if (r["task"], r["algo"], r["batch"]) == (task, algo, batch)
+        }
         if 1 in by_n and 10 in by_n:
             ratios.append(f"{task} {algo} batch {batch}: N=10 / N=1 latency ratio {by_n[10] / by_n[1]:.1f}x")
-    print_table([{**r, "flow_steps": r["flow_steps"] or "mean action", "latency_ms": f"{r['latency_ms']:.3f}"}
-                 for r in rows], ["task", "algo", "flow_steps", "batch", "latency_ms"],
-                title=f"Action latency on {device} ({device_name(device)}), torch threads {torch.get_num_threads()}, "
-                      f"median of {args.repeats} calls", notes=tuple(ratios))  # fmt: skip
+    print_table(
+        [{**r, "flow_steps": r["flow_steps"] or "mean action", "latency_ms": f"{r['latency_ms']:.3f}"} for r in rows],
+        ["task", "algo", "flow_steps", "batch", "latency_ms"],
+        title=f"Action latency on {device} ({device_name(device)}), torch threads {torch.get_num_threads()}, "
+        f"median of {args.repeats} calls",
+        notes=tuple(ratios),
+    )
     if args.json:
         path = Path(args.json)
         path.parent.mkdir(parents=True, exist_ok=True)
-        write_json({"benchmark": "action_latency", "device": device, "device_name": device_name(device),
-                    "torch_threads": torch.get_num_threads(), "torch_version": torch.__version__,
-                    "repeats": args.repeats, "created": datetime.datetime.now().isoformat(timespec="seconds"),
-                    "rows": rows}, path)  # fmt: skip
+        write_json(
+            {
+                "benchmark": "action_latency",
+                "device": device,
+                "device_name": device_name(device),
+                "torch_threads": torch.get_num_threads(),
+                "torch_version": torch.__version__,
+                "repeats": args.repeats,
+                "created": datetime.datetime.now().isoformat(timespec="seconds"),
+                "rows": rows,
+            },
+            path,
+        )
         print(f"wrote {path}")

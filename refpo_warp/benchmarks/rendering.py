@@ -21,12 +21,17 @@ from refpo_warp.render.video import write_video
 from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.timing import print_table
 
-CASES = (("dmc_cheetah_run", {}, {}), ("humanoid_all", {"eval_mode": True}, {"reference": True}),
-         ("humanoid_all", {"eval_mode": True}, {"reference": False}), ("gridworld", {}, {}))  # fmt: skip
+CASES = (
+    ("dmc_cheetah_run", {}, {}),
+    ("humanoid_all", {"eval_mode": True}, {"reference": True}),
+    ("humanoid_all", {"eval_mode": True}, {"reference": False}),
+    ("gridworld", {}, {}),
+)
 
 
-def frames_per_second(task: str, env_options: dict, render_options: dict, width: int, height: int,
-                      frames: int) -> tuple[float, object]:  # fmt: skip
+def frames_per_second(
+    task: str, env_options: dict, render_options: dict, width: int, height: int, frames: int
+) -> tuple[float, object]:
     """Frames per second of drawing env 0 of ``task`` after each of ``frames`` random steps (the steps untimed)."""
     env = make_env(task, num_envs=1, device="cpu", seed=0, **env_options)
     source = family_module(task, "render").frame_source(env, width, height, **render_options)
@@ -82,14 +87,20 @@ def main(argv: list[str]) -> None:
     rows = []
     for task, env_options, render_options in CASES:
         fps, (env, source) = frames_per_second(task, env_options, render_options, args.width, args.height, args.frames)
-        row = {"frames": f"{task}" + ("" if not render_options else
-                                      f" (reference {'on' if render_options['reference'] else 'off'})"),
-               "frames/s": f"{fps:.1f}"}  # fmt: skip
+        row = {
+            "frames": f"{task}"
+            + ("" if not render_options else f" (reference {'on' if render_options['reference'] else 'off'})"),
+            "frames/s": f"{fps:.1f}",
+        }
         video = video_seconds(env, source, 30.0, args.seconds, args.width, args.height)
         anchor = args.seconds * 30 / fps  # drawing alone
         row.update({k: f"{v:.2f}" if "(s)" in k else f"{v:.0f}" for k, v in video.items()})
         row["video / drawing"] = f"{(video['draw + overlay (s)'] + video['MP4 write (s)']) / anchor:.2f}"
         source.close()
         rows.append(row)
-    print_table(rows, list(rows[0]), title=f"Rendering on the CPU ({platform}), {args.width}x{args.height}, shadows "
-                                           f"off; {args.seconds:g} s videos at 30 frames/s")  # fmt: skip
+    print_table(
+        rows,
+        list(rows[0]),
+        title=f"Rendering on the CPU ({platform}), {args.width}x{args.height}, shadows "
+        f"off; {args.seconds:g} s videos at 30 frames/s",
+    )

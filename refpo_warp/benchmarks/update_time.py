@@ -25,15 +25,35 @@ from refpo_warp.utils.timing import print_table, synchronize
 
 # table order; other algos follow, sorted
 ORDER = ("fpo", "refpo", "refpo_onestep", "refpo_aw", "fpo_pp", "refpo_pp", "flow_grpo", "reinflow", "ppo")
-NAMES = {"fpo": "FPO", "refpo": "ReFPO", "refpo_aw": "ReFPO (adv.-weighted)", "flow_grpo": "Flow-GRPO",
-         "reinflow": "ReinFlow", "ppo": "PPO", "fpo_pp": "FPO++", "refpo_pp": "ReFPO on FPO++",
-         "refpo_onestep": "ReFPO, one-step term",
-         "refpo_coupled": "ReFPO, coupled pairs", "refpo_adaptive": "ReFPO, adaptive λ"}  # fmt: skip
-VARIANTS = {"refpo_coupled": ("refpo", ["algorithm.reflow_pairs=coupled"]),
-            "refpo_adaptive": ("refpo", ["algorithm.reflow_schedule=adaptive"])}  # fmt: skip
+NAMES = {
+    "fpo": "FPO",
+    "refpo": "ReFPO",
+    "refpo_aw": "ReFPO (adv.-weighted)",
+    "flow_grpo": "Flow-GRPO",
+    "reinflow": "ReinFlow",
+    "ppo": "PPO",
+    "fpo_pp": "FPO++",
+    "refpo_pp": "ReFPO on FPO++",
+    "refpo_onestep": "ReFPO, one-step term",
+    "refpo_coupled": "ReFPO, coupled pairs",
+    "refpo_adaptive": "ReFPO, adaptive λ",
+}
+VARIANTS = {
+    "refpo_coupled": ("refpo", ["algorithm.reflow_pairs=coupled"]),
+    "refpo_adaptive": ("refpo", ["algorithm.reflow_schedule=adaptive"]),
+}
 """name -> (algo, overrides): options of an algorithm timed as a row of their own (only when asked: --algos)."""
-PAPER_PASSES = {"fpo": 16, "refpo": 16, "refpo_onestep": 16, "refpo_aw": 16, "fpo_pp": 16, "refpo_pp": 16,
-                "flow_grpo": 8, "reinflow": 8, "ppo": 16}  # FPO++ at the ReFPO family's passes, as it runs in the grid
+PAPER_PASSES = {
+    "fpo": 16,
+    "refpo": 16,
+    "refpo_onestep": 16,
+    "refpo_aw": 16,
+    "fpo_pp": 16,
+    "refpo_pp": 16,
+    "flow_grpo": 8,
+    "reinflow": 8,
+    "ppo": 16,
+}  # FPO++ at the ReFPO family's passes, as it runs in the grid
 """Passes per batch in the paper's DMC tables; an algorithm not in them is scaled with ``--passes``."""
 
 
@@ -51,9 +71,19 @@ def build(algo: str, task: str, device: str, envs: int, steps: int, minibatches:
     from refpo_warp.runner.build import build_runner
 
     algo, overrides = VARIANTS.get(algo, (algo, []))
-    cfg = resolve_config([f"task={task}", f"algo={algo}", f"device={device}", f"num_envs={envs}",
-                          f"runner.num_steps_per_env={steps}", f"algorithm.num_mini_batches={minibatches}",
-                          f"algorithm.num_learning_epochs={passes}", "eval.interval=0", *overrides])  # fmt: skip
+    cfg = resolve_config(
+        [
+            f"task={task}",
+            f"algo={algo}",
+            f"device={device}",
+            f"num_envs={envs}",
+            f"runner.num_steps_per_env={steps}",
+            f"algorithm.num_mini_batches={minibatches}",
+            f"algorithm.num_learning_epochs={passes}",
+            "eval.interval=0",
+            *overrides,
+        ]
+    )
     with contextlib.redirect_stdout(io.StringIO()):  # rsl_rl prints the model structure
         env, runner = build_runner(cfg, None)
     return env, runner.alg, cfg
@@ -105,9 +135,11 @@ def main(argv: list[str]) -> None:
     device = resolve_device(args.device)
     if "fpo" not in args.algos:
         args.algos = ["fpo", *args.algos]
-    title = (f"Update time on {args.task}, {device}, torch threads {torch.get_num_threads()}: {args.envs} envs x "
-             f"{args.steps} steps = {args.envs * args.steps} transitions, {args.minibatches} minibatches, "
-             f"{args.passes} passes")  # fmt: skip
+    title = (
+        f"Update time on {args.task}, {device}, torch threads {torch.get_num_threads()}: {args.envs} envs x "
+        f"{args.steps} steps = {args.envs * args.steps} transitions, {args.minibatches} minibatches, "
+        f"{args.passes} passes"
+    )
     seconds, chunks = {}, {}
     for algo in args.algos:
         torch.manual_seed(0)
@@ -116,9 +148,15 @@ def main(argv: list[str]) -> None:
         chunks[algo] = cfg["env"].get("action_chunk", 1)
     passes = {a: PAPER_PASSES.get(VARIANTS.get(a, (a,))[0], args.passes) for a in seconds}
     per_env_step = {a: seconds[a] / args.passes * passes[a] / chunks[a] for a in seconds}
-    rows = [{"algorithm": NAMES.get(a, a), "update (s)": f"{seconds[a]:.3f}",
-             "ratio to FPO": f"{seconds[a] / seconds['fpo']:.2f}",
-             "paper passes, per env step, ratio to FPO": f"{per_env_step[a] / per_env_step['fpo']:.2f}"}
-            for a in seconds]  # fmt: skip
-    print_table(rows, ["algorithm", "update (s)", "ratio to FPO", "paper passes, per env step, ratio to FPO"],
-                title=title)
+    rows = [
+        {
+            "algorithm": NAMES.get(a, a),
+            "update (s)": f"{seconds[a]:.3f}",
+            "ratio to FPO": f"{seconds[a] / seconds['fpo']:.2f}",
+            "paper passes, per env step, ratio to FPO": f"{per_env_step[a] / per_env_step['fpo']:.2f}",
+        }
+        for a in seconds
+    ]
+    print_table(
+        rows, ["algorithm", "update (s)", "ratio to FPO", "paper passes, per env step, ratio to FPO"], title=title
+    )

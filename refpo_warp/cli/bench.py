@@ -21,8 +21,11 @@ chosen tasks and algorithms; `--json PATH` writes the rows for `refpo report` (i
 FLAGS = ()
 SUBJECTS = 1
 PASSES_ON = True  # the flags after the benchmark's name are the benchmark's own (its --help included)
-OTHERS = {"latency": "refpo_warp.benchmarks.latency", "algorithms": "refpo_warp.benchmarks.update_time",
-          "render": "refpo_warp.benchmarks.rendering"}  # not one family's
+OTHERS = {
+    "latency": "refpo_warp.benchmarks.latency",
+    "algorithms": "refpo_warp.benchmarks.update_time",
+    "render": "refpo_warp.benchmarks.rendering",
+}  # not one family's
 
 
 def benchmarked_families() -> list[str]:
@@ -40,8 +43,11 @@ def run(args: Arguments) -> None:
     name, rest = args.subjects[0], args.options
     if name not in choices:
         raise unknown("benchmark", name, choices)
-    modules = [OTHERS[name]] if name in OTHERS else [f"refpo_warp.tasks.{f}.bench"
-                                                     for f in (families if name == "all" else (name,))]  # fmt: skip
+    modules = (
+        [OTHERS[name]]
+        if name in OTHERS
+        else [f"refpo_warp.tasks.{f}.bench" for f in (families if name == "all" else (name,))]
+    )
     if wants_help(rest):  # a benchmark's own flags, from the same convention as every command
         print("\n\n".join(importlib.import_module(m).USAGE for m in modules))
         return

@@ -35,6 +35,8 @@ def run(args: Arguments) -> None:
 
     set_torch_threads(cuda_cap=4)
     out = collect(parse_overrides(args.options))
-    print(f"[collect] wrote {out['path']}: {out['episodes']} episodes, {out['steps']:,} steps, return "
-          f"{out['return_mean']:.2f}, length {out['length_mean']:.1f} (mean over episodes), {out['wall_s']:.1f} s",
-          flush=True)  # fmt: skip
+    print(
+        f"[collect] wrote {out['path']}: {out['episodes']} episodes, {out['steps']:,} steps, return "
+        f"{out['return_mean']:.2f}, length {out['length_mean']:.1f} (mean over episodes), {out['wall_s']:.1f} s",
+        flush=True,
+    )

@@ -26,8 +26,10 @@ def run(args: Arguments) -> None:
     from refpo_warp.motion.library_file import LIBRARY_SUFFIX
 
     if len(args.subjects) != 2 or args.options:
-        raise ConfigError(f"refpo convert-amass takes SOURCE (an AMASS .npz file or a folder of them) and OUTPUT "
-                          f"(a file name ending in {LIBRARY_SUFFIX}), and --fps; see refpo convert-amass --help")
+        raise ConfigError(
+            f"refpo convert-amass takes SOURCE (an AMASS .npz file or a folder of them) and OUTPUT "
+            f"(a file name ending in {LIBRARY_SUFFIX}), and --fps; see refpo convert-amass --help"
+        )
     source, output = map(Path, args.subjects)
     if not output.name.endswith(LIBRARY_SUFFIX):
         raise ConfigError(f"output file name must end in {LIBRARY_SUFFIX}, got {output.name}")
@@ -45,5 +47,4 @@ def convert(source: Path, output: Path, fps: float) -> None:
     start = time.perf_counter()
     library = MotionLibrary.load(source, device="cpu", fps=fps)
     library.save(output)
-    print(f"{library} -> {output} ({output.stat().st_size / 2**20:.1f} MiB, "
-          f"{time.perf_counter() - start:.1f} s)")  # fmt: skip
+    print(f"{library} -> {output} ({output.stat().st_size / 2**20:.1f} MiB, {time.perf_counter() - start:.1f} s)")

@@ -49,12 +49,17 @@ def run_guarded(fn: Callable[[], int | None]) -> int:
         return _fail(f"error: {where}{err.strerror or err}", EXIT_SYSTEM)
     except Exception as err:  # noqa: BLE001  (the last resort: a message and the traceback in a file)
         if type(err).__name__ == "OutOfMemoryError":  # torch's CUDA out-of-memory error
-            return _fail(f"error: out of GPU memory ({str(err).splitlines()[0]}); lower num_envs or the network "
-                         f"sizes", EXIT_SYSTEM)  # fmt: skip
+            return _fail(
+                f"error: out of GPU memory ({str(err).splitlines()[0]}); lower num_envs or the network sizes",
+                EXIT_SYSTEM,
+            )
         log = write_traceback(err)
         summary = " ".join(str(err).split())[:500] or "(no message)"
-        return _fail(f"error: unexpected {type(err).__name__}: {summary}\nThis is a bug or a case refpo_warp does not "
-                     f"foresee; the full traceback is in {log}", EXIT_UNEXPECTED)  # fmt: skip
+        return _fail(
+            f"error: unexpected {type(err).__name__}: {summary}\nThis is a bug or a case refpo_warp does not "
+            f"foresee; the full traceback is in {log}",
+            EXIT_UNEXPECTED,
+        )
     return EXIT_OK if code is None else code
 
 
@@ -65,14 +70,18 @@ def non_finite_message(err: NonFiniteLossError) -> str:
     smaller = f"a learning rate below {lr:g}" if lr else "a smaller learning rate"
     lines = [f"error: training stopped: {err}"]
     if checkpoint is not None:
-        lines.append(f"The checkpoints written before the failure are intact; the newest is {checkpoint}. To continue "
-                     f"from it with {smaller}: refpo train run_dir={run_dir} resume=true "
-                     f"algorithm.learning_rate=<value>")  # fmt: skip
+        lines.append(
+            f"The checkpoints written before the failure are intact; the newest is {checkpoint}. To continue "
+            f"from it with {smaller}: refpo train run_dir={run_dir} resume=true "
+            f"algorithm.learning_rate=<value>"
+        )
     else:
         where = f" in {run_dir}" if run_dir else ""
-        lines.append(f"No checkpoint was written before the failure{where}, so there is nothing to resume; start the "
-                     f"run again with {smaller} (algorithm.learning_rate=<value>) or, for flow policies, "
-                     f"algorithm.log_ratio_clip=<value>")  # fmt: skip
+        lines.append(
+            f"No checkpoint was written before the failure{where}, so there is nothing to resume; start the "
+            f"run again with {smaller} (algorithm.learning_rate=<value>) or, for flow policies, "
+            f"algorithm.log_ratio_clip=<value>"
+        )
     return "\n".join(lines)
 
 

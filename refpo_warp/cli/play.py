@@ -76,12 +76,16 @@ def split_arguments(args: list[str]) -> tuple[dict[str, Any], VideoOptions, dict
         return picked, video, flat  # run options: checked over the saved config (load_run_config)
     agent = picked.get("agent")
     if agent not in AGENTS:
-        raise ConfigError(f"agent={agent!r} is invalid; expected one of {', '.join(AGENTS)} (or run_dir=PATH for "
-                          f"a trained policy)")  # fmt: skip
+        raise ConfigError(
+            f"agent={agent!r} is invalid; expected one of {', '.join(AGENTS)} (or run_dir=PATH for a trained policy)"
+        )
     env = {k[4:]: flat.pop(k) for k in list(flat) if k.startswith("env.")}
     for key in [*flat, *(f"env.{k}" for k in env if k not in env_keys)]:
-        raise unknown(f"play option of an agent on task '{picked['task']}'", key,
-                      [*own, *(f"video.{k}" for k in VIDEO_KEYS), *(f"env.{k}" for k in env_keys)])  # fmt: skip
+        raise unknown(
+            f"play option of an agent on task '{picked['task']}'",
+            key,
+            [*own, *(f"video.{k}" for k in VIDEO_KEYS), *(f"env.{k}" for k in env_keys)],
+        )
     spec.cfg_class(**{**spec.cfg_overrides, **env})  # the env options' rules
     return picked, video, env
 
@@ -102,8 +106,14 @@ def play(args: list[str]) -> list[Path]:
     select_gl_platform()  # before anything imports MuJoCo
     if "run_dir" in picked:
         return _play_run(Path(str(picked["run_dir"])), picked.get("checkpoint"), rest, video)
-    return _play_agent(str(picked["task"]), str(picked["agent"]), str(picked.get("device", "cpu")),
-                       Path(str(picked.get("out", "runs/videos"))), video, rest)  # fmt: skip
+    return _play_agent(
+        str(picked["task"]),
+        str(picked["agent"]),
+        str(picked.get("device", "cpu")),
+        Path(str(picked.get("out", "runs/videos"))),
+        video,
+        rest,
+    )
 
 
 def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -> list[Path]:
@@ -119,8 +129,9 @@ def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -
     env_options = {**cfg["env"], **cfg["eval"]["env"]}
     from refpo_warp.envs.registry import make_env
 
-    host = make_env(cfg["task"], num_envs=video.num_envs, device=resolve_device(cfg["device"]), seed=cfg["seed"],
-                    **env_options)  # fmt: skip
+    host = make_env(
+        cfg["task"], num_envs=video.num_envs, device=resolve_device(cfg["device"]), seed=cfg["seed"], **env_options
+    )
     _, runner = build_runner(cfg, None, env=host)
     if checkpoint is not None:
         runner.load(checkpoint, map_location=runner.device)
@@ -129,8 +140,9 @@ def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -
     iteration = runner.current_learning_iteration
     panels, tag = policy_panels(cfg, runner.get_inference_policy(device=runner.device), video)
     seed = cfg["seed"] if video.seed is None else video.seed
-    return record(cfg["task"], env_options, runner.device, panels, video, run_dir / VIDEO_DIR,
-                  f"model_{iteration}_{tag}", seed)  # fmt: skip
+    return record(
+        cfg["task"], env_options, runner.device, panels, video, run_dir / VIDEO_DIR, f"model_{iteration}_{tag}", seed
+    )
 
 
 def _play_agent(task: str, agent: str, device: str, out: Path, video: VideoOptions, env_options: dict) -> list[Path]:

@@ -28,8 +28,10 @@ def run(args: Arguments) -> None:
     runs, outs = args.values("run_dir"), args.values("out")
     sweep = args.subjects[0] if args.subjects else None
     if bool(runs) == bool(sweep) or len(outs) > 1:
-        raise ConfigError(f"refpo plot expects run_dir=PATH [run_dir=...] or a sweep dir, and optionally one out=DIR; "
-                          f"got {' '.join(args.subjects + args.options) or 'nothing'}")  # fmt: skip
+        raise ConfigError(
+            f"refpo plot expects run_dir=PATH [run_dir=...] or a sweep dir, and optionally one out=DIR; "
+            f"got {' '.join(args.subjects + args.options) or 'nothing'}"
+        )
     out = outs[0] if outs else None
     from refpo_warp.evaluation.curves import plot_runs
     from refpo_warp.sweeps.figures import sweep_curves

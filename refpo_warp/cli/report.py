@@ -51,9 +51,15 @@ def run(args: Arguments) -> None:
         raise ConfigError(f"seed={seed!r} is invalid; expected a seed (a non-negative integer)")
     from refpo_warp.sweeps.report import write_report
 
-    written = write_report(args.subjects[0], _option(args, "out"), _option(args, "latency"),
-                           _names(_option(args, "curve_methods")), _names(_option(args, "ratio_tasks")),
-                           _names(_option(args, "ratio_methods")), None if seed is None else int(seed))  # fmt: skip
+    written = write_report(
+        args.subjects[0],
+        _option(args, "out"),
+        _option(args, "latency"),
+        _names(_option(args, "curve_methods")),
+        _names(_option(args, "ratio_tasks")),
+        _names(_option(args, "ratio_methods")),
+        None if seed is None else int(seed),
+    )
     text = written[0].read_text()  # report.md: print its title and the DMC table, then the files
     print(text[: text.index("Each method cell")].rstrip() if "Each method cell" in text else text)
     print("\nwritten:\n" + "\n".join(f"  {path}" for path in written))

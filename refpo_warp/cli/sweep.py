@@ -57,8 +57,9 @@ SUBJECTS = 1
 
 def run(args: Arguments) -> int:
     if not args.subjects:
-        raise ConfigError("refpo sweep needs a sweep: a name (configs/sweep/<name>.yaml) or a YAML file; see "
-                          "refpo sweep --help")  # fmt: skip
+        raise ConfigError(
+            "refpo sweep needs a sweep: a name (configs/sweep/<name>.yaml) or a YAML file; see refpo sweep --help"
+        )
     from refpo_warp.sweeps.ray_backend import RayOptions
     from refpo_warp.sweeps.run import run_sweep
     from refpo_warp.sweeps.spec import load_sweep
@@ -67,10 +68,15 @@ def run(args: Arguments) -> int:
     if any(f in args.flags for f in ("--ray-address", "--gpus-per-run", "--cpus-per-run")):  # refused without ray
         ray = RayOptions(args.flag("--ray-address"), args.flag("--gpus-per-run"), args.flag("--cpus-per-run", 1.0))
     signal.signal(signal.SIGTERM, signal.default_int_handler)  # stop the runs cleanly on SIGTERM too
-    summary = run_sweep(load_sweep(args.subjects[0], args.options), jobs=args.flag("--jobs"),
-                        retries=args.flag("--retries", 1), launcher=args.flag("--launcher", ""),
-                        dry_run=args.flag("--dry-run", False), backend=args.flag("--backend", "local"),
-                        ray=ray)  # fmt: skip
+    summary = run_sweep(
+        load_sweep(args.subjects[0], args.options),
+        jobs=args.flag("--jobs"),
+        retries=args.flag("--retries", 1),
+        launcher=args.flag("--launcher", ""),
+        dry_run=args.flag("--dry-run", False),
+        backend=args.flag("--backend", "local"),
+        ray=ray,
+    )
     if summary.interrupted:
         return EXIT_INTERRUPTED
     return 0 if summary.ok else EXIT_UNEXPECTED

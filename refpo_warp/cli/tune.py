@@ -40,8 +40,9 @@ SUBJECTS = 1
 
 def run(args: Arguments) -> int:
     if not args.subjects:
-        raise ConfigError("refpo tune needs a tuning: a name (configs/tune/<name>.yaml) or a YAML file; see "
-                          "refpo tune --help")  # fmt: skip
+        raise ConfigError(
+            "refpo tune needs a tuning: a name (configs/tune/<name>.yaml) or a YAML file; see refpo tune --help"
+        )
     from refpo_warp.sweeps.tune import Tuner
     from refpo_warp.sweeps.tune_spec import load_tuning
 

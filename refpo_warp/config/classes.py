@@ -17,9 +17,11 @@ from refpo_warp.utils.options import declared_options
 
 CLASS_SECTIONS = ("actor", "critic", "algorithm")
 # Constructor arguments that rsl_rl itself passes positionally; a config must not set them.
-POSITIONAL = {"actor": ("obs", "obs_groups", "obs_set", "output_dim"),
-              "critic": ("obs", "obs_groups", "obs_set", "output_dim"),
-              "algorithm": ("actor", "critic", "storage", "device", "multi_gpu_cfg")}  # fmt: skip
+POSITIONAL = {
+    "actor": ("obs", "obs_groups", "obs_set", "output_dim"),
+    "critic": ("obs", "obs_groups", "obs_set", "output_dim"),
+    "algorithm": ("actor", "critic", "storage", "device", "multi_gpu_cfg"),
+}
 CONSTRUCT_ALGORITHM_KEYS = {"share_cnn_encoders": None}  # consumed by rsl_rl's construct_algorithm
 
 

@@ -40,9 +40,11 @@ class ConfigPath:
         for folder in self.dirs if dirs is None else dirs:
             for path in sorted((folder / kind).glob("*.yaml")):
                 if path.stem in found:
-                    raise ConfigError(f"{shown(found[path.stem])} has the name of {shown(path)} ({kind} "
-                                      f"'{path.stem}'); give it another name (it may derive from the other with "
-                                      f"base: {path.stem})")  # fmt: skip
+                    raise ConfigError(
+                        f"{shown(found[path.stem])} has the name of {shown(path)} ({kind} "
+                        f"'{path.stem}'); give it another name (it may derive from the other with "
+                        f"base: {path.stem})"
+                    )
                 found[path.stem] = path
         return found
 
@@ -91,9 +93,12 @@ def _user_folder(value: str, where: str) -> Path:
     if not folder.is_dir():
         raise ConfigError(f"{where}={value}: no such directory; expected {layout}")
     if not any((folder / kind).is_dir() for kind in KINDS):
-        raise ConfigError(f"{where}={value}: has none of the folders {', '.join(k + '/' for k in KINDS)}; expected "
-                          f"{layout}")  # fmt: skip
+        raise ConfigError(
+            f"{where}={value}: has none of the folders {', '.join(k + '/' for k in KINDS)}; expected {layout}"
+        )
     if (folder / DEFAULT_FILE.name).exists():
-        raise ConfigError(f"{where}={value}: holds a {DEFAULT_FILE.name}, which is never read (the run options' "
-                          f"defaults are the shipped ones); put your settings in a task or algo file")  # fmt: skip
+        raise ConfigError(
+            f"{where}={value}: holds a {DEFAULT_FILE.name}, which is never read (the run options' "
+            f"defaults are the shipped ones); put your settings in a task or algo file"
+        )
     return folder

@@ -32,9 +32,17 @@ def register_config_tasks(path: ConfigPath) -> list[str]:
             continue
         base = variant_base(name, file, path)
         spec = get_task(base)
-        register_task(TaskSpec(name, spec.entry_point, spec.cfg_class, dict(spec.cfg_overrides),
-                               description=f"{spec.description} (from {shown(file)})", config_file=file),
-                      replace=name in _VARIANTS)  # fmt: skip
+        register_task(
+            TaskSpec(
+                name,
+                spec.entry_point,
+                spec.cfg_class,
+                dict(spec.cfg_overrides),
+                description=f"{spec.description} (from {shown(file)})",
+                config_file=file,
+            ),
+            replace=name in _VARIANTS,
+        )
         _VARIANTS.add(name)
         added.append(name)
     return added
@@ -46,7 +54,9 @@ def variant_base(name: str, file: Path, path: ConfigPath) -> str:
     named = {found.stem for found, _ in file_chain(file, "task", path, (name,))[:-1]} & set(registered)
     if len(named) != 1:
         what = "names none" if not named else f"names several ({', '.join(sorted(named))})"
-        raise ConfigError(f"{shown(file)}: a task file of your own either configures a registered task (its name is "
-                          f"the task id) or derives from exactly one with base: <task id>; its base chain {what}. "
-                          f"Registered tasks: {', '.join(registered)}")  # fmt: skip
+        raise ConfigError(
+            f"{shown(file)}: a task file of your own either configures a registered task (its name is "
+            f"the task id) or derives from exactly one with base: <task id>; its base chain {what}. "
+            f"Registered tasks: {', '.join(registered)}"
+        )
     return named.pop()

@@ -63,7 +63,6 @@ def _fallback(cfg: dict, key: str) -> tuple[Any, str] | None:
     return None
 
 
-
 def all_keys(cfg: dict) -> list[str]:
     """Every option of a resolved config, the ones set only by a constructor or env cfg default included."""
     keys = list(flatten(cfg))

@@ -32,7 +32,7 @@ class Layer:
 def _notes(comments: dict[str, str], section: str = "") -> dict[str, str]:
     """A file's line comments (``key_comments``) of the keys under ``section`` (dotted), relative to it."""
     prefix = f"{section}." if section else ""
-    return {k[len(prefix):]: v for k, v in comments.items() if k.startswith(prefix)}
+    return {k[len(prefix) :]: v for k, v in comments.items() if k.startswith(prefix)}
 
 
 def algo_names(path: ConfigPath) -> list[str]:
@@ -72,8 +72,9 @@ def file_chain(file: Path, kind: str, path: ConfigPath, seen: tuple[str, ...] = 
             raise ConfigError(f"{shown(file)}: circular 'base' chain {' -> '.join(seen + (base,))}")
         found = path.find(kind, base)
         if found is None:
-            raise unknown(f"base of {shown(file)} (a file {kind}/<name>.yaml of the config folders)", base,
-                          path.files(kind))  # fmt: skip
+            raise unknown(
+                f"base of {shown(file)} (a file {kind}/<name>.yaml of the config folders)", base, path.files(kind)
+            )
         out += file_chain(found, kind, path, seen + (base,))
     return out + [(file, data)]
 
@@ -82,8 +83,10 @@ def task_files(task: str, path: ConfigPath) -> list[tuple[Path, dict]]:
     """The task's config file after its ``base`` chain (bases are task files of the config path)."""
     file = task_config_path(task, path)
     if not file.exists():
-        raise ConfigError(f"task '{task}' is registered, but its config file {shown(file)} does not exist (every "
-                          f"task needs one; it may hold just a 'base' line)")  # fmt: skip
+        raise ConfigError(
+            f"task '{task}' is registered, but its config file {shown(file)} does not exist (every "
+            f"task needs one; it may hold just a 'base' line)"
+        )
     files = file_chain(file, "task", path, (task,))
     algos = algo_names(path)
     for file, data in files:
@@ -108,8 +111,10 @@ def algo_files(algo: str, path: ConfigPath) -> list[tuple[str, Path, dict]]:
     for found, data in files:
         extra = [k for k in data if k in PROFILE_KEYS[1:]]
         if extra:
-            raise ConfigError(f"{shown(found)}: an algo file holds run options (and 'base'), not {extra}; a task's "
-                              f"settings for an algorithm go under by_algo in the task's file")  # fmt: skip
+            raise ConfigError(
+                f"{shown(found)}: an algo file holds run options (and 'base'), not {extra}; a task's "
+                f"settings for an algorithm go under by_algo in the task's file"
+            )
     return [(found.stem, found, data) for found, data in files]
 
 
@@ -120,8 +125,9 @@ def _without_profiles(data: dict) -> dict:
 def generic_layers(task: str, path: ConfigPath) -> list[Layer]:
     """Layers 1 and 2: the defaults and what the task sets for every algorithm and device."""
     layers = [Layer(shown(DEFAULT_FILE), load_yaml(DEFAULT_FILE), key_comments(DEFAULT_FILE))]
-    return layers + [Layer(shown(file), _without_profiles(data), key_comments(file))
-                     for file, data in task_files(task, path)]  # fmt: skip
+    return layers + [
+        Layer(shown(file), _without_profiles(data), key_comments(file)) for file, data in task_files(task, path)
+    ]
 
 
 def specific_layers(task: str, algo: str, device_type: str, path: ConfigPath) -> list[Layer]:
@@ -129,13 +135,27 @@ def specific_layers(task: str, algo: str, device_type: str, path: ConfigPath) ->
     files = task_files(task, path)
     comments = {file: key_comments(file) for file, _ in files}  # each task file read once for all its sections
     profiles = [(file, dict((data.get("by_device") or {}).get(device_type) or {})) for file, data in files]
-    layers = [Layer(f"{shown(file)} by_device.{device_type}", {k: v for k, v in p.items() if k != "by_algo"},
-                    _notes(comments[file], f"by_device.{device_type}")) for file, p in profiles]  # fmt: skip
+    layers = [
+        Layer(
+            f"{shown(file)} by_device.{device_type}",
+            {k: v for k, v in p.items() if k != "by_algo"},
+            _notes(comments[file], f"by_device.{device_type}"),
+        )
+        for file, p in profiles
+    ]
     for name, file, data in algo_files(algo, path):
         layers.append(Layer(shown(file), _without_profiles(data), key_comments(file)))
-        layers += [Layer(f"{shown(file)} by_algo.{name}", (d.get("by_algo") or {}).get(name) or {},
-                         _notes(comments[file], f"by_algo.{name}")) for file, d in files]  # fmt: skip
+        layers += [
+            Layer(
+                f"{shown(file)} by_algo.{name}",
+                (d.get("by_algo") or {}).get(name) or {},
+                _notes(comments[file], f"by_algo.{name}"),
+            )
+            for file, d in files
+        ]
         section = f"by_device.{device_type}.by_algo.{name}"
-        layers += [Layer(f"{shown(file)} {section}", (p.get("by_algo") or {}).get(name) or {},
-                         _notes(comments[file], section)) for file, p in profiles]  # fmt: skip
+        layers += [
+            Layer(f"{shown(file)} {section}", (p.get("by_algo") or {}).get(name) or {}, _notes(comments[file], section))
+            for file, p in profiles
+        ]
     return [layer for layer in layers if layer.values]

@@ -31,8 +31,10 @@ def _check_logger(key: str, value: Any) -> str:
         raise ConfigError(f"{key}={value!r} is invalid; expected one of 'tensorboard', 'wandb', 'neptune'")
     package = {"wandb": "wandb", "neptune": "neptune"}.get(value)
     if package and importlib.util.find_spec(package) is None:
-        raise ConfigError(f"{key}={value} needs the '{package}' package, which is not installed; use tensorboard "
-                          f"or pip install {package}")  # fmt: skip
+        raise ConfigError(
+            f"{key}={value} needs the '{package}' package, which is not installed; use tensorboard "
+            f"or pip install {package}"
+        )
     return value
 
 
@@ -42,8 +44,10 @@ def _check_notice(key: str, value: Any) -> str:
     try:
         value.format(task="task", algo="algo")
     except (KeyError, IndexError, ValueError) as err:
-        raise ConfigError(f"{key}={value!r} is invalid ({type(err).__name__}: {err}); only {{task}} and {{algo}} are "
-                          f"filled in (write {{{{ and }}}} for literal braces)") from None
+        raise ConfigError(
+            f"{key}={value!r} is invalid ({type(err).__name__}: {err}); only {{task}} and {{algo}} are "
+            f"filled in (write {{{{ and }}}} for literal braces)"
+        ) from None
     return value
 
 
@@ -52,8 +56,9 @@ def _check_obs_groups(key: str, value: Any) -> dict:
         raise ConfigError(f"{key}={value!r} is invalid; expected a mapping like {{actor: [policy], critic: [policy]}}")
     for name, groups in value.items():
         if not isinstance(groups, list) or not groups or not all(isinstance(g, str) for g in groups):
-            raise ConfigError(f"{key}.{name}={groups!r} is invalid; expected a non-empty list of observation group "
-                              f"names")  # fmt: skip
+            raise ConfigError(
+                f"{key}.{name}={groups!r} is invalid; expected a non-empty list of observation group names"
+            )
     return value
 
 
@@ -105,10 +110,14 @@ def check_combinations(cfg: dict) -> None:
     """Checks that involve several options of a resolved config; each error names all the keys involved."""
     envs, steps = cfg["num_envs"], cfg["runner"]["num_steps_per_env"]
     if envs * steps > MAX_TRANSITIONS:
-        raise ConfigError(f"num_envs x runner.num_steps_per_env = {envs} x {steps} = {envs * steps:,} transitions per "
-                          f"iteration is more than {MAX_TRANSITIONS:,}; lower one of them")  # fmt: skip
+        raise ConfigError(
+            f"num_envs x runner.num_steps_per_env = {envs} x {steps} = {envs * steps:,} transitions per "
+            f"iteration is more than {MAX_TRANSITIONS:,}; lower one of them"
+        )
     mini = cfg["algorithm"].get("num_mini_batches")
     if mini is not None and mini > envs * steps:
-        raise ConfigError(f"algorithm.num_mini_batches={mini} is more than the {envs * steps} transitions per "
-                          f"iteration (num_envs={envs} x runner.num_steps_per_env={steps}): a minibatch would be "
-                          f"empty")  # fmt: skip
+        raise ConfigError(
+            f"algorithm.num_mini_batches={mini} is more than the {envs * steps} transitions per "
+            f"iteration (num_envs={envs} x runner.num_steps_per_env={steps}): a minibatch would be "
+            f"empty"
+        )

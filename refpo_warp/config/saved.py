@@ -44,8 +44,10 @@ def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
     saved = read_saved_config(run_dir)
     for key in IDENTITY_KEYS:
         if key in overrides and str(overrides[key]) != saved[key]:
-            raise ConfigError(f"{key}={overrides[key]} differs from the run's {key}={saved[key]} ({run_dir}); a run "
-                              f"keeps its {key}: choose another run_dir for a new run")  # fmt: skip
+            raise ConfigError(
+                f"{key}={overrides[key]} differs from the run's {key}={saved[key]} ({run_dir}); a run "
+                f"keeps its {key}: choose another run_dir for a new run"
+            )
     try:
         cfg = resolve_config({**flatten(saved), **overrides})
     except ConfigError as err:
@@ -56,8 +58,10 @@ def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
         raise
     changed = fixed_changes(saved, cfg)
     if changed:
-        raise ConfigError(f"the run in {run_dir} keeps its task, algorithm and model, but these options differ from "
-                          f"its config.yaml: {'; '.join(changed)}. Choose another run_dir for a new run")  # fmt: skip
+        raise ConfigError(
+            f"the run in {run_dir} keeps its task, algorithm and model, but these options differ from "
+            f"its config.yaml: {'; '.join(changed)}. Choose another run_dir for a new run"
+        )
     return cfg
 
 

@@ -28,10 +28,14 @@ def class_section(section: str, values: dict) -> dict:
     options = {k: v for k, v in values.items() if k != "class_name"}
     for key in options:
         if key not in params:
-            err = unknown(f"key '{section}.{key}' for {values['class_name']}", f"{section}.{key}",
-                          [f"{section}.{k}" for k in params])  # fmt: skip
-            raise ConfigError(f"{err} (A task file keeps keys that only some algorithms accept under "
-                              f"by_algo.<algo>.{section}.)")  # fmt: skip
+            err = unknown(
+                f"key '{section}.{key}' for {values['class_name']}",
+                f"{section}.{key}",
+                [f"{section}.{k}" for k in params],
+            )
+            raise ConfigError(
+                f"{err} (A task file keeps keys that only some algorithms accept under by_algo.<algo>.{section}.)"
+            )
     return {"class_name": values["class_name"], **check_options(rules_for(cls), options, f"{section}.")}
 
 

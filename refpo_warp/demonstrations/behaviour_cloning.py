@@ -39,9 +39,11 @@ def is_gaussian_actor(actor) -> bool:
 
 def check_clonable(actor, algo: str) -> None:
     if not (is_flow_actor(actor) or is_gaussian_actor(actor)):
-        raise ConfigError(f"algo={algo}: its actor {type(actor).__name__} cannot be cloned; refpo pretrain clones a "
-                          f"flow actor (FlowActor: refpo, fpo, refpo_onestep, fpo_pp, ...) or a Gaussian actor "
-                          f"(ppo)")  # fmt: skip
+        raise ConfigError(
+            f"algo={algo}: its actor {type(actor).__name__} cannot be cloned; refpo pretrain clones a "
+            f"flow actor (FlowActor: refpo, fpo, refpo_onestep, fpo_pp, ...) or a Gaussian actor "
+            f"(ppo)"
+        )
 
 
 def as_obs(flat: torch.Tensor, groups: dict[str, int]) -> TensorDict:
@@ -95,6 +97,7 @@ class CloneOptions:
 def make_loss(actor, tau_sampler: Callable, num_pairs: int):
     """loss(obs, actions) for this actor: the flow's CFM loss (fresh pairs every call) or the Gaussian's NLL."""
     if is_flow_actor(actor):
+
         def loss(obs, actions):
             b, a = actions.shape
             tau = tau_sampler((b, num_pairs)).to(actions.device)
@@ -105,9 +108,15 @@ def make_loss(actor, tau_sampler: Callable, num_pairs: int):
     return lambda obs, actions: gaussian_nll(actor, obs, actions)
 
 
-def clone(actor, loss, groups: dict[str, int], train: tuple[np.ndarray, np.ndarray],
-          validation: tuple[np.ndarray, np.ndarray], options: CloneOptions,
-          report: Callable[[dict], None]) -> dict:  # fmt: skip
+def clone(
+    actor,
+    loss,
+    groups: dict[str, int],
+    train: tuple[np.ndarray, np.ndarray],
+    validation: tuple[np.ndarray, np.ndarray],
+    options: CloneOptions,
+    report: Callable[[dict], None],
+) -> dict:
     """Train ``actor`` on ``train`` by ``loss`` with Adam, early-stopped on ``validation``; ``report`` receives one row
     per epoch. Returns the best epoch, its validation loss and the epochs run; the actor keeps the best weights."""
     device = next(actor.parameters()).device
@@ -141,15 +150,27 @@ def clone(actor, loss, groups: dict[str, int], train: tuple[np.ndarray, np.ndarr
             best, best_epoch, best_state, waited = val, epoch, copy.deepcopy(actor.state_dict()), 0
         else:
             waited += 1
-        report({"epoch": epoch, "train_loss": total / max(batches, 1), "val_loss": val, "best_val_loss": best,
-                "time_s": time.monotonic() - started})  # fmt: skip
+        report(
+            {
+                "epoch": epoch,
+                "train_loss": total / max(batches, 1),
+                "val_loss": val,
+                "best_val_loss": best,
+                "time_s": time.monotonic() - started,
+            }
+        )
         if waited >= options.patience:
             break
     if best_state is not None:
         actor.load_state_dict(best_state)
     actor.eval()
-    return {"best_epoch": best_epoch, "best_val_loss": best, "epochs_run": epoch + 1,
-            "stopped_early": epoch + 1 < options.epochs, "time_s": time.monotonic() - started}  # fmt: skip
+    return {
+        "best_epoch": best_epoch,
+        "best_val_loss": best,
+        "epochs_run": epoch + 1,
+        "stopped_early": epoch + 1 < options.epochs,
+        "time_s": time.monotonic() - started,
+    }
 
 
 @torch.no_grad()
@@ -157,8 +178,10 @@ def validation_loss(actor, loss, groups, obs_v, act_v, options: CloneOptions, ba
     """Mean loss over the held-out transitions, with the same (tau, eps) draws at every epoch."""
     actor.eval()
     with own_random_streams(stream_seed(options.seed, VALIDATION_STREAM), obs_v.device):
-        total = sum(float(loss(as_obs(obs_v[s : s + batch], groups), act_v[s : s + batch])) * len(obs_v[s : s + batch])
-                    for s in range(0, len(obs_v), batch))  # fmt: skip
+        total = sum(
+            float(loss(as_obs(obs_v[s : s + batch], groups), act_v[s : s + batch])) * len(obs_v[s : s + batch])
+            for s in range(0, len(obs_v), batch)
+        )
     return total / len(obs_v)
 
 

@@ -26,13 +26,33 @@ from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real, Text, check_op
 
 SAMPLING = ("stochastic", "mean")
 RULES = {
-    "run_dir": Text(optional=True), "checkpoint": Text(optional=True), "task": Text(optional=True),
-    "demonstrator": OneOf(None, "scripted"), "episodes": Int(1, 10**8), "out": Text(), "noise": Real(0, 1e3),
-    "overwrite": Flag(), "num_envs": Int(1, 1 << 22, optional=True), "seed": Int(0, 2**32 - 1, optional=True),
-    "flow_steps": Int(1, 1000, optional=True), "sample": OneOf(*SAMPLING), "device": RUN_RULES["device"],
-}  # fmt: skip
-DEFAULTS = {"run_dir": None, "checkpoint": None, "task": None, "demonstrator": None, "noise": 0.0, "overwrite": False,
-            "num_envs": None, "seed": None, "flow_steps": None, "sample": "stochastic", "device": "cpu"}  # fmt: skip
+    "run_dir": Text(optional=True),
+    "checkpoint": Text(optional=True),
+    "task": Text(optional=True),
+    "demonstrator": OneOf(None, "scripted"),
+    "episodes": Int(1, 10**8),
+    "out": Text(),
+    "noise": Real(0, 1e3),
+    "overwrite": Flag(),
+    "num_envs": Int(1, 1 << 22, optional=True),
+    "seed": Int(0, 2**32 - 1, optional=True),
+    "flow_steps": Int(1, 1000, optional=True),
+    "sample": OneOf(*SAMPLING),
+    "device": RUN_RULES["device"],
+}
+DEFAULTS = {
+    "run_dir": None,
+    "checkpoint": None,
+    "task": None,
+    "demonstrator": None,
+    "noise": 0.0,
+    "overwrite": False,
+    "num_envs": None,
+    "seed": None,
+    "flow_steps": None,
+    "sample": "stochastic",
+    "device": "cpu",
+}
 MAX_DEFAULT_ENVS = 64
 COLLECT_SEED_OFFSET = 20_000  # collection envs draw other initial states than the run's training and evaluation
 
@@ -55,8 +75,9 @@ def collect_options(flat: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any
     if options["run_dir"] and options["task"]:
         raise ConfigError("task= comes from the run's config.yaml with run_dir=; give one of them")
     if demo and not options["demonstrator"]:
-        raise ConfigError(f"demonstrator.{next(iter(demo))} is an option of a scripted demonstrator "
-                          f"(demonstrator=scripted)")  # fmt: skip
+        raise ConfigError(
+            f"demonstrator.{next(iter(demo))} is an option of a scripted demonstrator (demonstrator=scripted)"
+        )
     out = Path(options["out"])
     if out.exists() and not options["overwrite"]:
         raise ConfigError(f"out={out} exists; pass overwrite=true to replace it, or choose another out")
@@ -75,21 +96,42 @@ def collect(flat: dict[str, Any]) -> dict:
         policy, env, groups, source, task, env_options = _scripted_policy(options, demo, device)
     generator = torch.Generator().manual_seed(env.seed)  # the action noise's own stream
     started = time.monotonic()
-    print(f"[collect] {options['episodes']} episodes of {source['kind']} on {task} ({env.num_envs} envs, action "
-          f"noise {options['noise']:g}) -> {options['out']}", flush=True)  # fmt: skip
+    print(
+        f"[collect] {options['episodes']} episodes of {source['kind']} on {task} ({env.num_envs} envs, action "
+        f"noise {options['noise']:g}) -> {options['out']}",
+        flush=True,
+    )
     episodes = collect_episodes(policy, env, options["episodes"], groups, options["noise"], generator)
     wall = time.monotonic() - started
     action_bound = math.inf if getattr(env.cfg, "action_transform", "clip") == "tanh" else 1.0
     returns = [float(e.rewards.sum()) for e in episodes]
-    refpo = {"task": task, "env": env_options, "obs_groups": groups,
-             "obs_group_dims": {g: int(env.get_observations()[g].shape[-1]) for g in groups},
-             "policy": {**source, "sample": options["sample"], "action_noise_std": options["noise"]},
-             "num_envs": env.num_envs, "collect_time_s": wall}  # fmt: skip
-    path = write_dataset(options["out"], episodes, episodes[0].observations.shape[-1], env.num_actions, action_bound,
-                         refpo, overwrite=options["overwrite"])  # fmt: skip
+    refpo = {
+        "task": task,
+        "env": env_options,
+        "obs_groups": groups,
+        "obs_group_dims": {g: int(env.get_observations()[g].shape[-1]) for g in groups},
+        "policy": {**source, "sample": options["sample"], "action_noise_std": options["noise"]},
+        "num_envs": env.num_envs,
+        "collect_time_s": wall,
+    }
+    path = write_dataset(
+        options["out"],
+        episodes,
+        episodes[0].observations.shape[-1],
+        env.num_actions,
+        action_bound,
+        refpo,
+        overwrite=options["overwrite"],
+    )
     lengths = [e.length for e in episodes]
-    return {"path": str(path), "episodes": len(episodes), "steps": sum(lengths), "wall_s": wall,
-            "return_mean": sum(returns) / len(returns), "length_mean": sum(lengths) / len(lengths)}  # fmt: skip
+    return {
+        "path": str(path),
+        "episodes": len(episodes),
+        "steps": sum(lengths),
+        "wall_s": wall,
+        "return_mean": sum(returns) / len(returns),
+        "length_mean": sum(lengths) / len(lengths),
+    }
 
 
 def _num_envs(options: dict) -> int:
@@ -126,9 +168,16 @@ def _run_policy(options: dict, device: str):
             return actor(obs, stochastic_output=stochastic)
 
     torch.manual_seed(seed)  # the policy's own sampling noise
-    source = {"kind": f"the policy of {run_dir}", "run_dir": str(run_dir.resolve()), "checkpoint": checkpoint,
-              "algo": cfg["algo"], "actor_class": cfg["actor"]["class_name"], "flow_steps": steps,
-              "iteration": runner.current_learning_iteration, "seed": seed}  # fmt: skip
+    source = {
+        "kind": f"the policy of {run_dir}",
+        "run_dir": str(run_dir.resolve()),
+        "checkpoint": checkpoint,
+        "algo": cfg["algo"],
+        "actor_class": cfg["actor"]["class_name"],
+        "flow_steps": steps,
+        "iteration": runner.current_learning_iteration,
+        "seed": seed,
+    }
     return policy, env, list(cfg["runner"]["obs_groups"]["actor"]), source, cfg["task"], dict(cfg["env"])
 
 
@@ -138,8 +187,10 @@ def _scripted_policy(options: dict, demo: dict, device: str):
     get_task(task)  # an unknown task id names the closest one
     module = family_module(task, "demonstrator")
     if module is None:
-        raise ConfigError(f"task={task} has no scripted demonstrator (tasks/<family>/demonstrator.py); collect from a "
-                          f"trained run with run_dir=...")  # fmt: skip
+        raise ConfigError(
+            f"task={task} has no scripted demonstrator (tasks/<family>/demonstrator.py); collect from a "
+            f"trained run with run_dir=..."
+        )
     for key in demo:
         if key not in module.OPTIONS:
             raise unknown(f"option of {task}'s demonstrator (demonstrator.<option>)", key, module.OPTIONS)

@@ -93,8 +93,15 @@ def box_spaces(obs_dim: int, action_dim: int, action_bound: float):
     return obs, action
 
 
-def write_dataset(path: str | Path, episodes: list[Episode], obs_dim: int, action_dim: int, action_bound: float,
-                  refpo: dict, overwrite: bool = False) -> Path:  # fmt: skip
+def write_dataset(
+    path: str | Path,
+    episodes: list[Episode],
+    obs_dim: int,
+    action_dim: int,
+    action_bound: float,
+    refpo: dict,
+    overwrite: bool = False,
+) -> Path:
     """Write ``episodes`` as a Minari dataset folder at ``path``, atomically: built in a temp folder beside it, then
     renamed into place, so ``path`` is the old dataset or the new one, never a part. An existing ``path`` is refused
     unless ``overwrite``."""
@@ -111,20 +118,24 @@ def write_dataset(path: str | Path, episodes: list[Episode], obs_dim: int, actio
     os.chmod(tmp, 0o755)  # mkdtemp creates 0700; a dataset is shared like any written folder
     try:
         obs_space, action_space = box_spaces(obs_dim, action_dim, action_bound)
-        storage = storage_class.new(tmp, observation_space=obs_space, action_space=action_space,
-                                    data_format=DATA_FORMAT)  # fmt: skip
+        storage = storage_class.new(
+            tmp, observation_space=obs_space, action_space=action_space, data_format=DATA_FORMAT
+        )
         storage.update_episodes(_buffer(i, e) for i, e in enumerate(episodes))
         from minari import __version__ as minari_version
 
         returns = [float(e.rewards.sum()) for e in episodes]
-        storage.update_metadata({
-            "dataset_id": f"refpo/{refpo.get('task', 'task')}/{path.name}-v0",
-            "minari_version": minari_version,
-            "algorithm_name": str(refpo.get("policy", {}).get("algo", "unknown")),
-            "author": {"refpo collect"},
-            "ref_min_score": min(returns), "ref_max_score": max(returns),
-            REFPO_KEY: refpo,
-        })  # fmt: skip
+        storage.update_metadata(
+            {
+                "dataset_id": f"refpo/{refpo.get('task', 'task')}/{path.name}-v0",
+                "minari_version": minari_version,
+                "algorithm_name": str(refpo.get("policy", {}).get("algo", "unknown")),
+                "author": {"refpo collect"},
+                "ref_min_score": min(returns),
+                "ref_max_score": max(returns),
+                REFPO_KEY: refpo,
+            }
+        )
         if path.exists():  # overwrite: the old folder out of the way, the new one in, then the old one removed
             old = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.old.", suffix=".tmp"))
             os.replace(path, old / path.name)
@@ -141,20 +152,30 @@ def write_dataset(path: str | Path, episodes: list[Episode], obs_dim: int, actio
 def _buffer(i: int, e: Episode):
     from minari.data_collector.episode_buffer import EpisodeBuffer
 
-    return EpisodeBuffer(id=i, observations=e.observations.astype(np.float32), actions=e.actions.astype(np.float32),
-                         rewards=e.rewards.astype(np.float32), terminations=e.terminations.astype(bool),
-                         truncations=e.truncations.astype(bool), infos={})  # fmt: skip
+    return EpisodeBuffer(
+        id=i,
+        observations=e.observations.astype(np.float32),
+        actions=e.actions.astype(np.float32),
+        rewards=e.rewards.astype(np.float32),
+        terminations=e.terminations.astype(bool),
+        truncations=e.truncations.astype(bool),
+        infos={},
+    )
 
 
 def read_dataset(path: str | Path) -> Dataset:
     """Read and check a Minari dataset folder; ``DataFileError`` naming the file for every problem."""
     path = Path(path).absolute()
     if not path.exists():
-        raise DataFileError(f"dataset={path}: no such dataset (a folder written by refpo collect, or any Minari "
-                            f"dataset's data folder, holding {METADATA_FILE} and main_data.hdf5)")  # fmt: skip
+        raise DataFileError(
+            f"dataset={path}: no such dataset (a folder written by refpo collect, or any Minari "
+            f"dataset's data folder, holding {METADATA_FILE} and main_data.hdf5)"
+        )
     if not path.is_dir():
-        raise DataFileError(f"dataset={path}: not a Minari dataset (a folder holding {METADATA_FILE} and "
-                            f"main_data.hdf5, e.g. one written by refpo collect); found a file")  # fmt: skip
+        raise DataFileError(
+            f"dataset={path}: not a Minari dataset (a folder holding {METADATA_FILE} and "
+            f"main_data.hdf5, e.g. one written by refpo collect); found a file"
+        )
     meta_path = path / METADATA_FILE
     if not meta_path.is_file():
         raise DataFileError(f"{path}: not a Minari dataset: no {METADATA_FILE} in it")
@@ -166,12 +187,16 @@ def read_dataset(path: str | Path) -> Dataset:
         raise DataFileError(f"{meta_path}: not a Minari metadata file (it holds a {type(metadata).__name__})")
     data_format = metadata.get("data_format")
     if data_format != DATA_FORMAT:
-        raise DataFileError(f"{meta_path}: unknown or unsupported data_format {data_format!r}; refpo_warp reads "
-                            f"Minari's '{DATA_FORMAT}' datasets")  # fmt: skip
+        raise DataFileError(
+            f"{meta_path}: unknown or unsupported data_format {data_format!r}; refpo_warp reads "
+            f"Minari's '{DATA_FORMAT}' datasets"
+        )
     missing = [k for k in ("observation_space", "action_space") if not isinstance(metadata.get(k), str)]
     if missing:  # Minari would gym.make() the env the file names to find them: that runs code; refuse instead
-        raise DataFileError(f"{meta_path}: names no {' and no '.join(missing)}; refpo_warp needs both spaces in the "
-                            f"file (it does not build the environment a dataset names)")  # fmt: skip
+        raise DataFileError(
+            f"{meta_path}: names no {' and no '.join(missing)}; refpo_warp needs both spaces in the "
+            f"file (it does not build the environment a dataset names)"
+        )
     storage_class = _minari()
     try:
         storage = storage_class.read(path)
@@ -181,8 +206,9 @@ def read_dataset(path: str | Path) -> Dataset:
     except DataFileError:
         raise
     except Exception as err:  # noqa: BLE001  (h5py and Minari raise many types for a damaged file; one message)
-        raise DataFileError(f"{path}: cannot be read as a Minari dataset ({type(err).__name__}: "
-                            f"{' '.join(str(err).split())[:300]})") from None  # fmt: skip
+        raise DataFileError(
+            f"{path}: cannot be read as a Minari dataset ({type(err).__name__}: {' '.join(str(err).split())[:300]})"
+        ) from None
     obs_dim, action_dim = _box_dim(path, "observation_space", obs_space), _box_dim(path, "action_space", action_space)
     if not episodes:
         raise DataFileError(f"{path}: the dataset holds no episode")
@@ -205,8 +231,9 @@ def _episode(raw: dict) -> Episode:
             raise DataFileError(f"episode {raw.get('id')}: '{key}' is {type(value).__name__}, not one array")
         return value
 
-    return Episode(array("observations"), array("actions"), array("rewards"), array("terminations"),
-                   array("truncations"))  # fmt: skip
+    return Episode(
+        array("observations"), array("actions"), array("rewards"), array("terminations"), array("truncations")
+    )
 
 
 def _check_episode(path: Path, i: int, e: Episode, obs_dim: int, action_dim: int) -> None:
@@ -217,8 +244,10 @@ def _check_episode(path: Path, i: int, e: Episode, obs_dim: int, action_dim: int
     expected = {"observations": (t + 1, obs_dim), "actions": (t, action_dim), "terminations": (t,), "truncations": (t,)}
     for key, shape in expected.items():
         if getattr(e, key).shape != shape:
-            raise DataFileError(f"{where}: '{key}' has shape {getattr(e, key).shape}, expected {shape} "
-                                f"({t} steps, observation dim {obs_dim}, action dim {action_dim})")  # fmt: skip
+            raise DataFileError(
+                f"{where}: '{key}' has shape {getattr(e, key).shape}, expected {shape} "
+                f"({t} steps, observation dim {obs_dim}, action dim {action_dim})"
+            )
     for key in ("observations", "actions", "rewards"):
         values = np.asarray(getattr(e, key), dtype=np.float64)
         if not np.isfinite(values).all():
@@ -226,11 +255,14 @@ def _check_episode(path: Path, i: int, e: Episode, obs_dim: int, action_dim: int
             raise DataFileError(f"{where}: '{key}' holds {bad} NaN or infinite value(s)")
     ends = np.asarray(e.terminations, bool) | np.asarray(e.truncations, bool)
     if not ends[-1]:
-        raise DataFileError(f"{where} is truncated mid-episode: its last step ({t}) is neither a termination nor a "
-                            f"truncation (a partly written or cut dataset)")  # fmt: skip
+        raise DataFileError(
+            f"{where} is truncated mid-episode: its last step ({t}) is neither a termination nor a "
+            f"truncation (a partly written or cut dataset)"
+        )
     if ends[:-1].any():
-        raise DataFileError(f"{where}: ends at step {int(np.argmax(ends)) + 1} of {t} and goes on (two episodes in "
-                            f"one)")  # fmt: skip
+        raise DataFileError(
+            f"{where}: ends at step {int(np.argmax(ends)) + 1} of {t} and goes on (two episodes in one)"
+        )
 
 
 def check_spaces(dataset: Dataset, task: str, obs_dim: int, action_dim: int) -> None:
@@ -239,6 +271,8 @@ def check_spaces(dataset: Dataset, task: str, obs_dim: int, action_dim: int) -> 
     if recorded is not None and recorded != task:
         raise DataFileError(f"{dataset.path}: recorded on task {recorded}; this run's task is {task}")
     if (dataset.obs_dim, dataset.action_dim) != (obs_dim, action_dim):
-        raise DataFileError(f"{dataset.path}: its spaces (observation dim {dataset.obs_dim}, action dim "
-                            f"{dataset.action_dim}) are not task {task}'s (observation dim {obs_dim}, action dim "
-                            f"{action_dim})")  # fmt: skip
+        raise DataFileError(
+            f"{dataset.path}: its spaces (observation dim {dataset.obs_dim}, action dim "
+            f"{dataset.action_dim}) are not task {task}'s (observation dim {obs_dim}, action dim "
+            f"{action_dim})"
+        )

@@ -107,10 +107,13 @@ def _clone_and_evaluate(cfg, runner, actor, groups, dataset, train_data, val_dat
     num_pairs = p["num_pairs"] or int(getattr(alg, "num_mc_samples", 8))
     loss = make_loss(actor, tau_sampler(alg), num_pairs)
     kind = "flow (CFM loss)" if is_flow_actor(actor) else "Gaussian (max. likelihood)"
-    print(f"[pretrain] {cfg['task']} / {cfg['algo']}: cloning the {kind} actor from {dataset.path} "
-          f"({len(dataset.episodes)} episodes, {len(train_data[0]):,} training and {len(val_data[0]):,} validation "
-          f"transitions; observation normaliser {'from the data' if normalised else 'off'}), at most {p['epochs']} "
-          f"epochs, run dir {run_dir}", flush=True)  # fmt: skip
+    print(
+        f"[pretrain] {cfg['task']} / {cfg['algo']}: cloning the {kind} actor from {dataset.path} "
+        f"({len(dataset.episodes)} episodes, {len(train_data[0]):,} training and {len(val_data[0]):,} validation "
+        f"transitions; observation normaliser {'from the data' if normalised else 'off'}), at most {p['epochs']} "
+        f"epochs, run dir {run_dir}",
+        flush=True,
+    )
     writer = _tensorboard(run_dir)
 
     def report(row: dict) -> None:
@@ -119,13 +122,19 @@ def _clone_and_evaluate(cfg, runner, actor, groups, dataset, train_data, val_dat
         if writer is not None:
             writer.add_scalar("BC/train_loss", row["train_loss"], row["epoch"])
             writer.add_scalar("BC/val_loss", row["val_loss"], row["epoch"])
-        print(f"[epoch {row['epoch']}/{p['epochs'] - 1}] train {row['train_loss']:.4f}  validation "
-              f"{row['val_loss']:.4f} (best {row['best_val_loss']:.4f})  {row['time_s']:.0f} s", flush=True)  # fmt: skip
+        print(
+            f"[epoch {row['epoch']}/{p['epochs'] - 1}] train {row['train_loss']:.4f}  validation "
+            f"{row['val_loss']:.4f} (best {row['best_val_loss']:.4f})  {row['time_s']:.0f} s",
+            flush=True,
+        )
 
     options = CloneOptions(p["epochs"], p["batch_size"], p["learning_rate"], p["patience"], num_pairs, cfg["seed"])
     summary = clone(actor, loss, groups, train_data, val_data, options, report)
-    print(f"[pretrain] best validation loss {summary['best_val_loss']:.4f} at epoch {summary['best_epoch']} "
-          f"({summary['epochs_run']} epochs, {summary['time_s']:.0f} s)", flush=True)  # fmt: skip
+    print(
+        f"[pretrain] best validation loss {summary['best_val_loss']:.4f} at epoch {summary['best_epoch']} "
+        f"({summary['epochs_run']} epochs, {summary['time_s']:.0f} s)",
+        flush=True,
+    )
     checkpoint = save_checkpoint(runner, cfg, run_dir / CHECKPOINT, {**summary, "dataset": str(dataset.path)})
     results = evaluate_clone(cfg, runner, actor, run_dir, summary, dataset)
     if writer is not None:
@@ -155,9 +164,13 @@ def save_checkpoint(runner, cfg: dict, path: Path, pretrain: dict) -> Path:
     saved = runner.alg.save()
     saved["iter"] = 0
     saved["infos"] = None
-    saved[META_KEY] = {"task": cfg["task"], "algo": cfg["algo"], "env_steps": 0, "time_s": 0.0,
-                       "pretrain": {k: v for k, v in pretrain.items()
-                                    if isinstance(v, (int, float, str, bool))}}  # fmt: skip
+    saved[META_KEY] = {
+        "task": cfg["task"],
+        "algo": cfg["algo"],
+        "env_steps": 0,
+        "time_s": 0.0,
+        "pretrain": {k: v for k, v in pretrain.items() if isinstance(v, (int, float, str, bool))},
+    }
     with atomic_write(path) as f:
         torch.save(saved, f)
     return path
@@ -171,15 +184,29 @@ def evaluate_clone(cfg: dict, runner, actor, run_dir: Path, summary: dict, datas
     with own_random_streams(stream_seed(cfg["seed"], FINAL_EVALUATION, 0), runner.device), torch.inference_mode():
         results, _ = evaluate_actor(cfg, actor, make_eval_envs(cfg), list(cfg["eval"]["flow_steps"]))
     lengths = [e.length for e in dataset.episodes]
-    out = {"task": cfg["task"], "algo": cfg["algo"], "seed": cfg["seed"], "checkpoint_iteration": 0, "env_steps": 0,
-           "kind": "behaviour cloning", "pretrain": summary,
-           "dataset": {"path": str(dataset.path), "episodes": len(lengths), "steps": sum(lengths),
-                       "return_mean": sum(float(e.rewards.sum()) for e in dataset.episodes) / len(lengths),
-                       "length_mean": sum(lengths) / len(lengths), "policy": dataset.refpo.get("policy", {})},
-           "protocol": ({"initial_noise": cfg["eval"]["initial_noise"],
-                         "perturbation": bool(cfg["eval"]["perturbation"])}
-                        if is_flow_actor(actor) else {"mean_action": True}),
-           "results": results}  # fmt: skip
+    out = {
+        "task": cfg["task"],
+        "algo": cfg["algo"],
+        "seed": cfg["seed"],
+        "checkpoint_iteration": 0,
+        "env_steps": 0,
+        "kind": "behaviour cloning",
+        "pretrain": summary,
+        "dataset": {
+            "path": str(dataset.path),
+            "episodes": len(lengths),
+            "steps": sum(lengths),
+            "return_mean": sum(float(e.rewards.sum()) for e in dataset.episodes) / len(lengths),
+            "length_mean": sum(lengths) / len(lengths),
+            "policy": dataset.refpo.get("policy", {}),
+        },
+        "protocol": (
+            {"initial_noise": cfg["eval"]["initial_noise"], "perturbation": bool(cfg["eval"]["perturbation"])}
+            if is_flow_actor(actor)
+            else {"mean_action": True}
+        ),
+        "results": results,
+    }
     hooks = family_evaluation(cfg["task"])
     if hooks is not None and hasattr(hooks, "dataset_summary"):
         out["dataset"].update(hooks.dataset_summary(dataset))

@@ -26,9 +26,15 @@ def flat_obs(obs: TensorDict | dict, groups: list[str]) -> torch.Tensor:
 
 
 @torch.inference_mode()
-def collect_episodes(policy: Callable[[TensorDict], torch.Tensor], env, episodes: int, groups: list[str],
-                     noise_std: float = 0.0, generator: torch.Generator | None = None,
-                     progress_every_s: float = 10.0) -> list[Episode]:  # fmt: skip
+def collect_episodes(
+    policy: Callable[[TensorDict], torch.Tensor],
+    env,
+    episodes: int,
+    groups: list[str],
+    noise_std: float = 0.0,
+    generator: torch.Generator | None = None,
+    progress_every_s: float = 10.0,
+) -> list[Episode]:
     """``episodes`` whole episodes of ``policy`` (plus Gaussian action noise of std ``noise_std``, drawn from
     ``generator``) on ``env``; the noisy action is the one stepped and stored."""
     n, horizon = env.num_envs, int(env.max_episode_length)
@@ -66,9 +72,15 @@ def collect_episodes(policy: Callable[[TensorDict], torch.Tensor], env, episodes
                 steps = int(length[i])
                 if kept[i] < quota and len(out) < episodes:
                     obs_buf[steps, i] = final[i]
-                    out.append(Episode(obs_buf[: steps + 1, i].numpy().copy(), act_buf[:steps, i].numpy().copy(),
-                                       rew_buf[:steps, i].numpy().copy(), term_buf[:steps, i].numpy().copy(),
-                                       trunc_buf[:steps, i].numpy().copy()))  # fmt: skip
+                    out.append(
+                        Episode(
+                            obs_buf[: steps + 1, i].numpy().copy(),
+                            act_buf[:steps, i].numpy().copy(),
+                            rew_buf[:steps, i].numpy().copy(),
+                            term_buf[:steps, i].numpy().copy(),
+                            trunc_buf[:steps, i].numpy().copy(),
+                        )
+                    )
                     kept[i] += 1
             length[dones] = 0
         if time.monotonic() - shown >= progress_every_s:

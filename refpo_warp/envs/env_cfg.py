@@ -31,9 +31,13 @@ class EnvCfg:
     ``ActionChunkWrapper`` whose actions are ``action_chunk`` env actions run open-loop (ReinFlow's horizon)."""
 
     # Valid values of the fields (refpo_warp.utils.option_rules); a subclass adds the rules of its own fields likewise.
-    option_rules = {"max_episode_length": Int(1, 10_000_000), "graph_capture": Flag(),
-                    "action_transform": OneOf(ACTION_TRANSFORMS), "reset_group_size": Int(1, 1_000_000),
-                    "action_chunk": Int(1, 1000, fixed=True)}  # the chunk sets the policy's action size  # fmt: skip
+    option_rules = {
+        "max_episode_length": Int(1, 10_000_000),
+        "graph_capture": Flag(),
+        "action_transform": OneOf(ACTION_TRANSFORMS),
+        "reset_group_size": Int(1, 1_000_000),
+        "action_chunk": Int(1, 1000, fixed=True),
+    }  # the chunk sets the policy's action size
 
     def __post_init__(self) -> None:
         values = {f.name: getattr(self, f.name) for f in fields(self)}

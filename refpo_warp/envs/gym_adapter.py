@@ -43,8 +43,13 @@ class GymVectorEnv(gym.vector.VectorEnv):
             squashes them with tanh (``env.action_transform``).
     """
 
-    def __init__(self, env, obs_group: str = "policy", autoreset_mode: AutoresetMode = AutoresetMode.NEXT_STEP,
-                 action_bound: float | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        env,
+        obs_group: str = "policy",
+        autoreset_mode: AutoresetMode = AutoresetMode.NEXT_STEP,
+        action_bound: float | None = None,
+    ) -> None:
         if autoreset_mode not in AUTORESET_MODES:
             raise ValueError(f"autoreset_mode must be one of {[m.name for m in AUTORESET_MODES]}, got {autoreset_mode}")
         groups = list(env.get_observations().keys())
@@ -60,8 +65,9 @@ class GymVectorEnv(gym.vector.VectorEnv):
         if action_bound is None:
             action_bound = np.inf if getattr(env.cfg, "action_transform", "clip") == "tanh" else 1.0
         self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_dim,), dtype=np.float32)
-        self.single_action_space = gym.spaces.Box(-action_bound, action_bound, shape=(env.num_actions,),
-                                                  dtype=np.float32)  # fmt: skip
+        self.single_action_space = gym.spaces.Box(
+            -action_bound, action_bound, shape=(env.num_actions,), dtype=np.float32
+        )
         self.observation_space = gym.vector.utils.batch_space(self.single_observation_space, self.num_envs)
         self.action_space = gym.vector.utils.batch_space(self.single_action_space, self.num_envs)
         self._reset_pending = np.zeros(self.num_envs, dtype=bool)  # NEXT_STEP: envs to reset at the next step

@@ -29,16 +29,24 @@ class RandomStreams:
         """Restart every stream from ``seed``."""
         n = self.rng.shape[0]
         if self.group_size > 1:
-            wp.launch(_seed_group_streams, dim=n, device=self.device,
-                      inputs=[seed, self.group_size, self._group_base, self._episode_index, self.rng])  # fmt: skip
+            wp.launch(
+                _seed_group_streams,
+                dim=n,
+                device=self.device,
+                inputs=[seed, self.group_size, self._group_base, self._episode_index, self.rng],
+            )
         else:
             wp.launch(_seed_streams, dim=n, inputs=[seed, self.rng], device=self.device)
 
     def next_episode(self, started) -> None:
         """After the envs in the bool array ``started`` drew their reset: point them at their next episode's stream."""
         if self.group_size > 1:
-            wp.launch(_next_group_streams, dim=self.rng.shape[0], device=self.device,
-                      inputs=[started, self._group_base, self._episode_index, self.rng])  # fmt: skip
+            wp.launch(
+                _next_group_streams,
+                dim=self.rng.shape[0],
+                device=self.device,
+                inputs=[started, self._group_base, self._episode_index, self.rng],
+            )
 
 
 @wp.kernel
@@ -48,8 +56,13 @@ def _seed_streams(seed: int, rng: wp.array(dtype=wp.uint32)):
 
 
 @wp.kernel
-def _seed_group_streams(seed: int, group_size: int, base: wp.array(dtype=wp.int32),
-                        episode: wp.array(dtype=wp.int32), rng: wp.array(dtype=wp.uint32)):  # fmt: skip
+def _seed_group_streams(
+    seed: int,
+    group_size: int,
+    base: wp.array(dtype=wp.int32),
+    episode: wp.array(dtype=wp.int32),
+    rng: wp.array(dtype=wp.uint32),
+):
     i = wp.tid()
     base[i] = wp.int32(wp.rand_init(seed, i // group_size))
     episode[i] = 0
@@ -57,8 +70,12 @@ def _seed_group_streams(seed: int, group_size: int, base: wp.array(dtype=wp.int3
 
 
 @wp.kernel
-def _next_group_streams(started: wp.array(dtype=wp.bool), base: wp.array(dtype=wp.int32),
-                        episode: wp.array(dtype=wp.int32), rng: wp.array(dtype=wp.uint32)):  # fmt: skip
+def _next_group_streams(
+    started: wp.array(dtype=wp.bool),
+    base: wp.array(dtype=wp.int32),
+    episode: wp.array(dtype=wp.int32),
+    rng: wp.array(dtype=wp.uint32),
+):
     i = wp.tid()
     if started[i]:
         episode[i] = episode[i] + 1

@@ -78,8 +78,10 @@ class WarpVecEnv(VecEnv):
         if num_envs < 1:
             raise ValueError(f"num_envs must be >= 1, got {num_envs}")
         if self.step_finishes_episode and (self.reward_terms or self.task_truncation):
-            raise TypeError(f"{type(self).__name__}: step_finishes_episode cannot be combined with reward_terms or "
-                            "task_truncation (the base's finish kernels handle those)")
+            raise TypeError(
+                f"{type(self).__name__}: step_finishes_episode cannot be combined with reward_terms or "
+                "task_truncation (the base's finish kernels handle those)"
+            )
         init_warp()
         self.cfg = cfg
         self.num_envs = int(num_envs)
@@ -193,8 +195,9 @@ class WarpVecEnv(VecEnv):
             extras["log"] = {f"Episode/{name}": buf[dones] for name, buf in self._metrics.items()}
             if self.reward_terms:
                 ended_terms = self._ended_terms[dones]
-                extras["log"].update({f"Episode_Reward/{t}": ended_terms[:, k]
-                                      for k, t in enumerate(self.reward_terms)})  # fmt: skip
+                extras["log"].update(
+                    {f"Episode_Reward/{t}": ended_terms[:, k] for k, t in enumerate(self.reward_terms)}
+                )
         return self._publish_obs(), self._rewards.clone(), dones, extras
 
     @property
@@ -208,9 +211,12 @@ class WarpVecEnv(VecEnv):
         if mask is None:
             mask = wp.from_torch(torch.ones(self.num_envs, dtype=torch.bool, device=self.device), dtype=wp.bool)
         b = self.buffers
-        wp.launch(restart_episodes, dim=self.num_envs, device=self.wp_device,
-                  inputs=[mask, len(self.reward_terms), b.episode_length, self._term_sums,
-                          b.terminated, b.truncated, b.done])  # fmt: skip
+        wp.launch(
+            restart_episodes,
+            dim=self.num_envs,
+            device=self.wp_device,
+            inputs=[mask, len(self.reward_terms), b.episode_length, self._term_sums, b.terminated, b.truncated, b.done],
+        )
 
     def enable_final_observations(self) -> None:
         """Make every step also write the observation each env had before its auto-reset (``final_observations``).
@@ -264,13 +270,27 @@ class WarpVecEnv(VecEnv):
             self.transform_actions(b.actions)
         self._step_impl()
         if not self.step_finishes_episode:
-            wp.launch(finish_step, dim=self.num_envs, device=self.wp_device,
-                      inputs=[self.max_episode_length, int(self.task_truncation), b.terminated, b.truncated,
-                              b.episode_length],
-                      outputs=[b.done])  # fmt: skip
+            wp.launch(
+                finish_step,
+                dim=self.num_envs,
+                device=self.wp_device,
+                inputs=[
+                    self.max_episode_length,
+                    int(self.task_truncation),
+                    b.terminated,
+                    b.truncated,
+                    b.episode_length,
+                ],
+                outputs=[b.done],
+            )
             if self.reward_terms:
-                wp.launch(finish_reward_terms, dim=(self.num_envs, len(self.reward_terms)), device=self.wp_device,
-                          inputs=[b.reward_terms, b.done, self._term_sums], outputs=[self._ended_terms_view])  # fmt: skip
+                wp.launch(
+                    finish_reward_terms,
+                    dim=(self.num_envs, len(self.reward_terms)),
+                    device=self.wp_device,
+                    inputs=[b.reward_terms, b.done, self._term_sums],
+                    outputs=[self._ended_terms_view],
+                )
             if self.record_final_obs:
                 self._observe_final()
             self._reset_impl(b.done)

@@ -166,8 +166,16 @@ def figure_grid(run_dirs: list[Path], path: Path) -> Path | None:
                 plt.close(fig)
                 raise DataFileError(f"{Path(run_dir) / name}: cannot be read as a figure ({err})") from None
             axes[r, c].axis("off")
-        axes[r, 0].text(-0.04, 0.5, _label(Path(run_dir)), transform=axes[r, 0].transAxes, rotation=90,
-                        va="center", ha="right", fontsize=10)  # fmt: skip
+        axes[r, 0].text(
+            -0.04,
+            0.5,
+            _label(Path(run_dir)),
+            transform=axes[r, 0].transAxes,
+            rotation=90,
+            va="center",
+            ha="right",
+            fontsize=10,
+        )
     fig.tight_layout()
     save_figure(fig, path, dpi=80)
     plt.close(fig)

@@ -64,8 +64,13 @@ def eval_num_envs(cfg: dict, interval: bool = False) -> int:
 
 def make_eval_env(cfg: dict, interval: bool = False):
     """The evaluation env of a run's config (its ``eval.env`` options over ``env``)."""
-    return make_env(cfg["task"], num_envs=eval_num_envs(cfg, interval), device=resolve_device(cfg["device"]),
-                    seed=cfg["seed"] + EVAL_SEED_OFFSET, **{**cfg["env"], **cfg["eval"]["env"]})  # fmt: skip
+    return make_env(
+        cfg["task"],
+        num_envs=eval_num_envs(cfg, interval),
+        device=resolve_device(cfg["device"]),
+        seed=cfg["seed"] + EVAL_SEED_OFFSET,
+        **{**cfg["env"], **cfg["eval"]["env"]},
+    )
 
 
 def make_eval_envs(cfg: dict, interval: bool = False) -> dict:
@@ -88,8 +93,9 @@ def evaluate_actor(cfg: dict, actor, envs, flow_steps: list[int], record_obs: in
     results, visited = {}, None
     for name, n, noise in settings:
         policy = make_policy(actor, n, noise, cfg["eval"]["perturbation"])
-        episodes = run_episodes(policy, envs[noise], max_steps=cfg["eval"]["max_steps"],
-                                record_obs=record_obs if visited is None else 0)  # fmt: skip
+        episodes = run_episodes(
+            policy, envs[noise], max_steps=cfg["eval"]["max_steps"], record_obs=record_obs if visited is None else 0
+        )
         visited = episodes.pop("observations", visited)
         summary = summarize(episodes)
         if hooks is not None and hasattr(hooks, "summarize"):
@@ -106,8 +112,14 @@ def tau_sampler(alg):
 
     if not hasattr(alg, "tau_sampling"):
         return partial(sample_tau, mode="uniform", num_flow_steps=1, logit_mean=0.0, logit_std=1.0, device="cpu")
-    return partial(sample_tau, mode=alg.tau_sampling, num_flow_steps=alg.actor.num_flow_steps,
-                   logit_mean=alg.tau_logit_mean, logit_std=alg.tau_logit_std, device="cpu")  # fmt: skip
+    return partial(
+        sample_tau,
+        mode=alg.tau_sampling,
+        num_flow_steps=alg.actor.num_flow_steps,
+        logit_mean=alg.tau_logit_mean,
+        logit_std=alg.tau_logit_std,
+        device="cpu",
+    )
 
 
 def flow_diagnostics(alg, actor, observations, action_transform: str | None, seed: int) -> dict:
@@ -122,8 +134,9 @@ def flow_diagnostics(alg, actor, observations, action_transform: str | None, see
         out["straightness_error_eval"] = fd.straightness_error(actor, observations, tau_sampler(alg))
     if hasattr(actor, "velocity") and hasattr(actor.velocity, "project_obs"):
         generator = torch.Generator().manual_seed(seed)
-        one_step = fd.one_step_consistency(actor, observations, actor.num_flow_steps, action_transform,
-                                           generator=generator)  # fmt: skip
+        one_step = fd.one_step_consistency(
+            actor, observations, actor.num_flow_steps, action_transform, generator=generator
+        )
         out.update({f"{k}_eval": v for k, v in one_step.items()})
         out.update(fd.jacobian_statistics(actor, observations, num_steps=actor.num_flow_steps))
     return out

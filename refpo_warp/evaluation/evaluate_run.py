@@ -38,8 +38,14 @@ from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.rng import FINAL_EVALUATION, own_random_streams, stream_seed
 
 DIAGNOSTIC_OBSERVATIONS = 1024  # on-policy observations kept from the evaluation for the flow diagnostics
-TRAINING_MEANS = ("straightness_error", "explosion_rate", "explosion_rate_pair", "clip_fraction", "one_step_error",
-                  "one_step_ratio")
+TRAINING_MEANS = (
+    "straightness_error",
+    "explosion_rate",
+    "explosion_rate_pair",
+    "clip_fraction",
+    "one_step_error",
+    "one_step_ratio",
+)
 EVAL_FILE, PREVIOUS_EVAL_FILE = "eval.json", "eval.prev.json"
 
 
@@ -73,8 +79,13 @@ def write_eval_json(data: dict, run_dir: Path) -> Path | None:
     return kept
 
 
-def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, checkpoint: str | Path | None = None,
-                 overrides: dict | None = None) -> dict:  # fmt: skip
+def evaluate_run(
+    run_dir: str | Path,
+    cfg: dict | None = None,
+    runner=None,
+    checkpoint: str | Path | None = None,
+    overrides: dict | None = None,
+) -> dict:
     """Evaluate a run's policy (the in-memory one, or a checkpoint) and write ``eval.json`` and the figures.
 
     Without ``checkpoint`` the newest usable checkpoint of the run is evaluated (newer unusable ones are skipped
@@ -97,8 +108,9 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
     flow = is_flow(actor)
     iteration = runner.current_learning_iteration
     with own_random_streams(stream_seed(cfg["seed"], FINAL_EVALUATION, iteration), runner.device):
-        results, visited = evaluate_actor(cfg, actor, envs, cfg["eval"]["flow_steps"],
-                                          record_obs=DIAGNOSTIC_OBSERVATIONS if flow else 0)  # fmt: skip
+        results, visited = evaluate_actor(
+            cfg, actor, envs, cfg["eval"]["flow_steps"], record_obs=DIAGNOSTIC_OBSERVATIONS if flow else 0
+        )
         on_policy = flow_diagnostics(runner.alg, actor, visited, env.cfg.action_transform, cfg["seed"]) if flow else {}
     out = {
         "task": cfg["task"],
@@ -109,8 +121,11 @@ def evaluate_run(run_dir: str | Path, cfg: dict | None = None, runner=None, chec
         "env_steps": int(runner.logger.tot_timesteps) or (iteration + 1) * env_steps_per_iteration(cfg),
         "eval_envs": env.num_envs,
         "train_time_s": float(runner.logger.tot_time),
-        "protocol": ({"initial_noise": cfg["eval"]["initial_noise"], "perturbation": bool(cfg["eval"]["perturbation"])}
-                     if flow else {"mean_action": True}),  # fmt: skip
+        "protocol": (
+            {"initial_noise": cfg["eval"]["initial_noise"], "perturbation": bool(cfg["eval"]["perturbation"])}
+            if flow
+            else {"mean_action": True}
+        ),
         "results": results,
         "health": run_health(read_rows(run_dir)) if progress_path(run_dir).exists() else {},
         "diagnostics": {**training_diagnostics(run_dir), **on_policy} if flow else {},

@@ -29,8 +29,9 @@ def periodic_evaluator(cfg: dict, runner):
         actor.eval()
         flow = is_flow(actor)
         with own_random_streams(stream_seed(cfg["seed"], PERIODIC_EVALUATION, it), runner.device):
-            results, visited = evaluate_actor(cfg, actor, envs, cfg["eval"]["interval_flow_steps"],
-                                              record_obs=RECORDED_OBSERVATIONS if flow else 0)  # fmt: skip
+            results, visited = evaluate_actor(
+                cfg, actor, envs, cfg["eval"]["interval_flow_steps"], record_obs=RECORDED_OBSERVATIONS if flow else 0
+            )
             out = {curve_key(name): s.get("return_mean", float("nan")) for name, s in results.items()}
             if flow and visited is not None and hasattr(actor, "velocity"):
                 stats = jacobian_statistics(actor, visited, num_steps=actor.num_flow_steps)

@@ -34,8 +34,14 @@ def setting_of(curve_key: str) -> str:
 
 def reward_cliff(rewards: list[float]) -> dict:
     """FPO++'s verdict on a training-reward series, one value per iteration (see the module docstring)."""
-    out = {"status": INSUFFICIENT, "iterations": len(rewards), "peak": None, "peak_iteration": None,
-           "cliff_iteration": None, "drop": None}  # fmt: skip
+    out = {
+        "status": INSUFFICIENT,
+        "iterations": len(rewards),
+        "peak": None,
+        "peak_iteration": None,
+        "cliff_iteration": None,
+        "drop": None,
+    }
     if len(rewards) < MIN_PLATEAU + WINDOW:
         return {**out, "message": f"needs {MIN_PLATEAU + WINDOW} iterations, has {len(rewards)}"}
     peak = max(rewards)
@@ -45,11 +51,19 @@ def reward_cliff(rewards: list[float]) -> dict:
     for start in range(out["peak_iteration"] + MIN_PLATEAU, len(rewards) - WINDOW + 1):
         drop = (peak - sum(rewards[start : start + WINDOW]) / WINDOW) / max(peak, 1e-8)
         if drop >= DROP:
-            return {**out, "status": CLIFF, "cliff_iteration": start, "drop": drop,
-                    "message": f"the {WINDOW}-iteration mean from iteration {start} is {100 * drop:.0f} % under "
-                               f"the peak {peak:.4g} (iteration {out['peak_iteration']})"}  # fmt: skip
-    return {**out, "status": HEALTHY, "message": f"no cliff after the peak {peak:.4g} (iteration "
-                                                 f"{out['peak_iteration']})"}  # fmt: skip
+            return {
+                **out,
+                "status": CLIFF,
+                "cliff_iteration": start,
+                "drop": drop,
+                "message": f"the {WINDOW}-iteration mean from iteration {start} is {100 * drop:.0f} % under "
+                f"the peak {peak:.4g} (iteration {out['peak_iteration']})",
+            }
+    return {
+        **out,
+        "status": HEALTHY,
+        "message": f"no cliff after the peak {peak:.4g} (iteration {out['peak_iteration']})",
+    }
 
 
 def curve_summaries(rows: list[dict]) -> dict[str, dict]:
@@ -62,9 +76,13 @@ def curve_summaries(rows: list[dict]) -> dict[str, dict]:
             continue
         peak_iteration, peak = max(series, key=lambda point: point[1])  # the first of equal peaks
         final_iteration, final = series[-1]
-        out[setting_of(key)] = {"peak": peak, "peak_iteration": peak_iteration, "final": final,
-                                "final_iteration": final_iteration,
-                                "drop": (peak - final) / abs(peak) if peak else 0.0}  # fmt: skip
+        out[setting_of(key)] = {
+            "peak": peak,
+            "peak_iteration": peak_iteration,
+            "final": final,
+            "final_iteration": final_iteration,
+            "drop": (peak - final) / abs(peak) if peak else 0.0,
+        }
     return out
 
 

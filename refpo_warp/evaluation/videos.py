@@ -33,12 +33,19 @@ def frame_source(task: str, env, options: VideoOptions):
     if module is None:
         raise ConfigError(f"task {task!r} has no frames to record: its family has no render.py")
     inner = getattr(env, "env", env)  # an action-chunk wrapper's env
-    return module.frame_source(inner, options.width, options.height, camera=options.camera, shadows=options.shadows,
-                               reference=options.reference)  # fmt: skip
+    return module.frame_source(
+        inner,
+        options.width,
+        options.height,
+        camera=options.camera,
+        shadows=options.shadows,
+        reference=options.reference,
+    )
 
 
-def record_panel(task: str, env_options: dict, device: str, make_policy: Callable, label: str, options: VideoOptions,
-                 seed: int) -> tuple[list[np.ndarray], float]:  # fmt: skip
+def record_panel(
+    task: str, env_options: dict, device: str, make_policy: Callable, label: str, options: VideoOptions, seed: int
+) -> tuple[list[np.ndarray], float]:
     """(frames, frames per second) of one panel: ``options.num_envs`` envs tiled, from their first reset until each
     ended its first episode (or ``options.length`` env steps), every k-th env step drawn (k from the real-time rate
     and the fps)."""
@@ -85,13 +92,22 @@ def side_by_side(panels: list[list[np.ndarray]]) -> list[np.ndarray]:
     return [tile([p[min(t, len(p) - 1)] for p in panels], columns=len(panels)) for t in range(length)]
 
 
-def record(task: str, env_options: dict, device: str, policies: dict[str, Callable], options: VideoOptions,
-           out_dir: Path, name: str, seed: int) -> list[Path]:  # fmt: skip
+def record(
+    task: str,
+    env_options: dict,
+    device: str,
+    policies: dict[str, Callable],
+    options: VideoOptions,
+    out_dir: Path,
+    name: str,
+    seed: int,
+) -> list[Path]:
     """Record one panel per policy (label -> a function of the env giving the obs -> actions function), side by
     side; returns the files written."""
     with own_random_streams(stream_seed(seed, VIDEO), device):
-        recorded = [record_panel(task, env_options, device, policy, label, options, seed)
-                    for label, policy in policies.items()]  # fmt: skip
+        recorded = [
+            record_panel(task, env_options, device, policy, label, options, seed) for label, policy in policies.items()
+        ]
     frames = side_by_side([panel for panel, _ in recorded])
     fps = recorded[0][1]
     name = options.name or name
@@ -108,8 +124,11 @@ def policy_panels(cfg: dict, actor, options: VideoOptions) -> tuple[dict[str, Ca
         return {"mean action": lambda env: make_policy(actor, None)}, "mean"
     steps = options.flow_steps or [cfg["eval"]["flow_steps"][0]]
     protocols, perturbation = cfg["eval"]["initial_noise"], cfg["eval"]["perturbation"]
-    panels = {setting_name(n, noise): (lambda env, n=n, noise=noise: make_policy(actor, n, noise, perturbation))
-              for noise in protocols for n in steps}  # fmt: skip
+    panels = {
+        setting_name(n, noise): (lambda env, n=n, noise=noise: make_policy(actor, n, noise, perturbation))
+        for noise in protocols
+        for n in steps
+    }
     tag = "N" + "-".join(map(str, steps)) + ("" if protocols == ["random"] else "_" + "-".join(protocols))
     return panels, tag
 
@@ -137,8 +156,16 @@ def run_video(cfg: dict, runner, run_dir: Path, name: str) -> list[Path]:
     try:
         panels, _ = policy_panels(cfg, actor, options)
         seed = cfg["seed"] if options.seed is None else options.seed
-        return record(cfg["task"], {**cfg["env"], **cfg["eval"]["env"]}, runner.device, panels, options,
-                      Path(run_dir) / VIDEO_DIR, name, seed)  # fmt: skip
+        return record(
+            cfg["task"],
+            {**cfg["env"], **cfg["eval"]["env"]},
+            runner.device,
+            panels,
+            options,
+            Path(run_dir) / VIDEO_DIR,
+            name,
+            seed,
+        )
     finally:
         actor.train(was_training)
 

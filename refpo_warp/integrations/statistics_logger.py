@@ -32,14 +32,22 @@ class StatisticsLogger(Logger):
     @classmethod
     def replacing(cls, logger: Logger, is_distributed: bool, gpu_global_rank: int) -> StatisticsLogger:
         """A StatisticsLogger with the settings of a runner's ``logger`` (built, not yet writing)."""
-        new = cls(log_dir=logger.log_dir, cfg=logger.cfg, env_cfg=logger.env_cfg, num_envs=logger.num_envs,
-                  is_distributed=is_distributed, gpu_world_size=logger.gpu_world_size,
-                  gpu_global_rank=gpu_global_rank, device=logger.device)  # fmt: skip
+        new = cls(
+            log_dir=logger.log_dir,
+            cfg=logger.cfg,
+            env_cfg=logger.env_cfg,
+            num_envs=logger.num_envs,
+            is_distributed=is_distributed,
+            gpu_world_size=logger.gpu_world_size,
+            gpu_global_rank=gpu_global_rank,
+            device=logger.device,
+        )
         new.git_status_repos = list(logger.git_status_repos)
         return new
 
-    def log(self, it: int, start_it: int, total_it: int, collect_time: float, learn_time: float,
-            loss_dict: dict, **kwargs) -> None:  # fmt: skip
+    def log(
+        self, it: int, start_it: int, total_it: int, collect_time: float, learn_time: float, loss_dict: dict, **kwargs
+    ) -> None:
         losses, statistics = split_statistics(loss_dict)
         if self.writer is None or not statistics:
             super().log(it, start_it, total_it, collect_time, learn_time, losses, **kwargs)

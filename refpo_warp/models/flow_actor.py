@@ -70,48 +70,89 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
     class Options(SampledPolicyOptions):
         """The flow actor's options (``docs/algorithms.md``, "Flow actor")."""
 
-        num_flow_steps: int = option(10, NUM_FLOW_STEPS, "N, Euler steps that sample an action; may change at any "
-                                                         "time (train with 10, deploy with 1) and on resume")
-        time_embed_dim: int = option(8, Int(2, 1024, multiple_of=2), "channels of the time embedding: 2^k sinusoid "
-                                     "(concat) or DiT sinusoid (adaln; Puffer-PHC: 256)")
-        output_mode: OutputMode = option("u", OneOf(OutputMode), "the CFM loss: u |e_v|^2, eps tau^2 |e_v|^2 "
-                                         "(Playground), data |a_hat - a|^2 (Puffer-PHC); e_v = v - (a - eps)")
+        num_flow_steps: int = option(
+            10,
+            NUM_FLOW_STEPS,
+            "N, Euler steps that sample an action; may change at any time (train with 10, deploy with 1) and on resume",
+        )
+        time_embed_dim: int = option(
+            8,
+            Int(2, 1024, multiple_of=2),
+            "channels of the time embedding: 2^k sinusoid (concat) or DiT sinusoid (adaln; Puffer-PHC: 256)",
+        )
+        output_mode: OutputMode = option(
+            "u",
+            OneOf(OutputMode),
+            "the CFM loss: u |e_v|^2, eps tau^2 |e_v|^2 "
+            "(Playground), data |a_hat - a|^2 (Puffer-PHC); e_v = v - (a - eps)",
+        )
         output_scale: float = option(1.0, Real(0, 1e6, lo_open=True), "multiplies the head (Playground: 0.25)")
-        action_noise_std: float = option(0.0, Real(0, 1e3, fixed=False), "Gaussian perturbation of rollout actions, "
-                                         "stored with the action (Puffer-PHC: 0.05)")
-        parameterization: Parameterization = option("velocity", OneOf(Parameterization), "the head predicts v, or "
-                                                     "the clean action a_hat with v = (a_hat - x) / (1 - tau) "
-                                                     "(Puffer-PHC)")
-        time_conditioning: TimeConditioning = option("concat", OneOf(TimeConditioning), "tau enters the first layer "
-                                                     "as [cos(tau 2^k), sin(tau 2^k)] (Playground), or the last "
-                                                     "hidden layer through adaLN (Puffer-PHC)")
-        head_init_gain: float | None = option(None, Real(0, 1e3, lo_open=True, optional=True),
-                                              "orthogonal head init with this gain, zero bias (Puffer-PHC: 0.01); "
-                                              "null keeps PyTorch's")
-        loss_scale: float = option(1.0, Real(0, 1e6, lo_open=True), "multiplies the CFM loss, hence the ratio's log "
-                                   "and the Reflow term (Puffer-PHC: 200 = 1 / (2 * 0.05^2))")
-        obs_clip: float | None = option(None, Real(0, 1e6, lo_open=True, optional=True),
-                                        "clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); "
-                                        "null: no clamp")
+        action_noise_std: float = option(
+            0.0,
+            Real(0, 1e3, fixed=False),
+            "Gaussian perturbation of rollout actions, stored with the action (Puffer-PHC: 0.05)",
+        )
+        parameterization: Parameterization = option(
+            "velocity",
+            OneOf(Parameterization),
+            "the head predicts v, or the clean action a_hat with v = (a_hat - x) / (1 - tau) (Puffer-PHC)",
+        )
+        time_conditioning: TimeConditioning = option(
+            "concat",
+            OneOf(TimeConditioning),
+            "tau enters the first layer "
+            "as [cos(tau 2^k), sin(tau 2^k)] (Playground), or the last "
+            "hidden layer through adaLN (Puffer-PHC)",
+        )
+        head_init_gain: float | None = option(
+            None,
+            Real(0, 1e3, lo_open=True, optional=True),
+            "orthogonal head init with this gain, zero bias (Puffer-PHC: 0.01); null keeps PyTorch's",
+        )
+        loss_scale: float = option(
+            1.0,
+            Real(0, 1e6, lo_open=True),
+            "multiplies the CFM loss, hence the ratio's log and the Reflow term (Puffer-PHC: 200 = 1 / (2 * 0.05^2))",
+        )
+        obs_clip: float | None = option(
+            None,
+            Real(0, 1e6, lo_open=True, optional=True),
+            "clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); null: no clamp",
+        )
 
-    def __init__(self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int,
-                 **options) -> None:  # fmt: skip
+    def __init__(
+        self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int, **options
+    ) -> None:
         super().__init__()
         o = constructor_options(type(self), options)
         if o.distribution_cfg is not None:
             warnings.warn("FlowActor ignores distribution_cfg: actions are sampled by integrating the flow.")
         self._set_up_observations(obs, obs_groups, obs_set, output_dim, o.obs_normalization, o.obs_clip)
-        self.velocity = VelocityField(self.obs_dim, output_dim, o.hidden_dims, o.activation, o.time_embed_dim,
-                                      o.output_scale, o.parameterization, o.time_conditioning,
-                                      o.head_init_gain)  # fmt: skip
+        self.velocity = VelocityField(
+            self.obs_dim,
+            output_dim,
+            o.hidden_dims,
+            o.activation,
+            o.time_embed_dim,
+            o.output_scale,
+            o.parameterization,
+            o.time_conditioning,
+            o.head_init_gain,
+        )
         self.num_flow_steps = int(o.num_flow_steps)
         self.output_mode = o.output_mode
         self.loss_scale = float(o.loss_scale)
         self.action_noise_std = float(o.action_noise_std)
 
     # ------------------------------------------------------------------------------------------------ sampling
-    def sample(self, obs: TensorDict, num_steps: int | None = None, initial_noise: str = "random",
-               perturbation: bool = False, noise: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
+    def sample(
+        self,
+        obs: TensorDict,
+        num_steps: int | None = None,
+        initial_noise: str = "random",
+        perturbation: bool = False,
+        noise: torch.Tensor | None = None,
+    ) -> torch.Tensor:
         """Actions from the flow: integrate from random (or zero, or the given) noise with ``num_steps`` Euler steps
         (default ``num_flow_steps``), then add the ``action_noise_std`` perturbation if ``perturbation``."""
         n = self._sampling_steps(num_steps, initial_noise)
@@ -127,8 +168,14 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
         self._last_noise = noise.detach()  # x_0 of each action: the coupled Reflow pairs it with the action
         return actions
 
-    def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False,
-                num_steps: int | None = None) -> torch.Tensor:  # fmt: skip
+    def forward(
+        self,
+        obs: TensorDict,
+        masks=None,
+        hidden_state=None,
+        stochastic_output: bool = False,
+        num_steps: int | None = None,
+    ) -> torch.Tensor:
         """rsl_rl's model call: a rollout sample (random noise, perturbation on) with ``stochastic_output``, else the
         deterministic output (zero noise, no perturbation), which is what inference and export use."""
         if stochastic_output:
@@ -153,8 +200,14 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
             e_v = e_a / (1.0 - t).clamp(min=DATA_GUARD)
         return CfmTerms(e_v.square().mean(dim=-1), e_a.square().mean(dim=-1), clean)
 
-    def cfm_loss(self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor,
-                 output_mode: str | None = None) -> torch.Tensor:  # fmt: skip
+    def cfm_loss(
+        self,
+        obs: TensorDict,
+        actions: torch.Tensor,
+        tau: torch.Tensor,
+        eps: torch.Tensor,
+        output_mode: str | None = None,
+    ) -> torch.Tensor:
         """CFM loss per (action, tau, eps) sample, shape (B, K), in ``output_mode`` (default: the actor's)."""
         return cfm_loss(self.cfm_terms(obs, actions, tau, eps), tau, output_mode or self.output_mode, self.loss_scale)
 

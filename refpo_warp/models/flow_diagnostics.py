@@ -41,8 +41,9 @@ def env_actions(actions: torch.Tensor, transform: str | None) -> torch.Tensor:
     raise ValueError(f"action transform must be one of {ACTION_TRANSFORMS}, got {transform!r}")
 
 
-def spectral_norms(velocity: Callable, obs_feat: torch.Tensor, x: torch.Tensor, tau: torch.Tensor
-                   ) -> tuple[torch.Tensor, torch.Tensor]:  # fmt: skip
+def spectral_norms(
+    velocity: Callable, obs_feat: torch.Tensor, x: torch.Tensor, tau: torch.Tensor
+) -> tuple[torch.Tensor, torch.Tensor]:
     """(||J||_2, ||J||_F) of J = d velocity(obs_feat, x, tau) / dx for each row of x (B, A); exact, by jacrev."""
 
     def single(feat, xi, ti):
@@ -97,8 +98,9 @@ def straightness_error(actor, obs, sample_tau: Callable[[tuple[int, ...]], torch
 
 
 @torch.no_grad()
-def one_step_consistency(actor, obs, num_steps: int, transform: str | None = None, noises: int = 4,
-                         generator: torch.Generator | None = None) -> dict[str, float]:  # fmt: skip
+def one_step_consistency(
+    actor, obs, num_steps: int, transform: str | None = None, noises: int = 4, generator: torch.Generator | None = None
+) -> dict[str, float]:
     """One-step error, policy spread and their ratio at observations ``obs`` (see the module docstring): ``noises``
     shared initial noises per observation, drawn from ``generator`` (so a caller's random stream is left alone)."""
     field = actor.velocity

@@ -30,12 +30,16 @@ class PhcMLPModel(MLPModel):
     class Options:
         """The options it adds to ``MLPModel``'s arguments."""
 
-        head_init_gain: float | None = option(None, Real(0, 1e3, lo_open=True, optional=True),
-                                              "orthogonal init of the output head with this gain, zero bias "
-                                              "(Puffer-PHC: 0.01); null keeps rsl_rl's")
-        obs_clip: float | None = option(None, Real(0, 1e6, lo_open=True, optional=True),
-                                        "clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); "
-                                        "null: no clamp")
+        head_init_gain: float | None = option(
+            None,
+            Real(0, 1e3, lo_open=True, optional=True),
+            "orthogonal init of the output head with this gain, zero bias (Puffer-PHC: 0.01); null keeps rsl_rl's",
+        )
+        obs_clip: float | None = option(
+            None,
+            Real(0, 1e6, lo_open=True, optional=True),
+            "clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); null: no clamp",
+        )
 
     def __init__(self, *args, **kwargs) -> None:
         options, kwargs = option_values(type(self), kwargs)

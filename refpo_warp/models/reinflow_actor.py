@@ -74,47 +74,66 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
     class Options(SampledPolicyOptions):
         """ReinFlow's actor options; "table (d)" is the ReFPO paper's ReinFlow table."""
 
-        num_flow_steps: int = option(4, NUM_FLOW_STEPS.with_fixed(None), "K, denoising steps (table (d): 4); fixed "
-                                     "on resume: K shapes the noisy chain it trains on")
+        num_flow_steps: int = option(
+            4,
+            NUM_FLOW_STEPS.with_fixed(None),
+            "K, denoising steps (table (d): 4); fixed on resume: K shapes the noisy chain it trains on",
+        )
         time_embed_dim: int = option(16, Int(2, 1024, multiple_of=2), "channels of the time embedding (table (d): 16)")
         output_scale: float = option(1.0, Real(0, 1e6, lo_open=True), "multiplies the velocity head")
-        noise_hidden_dims: tuple[int, ...] | list[int] = option((64, 64), HIDDEN_DIMS, "hidden layer sizes of the "
-                                                                "noise network (ReinFlow gym configs: [64, 64])")
-        noise_activation: Activation = option("tanh", OneOf(Activation), "activation of the noise network "
-                                              "(ReinFlow: Tanh)")
+        noise_hidden_dims: tuple[int, ...] | list[int] = option(
+            (64, 64), HIDDEN_DIMS, "hidden layer sizes of the noise network (ReinFlow gym configs: [64, 64])"
+        )
+        noise_activation: Activation = option(
+            "tanh", OneOf(Activation), "activation of the noise network (ReinFlow: Tanh)"
+        )
         ft_denoising_steps: int = option(2, Int(0, 1000), "the last steps, whose noise is learned (table (d): 2)")
-        sigma_min: float = option(0.08, Real(0, 100, lo_open=True, fixed=False), "lower bound of sigma "
-                                  "(table (d): 0.08)")
-        sigma_max: float = option(0.16, Real(0, 100, lo_open=True, fixed=False), "upper bound of sigma "
-                                  "(table (d): 0.16)")
-        noise_schedule: NoiseSchedule = option("lin", OneOf(NoiseSchedule, fixed=False), "fixed sigma of the other "
-                                               "steps: lin 0.1 t (table (d) \"Linear\"), vp sqrt(0.2 t (1 - t)), "
-                                               "const sigma_min")
-        min_sampling_std: float = option(0.10, Real(0, 100, fixed=False), "floor of the std sampled with "
-                                         "(table (d): 0.10)")
-        denoised_clip: float = option(1.0, Real(0, 1e6, lo_open=True, fixed=False), "clamp of every step mean "
-                                      "(ReinFlow: 1)")
-        randn_clip: float = option(3.0, Real(0, 1e6, lo_open=True, fixed=False), "truncation of the noise, in stds "
-                                   "(ReinFlow: 3)")
-        action_clip: float = option(1.0, Real(0, 1e6, lo_open=True, fixed=False), "clamp of the final action "
-                                    "(table (d) action range [-1, 1])")
-        obs_clip: float | None = option(None, Real(0, 1e6, lo_open=True, optional=True),
-                                        "clamp the normalised observation to [-obs_clip, obs_clip]; null: no clamp")
+        sigma_min: float = option(
+            0.08, Real(0, 100, lo_open=True, fixed=False), "lower bound of sigma (table (d): 0.08)"
+        )
+        sigma_max: float = option(
+            0.16, Real(0, 100, lo_open=True, fixed=False), "upper bound of sigma (table (d): 0.16)"
+        )
+        noise_schedule: NoiseSchedule = option(
+            "lin",
+            OneOf(NoiseSchedule, fixed=False),
+            'fixed sigma of the other steps: lin 0.1 t (table (d) "Linear"), vp sqrt(0.2 t (1 - t)), const sigma_min',
+        )
+        min_sampling_std: float = option(
+            0.10, Real(0, 100, fixed=False), "floor of the std sampled with (table (d): 0.10)"
+        )
+        denoised_clip: float = option(
+            1.0, Real(0, 1e6, lo_open=True, fixed=False), "clamp of every step mean (ReinFlow: 1)"
+        )
+        randn_clip: float = option(
+            3.0, Real(0, 1e6, lo_open=True, fixed=False), "truncation of the noise, in stds (ReinFlow: 3)"
+        )
+        action_clip: float = option(
+            1.0, Real(0, 1e6, lo_open=True, fixed=False), "clamp of the final action (table (d) action range [-1, 1])"
+        )
+        obs_clip: float | None = option(
+            None,
+            Real(0, 1e6, lo_open=True, optional=True),
+            "clamp the normalised observation to [-obs_clip, obs_clip]; null: no clamp",
+        )
 
-    def __init__(self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int,
-                 **options) -> None:  # fmt: skip
+    def __init__(
+        self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int, **options
+    ) -> None:
         super().__init__()
         o = constructor_options(type(self), options)
         if o.distribution_cfg is not None:
             warnings.warn("ReinFlowActor ignores distribution_cfg: its noisy Euler chain defines the distribution.")
         if o.ft_denoising_steps > o.num_flow_steps:
-            raise ValueError(f"ft_denoising_steps ({o.ft_denoising_steps}) must not exceed num_flow_steps "
-                             f"({o.num_flow_steps})")  # fmt: skip
+            raise ValueError(
+                f"ft_denoising_steps ({o.ft_denoising_steps}) must not exceed num_flow_steps ({o.num_flow_steps})"
+            )
         if o.sigma_min > o.sigma_max:
             raise ValueError(f"sigma_min ({o.sigma_min}) must not exceed sigma_max ({o.sigma_max})")
         self._set_up_observations(obs, obs_groups, obs_set, output_dim, o.obs_normalization, o.obs_clip)
-        self.velocity = VelocityField(self.obs_dim, self.action_dim, o.hidden_dims, o.activation, o.time_embed_dim,
-                                      o.output_scale)  # fmt: skip
+        self.velocity = VelocityField(
+            self.obs_dim, self.action_dim, o.hidden_dims, o.activation, o.time_embed_dim, o.output_scale
+        )
         layers, width = [], o.time_embed_dim + self.obs_dim
         for hidden in o.noise_hidden_dims:
             layers += [nn.Linear(width, hidden), resolve_nn_activation(o.noise_activation)]
@@ -183,8 +202,14 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         return log_prob, entropy, std.mean()
 
     # ------------------------------------------------------------------------------------------------ sampling
-    def sample(self, obs: TensorDict, num_steps: int | None = None, initial_noise: str = "random",
-               perturbation: bool = False, noise: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
+    def sample(
+        self,
+        obs: TensorDict,
+        num_steps: int | None = None,
+        initial_noise: str = "random",
+        perturbation: bool = False,
+        noise: torch.Tensor | None = None,
+    ) -> torch.Tensor:
         """Actions from the chain with ``num_steps`` steps (default K) from random, zero or the given x_0: the
         deterministic chain, or with ``perturbation`` the noisy one the rollout samples."""
         n = self._sampling_steps(num_steps, initial_noise)
@@ -199,13 +224,20 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
     def sample_chain(self, obs: TensorDict) -> tuple[torch.Tensor, torch.Tensor]:
         """A rollout sample: the noisy chain (B, K + 1, D) from random x_0 and its normalised log-probability (B,)."""
         first = next(iter(obs.values()))
-        chain = self.run_chain(obs, self.num_flow_steps, True, torch.randn(first.shape[0], self.action_dim,
-                                                                            device=first.device))  # fmt: skip
+        chain = self.run_chain(
+            obs, self.num_flow_steps, True, torch.randn(first.shape[0], self.action_dim, device=first.device)
+        )
         self._last_actions = chain[:, -1].detach()
         return chain, self.chain_log_prob(obs, chain)
 
-    def forward(self, obs: TensorDict, masks=None, hidden_state=None, stochastic_output: bool = False,
-                num_steps: int | None = None) -> torch.Tensor:  # fmt: skip
+    def forward(
+        self,
+        obs: TensorDict,
+        masks=None,
+        hidden_state=None,
+        stochastic_output: bool = False,
+        num_steps: int | None = None,
+    ) -> torch.Tensor:
         """rsl_rl's model call: the noisy chain from random x_0 with ``stochastic_output``, else the deterministic
         chain from zero x_0 (what inference uses)."""
         if stochastic_output:
@@ -214,8 +246,10 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
 
     # --------------------------------------------- rsl_rl model protocol (the rest: SampledPolicyProtocol)
     def get_output_log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
-        raise NotImplementedError("ReinFlowActor's likelihood is that of its whole chain; train it with "
-                                  "refpo_warp.algorithms:ReinFlow, not with rsl_rl's PPO.")  # fmt: skip
+        raise NotImplementedError(
+            "ReinFlowActor's likelihood is that of its whole chain; train it with "
+            "refpo_warp.algorithms:ReinFlow, not with rsl_rl's PPO."
+        )
 
     @property
     def output_entropy(self) -> torch.Tensor:

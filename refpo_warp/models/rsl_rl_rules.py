@@ -55,8 +55,10 @@ def check_distribution_cfg(key: str, value: Any) -> dict:
     from rsl_rl.utils import resolve_callable
 
     if not isinstance(value, dict) or "class_name" not in value:
-        raise ConfigError(f"{key}={value!r} is invalid; expected a mapping with a class_name "
-                          f"(e.g. {{class_name: GaussianDistribution, init_std: 1.0}})")  # fmt: skip
+        raise ConfigError(
+            f"{key}={value!r} is invalid; expected a mapping with a class_name "
+            f"(e.g. {{class_name: GaussianDistribution, init_std: 1.0}})"
+        )
     try:
         cls = resolve_callable(value["class_name"])
     except (ImportError, AttributeError, ValueError, TypeError) as err:
@@ -71,20 +73,27 @@ def check_distribution_cfg(key: str, value: Any) -> dict:
     return {"class_name": value["class_name"], **check_options(rules, options, f"{key}.")}
 
 
-register_rules(MLPModel, {
-    "hidden_dims": HIDDEN_DIMS,
-    "activation": OneOf(Activation),
-    "obs_normalization": Flag(),
-    "distribution_cfg": Check(check_distribution_cfg, "null or {class_name: <rsl_rl Distribution>, ...}",
-                              optional=True),
-})  # fmt: skip
+register_rules(
+    MLPModel,
+    {
+        "hidden_dims": HIDDEN_DIMS,
+        "activation": OneOf(Activation),
+        "obs_normalization": Flag(),
+        "distribution_cfg": Check(
+            check_distribution_cfg, "null or {class_name: <rsl_rl Distribution>, ...}", optional=True
+        ),
+    },
+)
 
 _STD_RANGE = ListOf(Real(0, None), min_len=2, max_len=2)
-register_rules(rsl_modules.GaussianDistribution, {
-    "init_std": Real(0, 1e6, lo_open=True),
-    "std_range": _STD_RANGE,
-    "std_type": OneOf("scalar", "log"),
-    "learn_std": Flag(),
-})  # fmt: skip
+register_rules(
+    rsl_modules.GaussianDistribution,
+    {
+        "init_std": Real(0, 1e6, lo_open=True),
+        "std_range": _STD_RANGE,
+        "std_type": OneOf("scalar", "log"),
+        "learn_std": Flag(),
+    },
+)
 if hasattr(rsl_modules, "BetaDistribution"):  # rsl-rl-lib >= 5.1
     register_rules(rsl_modules.BetaDistribution, {"action_range": ListOf(Real(), min_len=2, max_len=2)})

@@ -29,13 +29,18 @@ NUM_FLOW_STEPS = Int(1, 1000, fixed=False)  # Euler / chain steps N of a sampler
 class SampledPolicyOptions:
     """The options every sampled policy's velocity MLP shares (the first fields of each actor's ``Options``)."""
 
-    hidden_dims: tuple[int, ...] | list[int] = option((256, 256, 256), HIDDEN_DIMS,
-                                                      "hidden layer sizes of the velocity MLP")
+    hidden_dims: tuple[int, ...] | list[int] = option(
+        (256, 256, 256), HIDDEN_DIMS, "hidden layer sizes of the velocity MLP"
+    )
     activation: Activation = option("elu", OneOf(Activation), "activation of the velocity MLP")
     obs_normalization: bool = option(False, Flag(), "normalise the observation (rsl_rl's EmpiricalNormalization)")
-    distribution_cfg: dict | None = option(None, Check(mapping_or_none, "a mapping (ignored)", optional=True),
-                                           "accepted for config compatibility and ignored: the sampler, not a "
-                                           "parametric distribution, gives the actions")
+    distribution_cfg: dict | None = option(
+        None,
+        Check(mapping_or_none, "a mapping (ignored)", optional=True),
+        "accepted for config compatibility and ignored: the sampler, not a parametric distribution, gives the actions",
+    )
+
+
 INITIAL_NOISE = ("random", "zero")
 INITIAL_NOISE_RULE = OneOf(INITIAL_NOISE)
 
@@ -58,20 +63,29 @@ class SampledPolicyProtocol(Stateless):
     """Mixin for an ``nn.Module`` actor: ``_set_up_observations`` in its ``__init__``; its sampler sets
     ``_last_actions`` (the last sampled batch)."""
 
-    def _set_up_observations(self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int,
-                             obs_normalization: bool, obs_clip: float | None) -> None:  # fmt: skip
+    def _set_up_observations(
+        self,
+        obs: TensorDict,
+        obs_groups: dict[str, list[str]],
+        obs_set: str,
+        output_dim: int,
+        obs_normalization: bool,
+        obs_clip: float | None,
+    ) -> None:
         """``obs_groups`` (this actor's, 1-D each), ``obs_dim``, ``action_dim`` and the normaliser (rsl_rl's, clamped
         to ``obs_clip`` if set); call after ``nn.Module.__init__``."""
         self.obs_groups = list(obs_groups[obs_set])
         for group in self.obs_groups:
             if obs[group].dim() != 2:
-                raise ValueError(f"{type(self).__name__} needs 1-D observation groups; '{group}' has shape "
-                                 f"{obs[group].shape}")  # fmt: skip
+                raise ValueError(
+                    f"{type(self).__name__} needs 1-D observation groups; '{group}' has shape {obs[group].shape}"
+                )
         self.obs_dim = sum(obs[g].shape[-1] for g in self.obs_groups)
         self.action_dim = int(output_dim)
         self.obs_normalization = obs_normalization
-        self.obs_normalizer = with_clip(EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity(),
-                                        obs_clip)  # fmt: skip
+        self.obs_normalizer = with_clip(
+            EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity(), obs_clip
+        )
         self._last_actions = torch.zeros(1, self.action_dim)
 
     def _sampling_steps(self, num_steps: int | None, initial_noise: str) -> int:

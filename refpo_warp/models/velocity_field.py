@@ -113,8 +113,9 @@ class VelocityField(nn.Module):
         self.parameterization = parameterization
         self.time_conditioning = time_conditioning
         concat = time_conditioning == "concat"
-        self.embedding = (SinusoidalEmbedding(time_embed_dim) if concat
-                          else TimestepEmbedding(time_embed_dim, hidden_dims[-1]))  # fmt: skip
+        self.embedding = (
+            SinusoidalEmbedding(time_embed_dim) if concat else TimestepEmbedding(time_embed_dim, hidden_dims[-1])
+        )
         self.obs_proj = nn.Linear(obs_dim, hidden_dims[0])
         self.sample_proj = nn.Linear(action_dim + (time_embed_dim if concat else 0), hidden_dims[0], bias=False)
         layers: list[nn.Module] = []

@@ -89,7 +89,6 @@ def model_to_amass(
     return aa[:, 0], body_pose, np.asarray(root_pos, dtype=np.float64) - PELVIS_J0_TEMPLATE
 
 
-
 def dof_positions(local_rot: np.ndarray) -> np.ndarray:
     """Hinge angles (T, 69): intrinsic x-y-z Euler angles of the 23 non-root local rotations, in [-pi, pi).
 

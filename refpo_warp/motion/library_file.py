@@ -37,8 +37,14 @@ def is_library_file(path: Path) -> bool:
     return path.name.lower().endswith(LIBRARY_SUFFIX)
 
 
-def save_library(path: str | Path, frames: dict[str, np.ndarray], clip_frames: np.ndarray, fps: float,
-                 clip_names: list[str], sources: list[str]) -> Path:  # fmt: skip
+def save_library(
+    path: str | Path,
+    frames: dict[str, np.ndarray],
+    clip_frames: np.ndarray,
+    fps: float,
+    clip_names: list[str],
+    sources: list[str],
+) -> Path:
     """Write a library file atomically (a crash keeps the previous file); ``path`` must end in ``.motionlib.npz``."""
     path = Path(path)
     if not is_library_file(path):
@@ -75,8 +81,9 @@ def load_library(path: str | Path) -> tuple[dict[str, np.ndarray], np.ndarray, d
     num_clips = len(meta["clip_names"])
     for key, value in (("clip_frames", clip_frames), ("clip_start", clip_start)):
         if value.shape != (num_clips,) or not np.issubdtype(value.dtype, np.integer):
-            raise MotionDataError(f"{path}: '{key}' must be {num_clips} integers (one per clip), got "
-                                  f"{value.dtype} {value.shape}")  # fmt: skip
+            raise MotionDataError(
+                f"{path}: '{key}' must be {num_clips} integers (one per clip), got {value.dtype} {value.shape}"
+            )
     if num_clips == 0:
         raise MotionDataError(f"{path}: the library holds no clips")
     if np.any(clip_frames < 1):
@@ -89,8 +96,7 @@ def load_library(path: str | Path) -> tuple[dict[str, np.ndarray], np.ndarray, d
     for key, tail in FRAME_ARRAYS.items():
         value = arrays[key]
         if value.shape != (total, *tail) or not np.issubdtype(value.dtype, np.floating):
-            raise MotionDataError(f"{path}: '{key}' has {value.dtype} {value.shape}; expected floats "
-                                  f"{(total, *tail)}")  # fmt: skip
+            raise MotionDataError(f"{path}: '{key}' has {value.dtype} {value.shape}; expected floats {(total, *tail)}")
         if not np.all(np.isfinite(value)):
             raise MotionDataError(f"{path}: '{key}' has NaN or infinite values")
         frames[key] = value.astype(np.float32)

@@ -41,15 +41,18 @@ def check_source(path: Path, fps: float, key: str, num_frames: int, trans: np.nd
     """A source motion file: its capture rate, length and magnitudes (the resampled length: ``sources.py``)."""
     lo, hi = SOURCE_FPS
     if not (lo <= fps <= hi):
-        raise MotionDataError(f"{path}: {key}={fps:g} is not a plausible capture rate; expected {lo:g} to {hi:g} "
-                              f"frames per second")  # fmt: skip
+        raise MotionDataError(
+            f"{path}: {key}={fps:g} is not a plausible capture rate; expected {lo:g} to {hi:g} frames per second"
+        )
     if num_frames < MIN_FRAMES:
         count = "zero frames" if num_frames == 0 else f"{num_frames} frame"
         raise MotionDataError(f"{path}: the motion has {count}; at least {MIN_FRAMES} are needed")
     duration = (num_frames - 1) / fps
     if duration > MAX_CLIP_SECONDS:
-        raise MotionDataError(f"{path}: the motion lasts {duration:.0f} s ({num_frames} frames at {fps:g} fps); "
-                              f"clips longer than {MAX_CLIP_SECONDS:.0f} s are refused")  # fmt: skip
+        raise MotionDataError(
+            f"{path}: the motion lasts {duration:.0f} s ({num_frames} frames at {fps:g} fps); "
+            f"clips longer than {MAX_CLIP_SECONDS:.0f} s are refused"
+        )
     _check_magnitude(path, "trans", trans, MAX_TRANSLATION_M, "m")
     _check_magnitude(path, "pose", angles, MAX_ANGLE_RAD, "rad")
 
@@ -61,8 +64,10 @@ def check_library(path: Path, fps: float, clip_names: list[str], clip_frames: np
         raise MotionDataError(f"{path}: metadata fps={fps:g} is outside [{lo:g}, {hi:g}]")
     short = np.flatnonzero(clip_frames < MIN_FRAMES)
     if short.size:
-        raise MotionDataError(f"{path}: clip '{clip_names[int(short[0])]}' has {int(clip_frames[short[0]])} "
-                              f"frame(s); at least {MIN_FRAMES} are needed")  # fmt: skip
+        raise MotionDataError(
+            f"{path}: clip '{clip_names[int(short[0])]}' has {int(clip_frames[short[0]])} "
+            f"frame(s); at least {MIN_FRAMES} are needed"
+        )
     long = np.flatnonzero((clip_frames - 1) / fps > MAX_CLIP_SECONDS)
     if long.size:
         raise MotionDataError(f"{path}: clip '{clip_names[int(long[0])]}' lasts more than {MAX_CLIP_SECONDS:.0f} s")
@@ -75,5 +80,6 @@ def check_library(path: Path, fps: float, clip_names: list[str], clip_frames: np
 def _check_magnitude(path: Path, key: str, values: np.ndarray, limit: float, unit: str) -> None:
     if values.size and float(np.max(np.abs(values))) > limit:
         frame = int(np.argwhere(np.abs(values) > limit)[0, 0])
-        raise MotionDataError(f"{path}: '{key}' holds values beyond {limit:g} {unit} (first at frame {frame}); "
-                              f"not a plausible motion")  # fmt: skip
+        raise MotionDataError(
+            f"{path}: '{key}' holds values beyond {limit:g} {unit} (first at frame {frame}); not a plausible motion"
+        )

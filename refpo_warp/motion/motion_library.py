@@ -21,8 +21,14 @@ from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.errors import MotionDataError
 from refpo_warp.utils.warp_setup import init_warp, wp
 
-_WARP_DTYPES = {"body_pos": wp.vec3, "body_rot": wp.quat, "body_vel": wp.vec3, "body_angvel": wp.vec3,
-                "dof_pos": float, "dof_vel": float}  # fmt: skip
+_WARP_DTYPES = {
+    "body_pos": wp.vec3,
+    "body_rot": wp.quat,
+    "body_vel": wp.vec3,
+    "body_angvel": wp.vec3,
+    "dof_pos": float,
+    "dof_vel": float,
+}
 
 
 @wp.struct
@@ -41,8 +47,15 @@ class MotionFrames:
 class MotionLibrary:
     """Clips concatenated on a Warp device; build with ``load`` (or ``from_clips``)."""
 
-    def __init__(self, frames: dict[str, np.ndarray], clip_frames: np.ndarray, fps: float, clip_names: list[str],
-                 sources: list[str] | None = None, device: str = "cpu") -> None:  # fmt: skip
+    def __init__(
+        self,
+        frames: dict[str, np.ndarray],
+        clip_frames: np.ndarray,
+        fps: float,
+        clip_names: list[str],
+        sources: list[str] | None = None,
+        device: str = "cpu",
+    ) -> None:
         init_warp()
         self.device = resolve_device(device)
         self.fps = float(fps)
@@ -51,8 +64,10 @@ class MotionLibrary:
         self.sources = list(sources or [])
         self.clip_num_frames = np.asarray(clip_frames, dtype=np.int64)
         if self.num_clips < 1 or self.clip_num_frames.shape != (self.num_clips,) or self.clip_num_frames.min() < 1:
-            raise ValueError(f"MotionLibrary needs at least one clip and one frame count >= 1 per clip, got "
-                             f"{self.num_clips} clip names and frame counts {self.clip_num_frames.tolist()[:8]}")
+            raise ValueError(
+                f"MotionLibrary needs at least one clip and one frame count >= 1 per clip, got "
+                f"{self.num_clips} clip names and frame counts {self.clip_num_frames.tolist()[:8]}"
+            )
         if not (np.isfinite(self.fps) and self.fps > 0):
             raise ValueError(f"MotionLibrary: fps must be a positive number, got {fps}")
         self.clip_duration = (self.clip_num_frames - 1) / self.fps
@@ -84,12 +99,19 @@ class MotionLibrary:
         that keep it to build libraries on several devices without reading or converting the source again."""
         path = Path(source).expanduser()
         if not path.exists():
-            raise MotionDataError(f"{path}: motion source not found (expected an AMASS .npz file, a folder of "
-                                  f"them, or a *.motionlib.npz library)")  # fmt: skip
+            raise MotionDataError(
+                f"{path}: motion source not found (expected an AMASS .npz file, a folder of "
+                f"them, or a *.motionlib.npz library)"
+            )
         if path.is_file() and is_library_file(path):
             frames, clip_frames, meta = load_library(path)
-            return {"frames": frames, "clip_frames": clip_frames, "fps": meta["fps"],
-                    "clip_names": meta["clip_names"], "sources": meta["sources"]}  # fmt: skip
+            return {
+                "frames": frames,
+                "clip_frames": clip_frames,
+                "fps": meta["fps"],
+                "clip_names": meta["clip_names"],
+                "sources": meta["sources"],
+            }
         clips, sources = load_amass_clips(path, check_fps_argument(fps))
         return _concatenate(clips, sources)
 
@@ -129,22 +151,35 @@ class MotionLibrary:
         """
         num_envs = out.body_pos.shape[0]
         if clip_ids.shape[0] != num_envs or times.shape[0] != num_envs:
-            raise ValueError(f"MotionLibrary.sample: {clip_ids.shape[0]} clip ids and {times.shape[0]} times for "
-                             f"{num_envs} output rows; they must match")  # fmt: skip
+            raise ValueError(
+                f"MotionLibrary.sample: {clip_ids.shape[0]} clip ids and {times.shape[0]} times for "
+                f"{num_envs} output rows; they must match"
+            )
         if mask is not None and mask.shape[0] != num_envs:
             raise ValueError(f"MotionLibrary.sample: {mask.shape[0]} mask entries for {num_envs} output rows")
         wp.launch(
             _sample_kernel,
             dim=(num_envs, NUM_BODIES),
-            inputs=[self.clip_start, self.clip_frames, self.num_clips, self.fps, self.frames_device, clip_ids, times,
-                    int(mask is not None), mask],  # fmt: skip
+            inputs=[
+                self.clip_start,
+                self.clip_frames,
+                self.num_clips,
+                self.fps,
+                self.frames_device,
+                clip_ids,
+                times,
+                int(mask is not None),
+                mask,
+            ],
             outputs=[out],
             device=self.device,
         )
 
     def __repr__(self) -> str:
-        return (f"MotionLibrary({self.num_clips} clips, {self.num_frames} frames at {self.fps:g} fps, "
-                f"{float(self.clip_duration.sum()):.1f} s, device={self.device})")  # fmt: skip
+        return (
+            f"MotionLibrary({self.num_clips} clips, {self.num_frames} frames at {self.fps:g} fps, "
+            f"{float(self.clip_duration.sum()):.1f} s, device={self.device})"
+        )
 
 
 def _concatenate(clips: list[MotionClip], sources: list[str] | None) -> dict:
@@ -156,8 +191,13 @@ def _concatenate(clips: list[MotionClip], sources: list[str] | None) -> dict:
         raise ValueError(f"MotionLibrary.from_clips: clips have different frame rates {sorted(rates)}")
     frames = {key: np.concatenate([getattr(c, key) for c in clips]) for key in FRAME_ARRAYS}
     clip_frames = np.array([c.num_frames for c in clips])
-    return {"frames": frames, "clip_frames": clip_frames, "fps": rates.pop(), "clip_names": [c.name for c in clips],
-            "sources": sources}  # fmt: skip
+    return {
+        "frames": frames,
+        "clip_frames": clip_frames,
+        "fps": rates.pop(),
+        "clip_names": [c.name for c in clips],
+        "sources": sources,
+    }
 
 
 @wp.func

@@ -92,9 +92,10 @@ def quat_from_matrix(m: np.ndarray) -> np.ndarray:
                       m[..., 1, 0] - m[..., 0, 1]], -1),
         ],
         axis=-2,
-    )  # fmt: skip
-    pivots = np.stack([1 + trace, 1 + 2 * m[..., 0, 0] - trace, 1 + 2 * m[..., 1, 1] - trace,
-                       1 + 2 * m[..., 2, 2] - trace], -1)  # fmt: skip
+    )  # fmt: skip  # one row per matrix row
+    pivots = np.stack(
+        [1 + trace, 1 + 2 * m[..., 0, 0] - trace, 1 + 2 * m[..., 1, 1] - trace, 1 + 2 * m[..., 2, 2] - trace], -1
+    )
     best = np.argmax(pivots, axis=-1)
     q = np.take_along_axis(cands, best[..., None, None], axis=-2)[..., 0, :]
     q = quat_normalize(q)

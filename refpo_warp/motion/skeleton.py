@@ -17,7 +17,7 @@ BODY_NAMES: tuple[str, ...] = (
     "Torso", "Spine", "Chest", "Neck", "Head",
     "L_Thorax", "L_Shoulder", "L_Elbow", "L_Wrist", "L_Hand",
     "R_Thorax", "R_Shoulder", "R_Elbow", "R_Wrist", "R_Hand",
-)  # fmt: skip
+)  # fmt: skip  # one row per limb
 NUM_BODIES = len(BODY_NAMES)  # 24
 NUM_JOINTS = NUM_BODIES - 1  # 23 ball joints (three hinges each) below the free root
 NUM_DOFS = 3 * NUM_JOINTS  # 69 actuated DoF
@@ -27,7 +27,7 @@ SMPL_NAMES: tuple[str, ...] = (
     "Pelvis", "L_Hip", "R_Hip", "Torso", "L_Knee", "R_Knee", "Spine", "L_Ankle", "R_Ankle", "Chest",
     "L_Toe", "R_Toe", "Neck", "L_Thorax", "R_Thorax", "Head", "L_Shoulder", "R_Shoulder", "L_Elbow",
     "R_Elbow", "L_Wrist", "R_Wrist", "L_Hand", "R_Hand",
-)  # fmt: skip
+)  # fmt: skip  # rows of ten, in SMPL order
 SMPL_PARENTS = (-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21)
 
 # SMPL_TO_BODY[i] is the index in BODY_NAMES of SMPL joint i; BODY_TO_SMPL is its inverse.
@@ -56,7 +56,7 @@ _OFFSETS = {
     "L_Elbow": (-0.0275, 0.2596, -0.0128), "R_Elbow": (-0.0214, -0.2537, -0.0133),
     "L_Wrist": (-0.0012, 0.2492, 0.0090), "R_Wrist": (-0.0056, -0.2553, 0.0078),
     "L_Hand": (-0.0149, 0.0840, -0.0082), "R_Hand": (-0.0103, -0.0846, -0.0061),
-}  # fmt: skip
+}  # fmt: skip  # left and right of a joint on one row
 REST_OFFSETS = np.array([_OFFSETS[n] for n in BODY_NAMES], dtype=np.float64)  # (24, 3)
 
 # Pelvis joint position J0 in SMPL's y-up template frame (x left, y up, z forward). AMASS ``trans`` + J0 is
@@ -73,7 +73,7 @@ _MASSES = {
     "L_Toe": 0.4, "R_Toe": 0.4, "Torso": 4.4, "Spine": 3.9, "Chest": 9.6, "Neck": 0.65, "Head": 4.3,
     "L_Thorax": 1.1, "R_Thorax": 1.1, "L_Shoulder": 1.95, "R_Shoulder": 1.98, "L_Elbow": 1.05, "R_Elbow": 1.09,
     "L_Wrist": 0.3, "R_Wrist": 0.3, "L_Hand": 0.16, "R_Hand": 0.16,
-}  # fmt: skip
+}  # fmt: skip  # rows of seven, in SMPL order
 BODY_MASSES = np.array([_MASSES[n] for n in BODY_NAMES], dtype=np.float64)
 
 # Joint PD gains (stiffness N·m/rad, damping N·m·s/rad) per body's joint, from the reference tracking setup.
@@ -82,7 +82,7 @@ _GAINS = {
     "Torso": (1000.0, 100.0), "Spine": (1000.0, 100.0), "Chest": (1000.0, 100.0),
     "Neck": (500.0, 50.0), "Head": (500.0, 50.0), "Thorax": (500.0, 50.0), "Shoulder": (500.0, 50.0),
     "Elbow": (500.0, 50.0), "Wrist": (300.0, 30.0), "Hand": (300.0, 30.0),
-}  # fmt: skip
+}  # fmt: skip  # one row per gain group
 PD_GAINS = np.array([(0.0, 0.0)] + [_GAINS[n.split("_")[-1]] for n in BODY_NAMES[1:]], dtype=np.float64)  # (24, 2)
 
 # Policy action a in [-1, 1] maps to a PD target offset + scale * a per DoF (x, y, z hinge of each joint).
@@ -117,4 +117,4 @@ FOOT_BODIES: tuple[str, ...] = ("L_Ankle", "L_Toe", "R_Ankle", "R_Toe")
 FOOT_SOLE_DEPTH = np.array(
     [TOE_SOLE_DEPTH + (0.0 if name.endswith("Toe") else -REST_OFFSETS[BODY_NAMES.index(name[0] + "_Toe"), 2])
      for name in FOOT_BODIES]
-)  # fmt: skip
+)  # fmt: skip  # the sole depth of each foot joint in one expression

@@ -32,8 +32,10 @@ def find_amass_files(folder: Path) -> list[Path]:
 def clip_from_amass(motion: AmassMotion, name: str, fps: float) -> MotionClip:
     """Convert one AMASS motion to a library clip at ``fps`` (model frame, grounded, with velocities)."""
     if resampled_frame_count(motion.num_frames, motion.fps, fps) < MIN_FRAMES:
-        raise MotionDataError(f"{motion.path}: too short to resample: {motion.num_frames} frames at {motion.fps:g} fps "
-                              f"give fewer than {MIN_FRAMES} frames at {fps:g} fps")  # fmt: skip
+        raise MotionDataError(
+            f"{motion.path}: too short to resample: {motion.num_frames} frames at {motion.fps:g} fps "
+            f"give fewer than {MIN_FRAMES} frames at {fps:g} fps"
+        )
     root_pos, root_rot, local_rot = kin.amass_to_model(motion.root_orient, motion.body_pose, motion.trans)
     return build_clip(name, root_pos, root_rot, local_rot, motion.fps, fps)
 

@@ -227,4 +227,3 @@ def _rotation_between(u: np.ndarray, w: np.ndarray) -> np.ndarray:
     w = w / np.linalg.norm(w, axis=-1, keepdims=True)
     q = np.concatenate([np.cross(u, w), 1.0 + np.sum(u * w, axis=-1, keepdims=True)], axis=-1)
     return rot.quat_normalize(q)
-

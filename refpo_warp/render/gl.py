@@ -16,10 +16,15 @@ from refpo_warp.utils.errors import SystemRefusedError
 
 HEADLESS = ("egl", "osmesa")
 CHOICES = ("egl", "osmesa", "glfw")
-INSTALL = {"egl": "Mesa's libEGL (apt-get install libegl1 libgl1) or a GPU driver",
-           "osmesa": "apt-get install libosmesa6", "glfw": "a display (DISPLAY set) and the glfw library"}  # fmt: skip
-_PROBE = ("import mujoco; m = mujoco.MjModel.from_xml_string('<mujoco/>'); r = mujoco.Renderer(m, 8, 8); "
-          "r.update_scene(mujoco.MjData(m)); r.render(); r.close()")  # fmt: skip
+INSTALL = {
+    "egl": "Mesa's libEGL (apt-get install libegl1 libgl1) or a GPU driver",
+    "osmesa": "apt-get install libosmesa6",
+    "glfw": "a display (DISPLAY set) and the glfw library",
+}
+_PROBE = (
+    "import mujoco; m = mujoco.MjModel.from_xml_string('<mujoco/>'); r = mujoco.Renderer(m, 8, 8); "
+    "r.update_scene(mujoco.MjData(m)); r.render(); r.close()"
+)
 
 
 def probe(platform: str) -> str | None:
@@ -38,8 +43,10 @@ def probe(platform: str) -> str | None:
 def no_backend(failures: dict[str, str]) -> SystemRefusedError:
     tried = "; ".join(f"MUJOCO_GL={p}: {why}" for p, why in failures.items())
     options = "; ".join(f"MUJOCO_GL={p} needs {INSTALL[p]}" for p in CHOICES)
-    return SystemRefusedError(f"no OpenGL platform for MuJoCo's offscreen renderer works here ({tried}). Set "
-                              f"MUJOCO_GL to one that does: {options}")  # fmt: skip
+    return SystemRefusedError(
+        f"no OpenGL platform for MuJoCo's offscreen renderer works here ({tried}). Set "
+        f"MUJOCO_GL to one that does: {options}"
+    )
 
 
 def select_gl_platform() -> str:

@@ -38,8 +38,10 @@ def themed(model) -> None:
 
     plain = np.all(np.isclose(model.geom_rgba, DEFAULT_RGBA), axis=1)
     planes = model.geom_type == mujoco.mjtGeom.mjGEOM_PLANE
-    targets = np.array(["target" in (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or "")
-                        for g in range(model.ngeom)], dtype=bool)  # fmt: skip
+    targets = np.array(
+        ["target" in (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or "") for g in range(model.ngeom)],
+        dtype=bool,
+    )
     model.geom_rgba[plain & ~planes] = BODY_RGBA
     model.geom_rgba[plain & planes] = FLOOR_RGBA
     model.geom_rgba[plain & targets] = TARGET_RGBA
@@ -69,9 +71,18 @@ def camera_choices(model) -> list[str]:
 class MujocoScene:
     """An offscreen renderer of ``model`` (see the module docstring)."""
 
-    def __init__(self, model, width: int = 640, height: int = 480, camera: str = "fixed", track_body: str | None = None,
-                 shadows: bool = False, distance: float | None = None, elevation: float = -20.0,
-                 azimuth: float = 90.0) -> None:  # fmt: skip
+    def __init__(
+        self,
+        model,
+        width: int = 640,
+        height: int = 480,
+        camera: str = "fixed",
+        track_body: str | None = None,
+        shadows: bool = False,
+        distance: float | None = None,
+        elevation: float = -20.0,
+        azimuth: float = 90.0,
+    ) -> None:
         """``distance``: of the free camera from what it looks at (default: from the size of the model's geoms at
         its initial pose); ``elevation``, ``azimuth``: its angles in degrees (-90 looks straight down)."""
         import mujoco
@@ -89,8 +100,10 @@ class MujocoScene:
         try:
             self.renderer = mujoco.Renderer(model, self.height, self.width, max_geom=model.ngeom + 256)
         except Exception as err:  # noqa: BLE001  (each GL platform fails in its own way)
-            raise SystemRefusedError(f"MuJoCo's offscreen renderer could not start ({type(err).__name__}: {err}); "
-                                     f"set MUJOCO_GL=egl or MUJOCO_GL=osmesa (docs/videos.md)") from None  # fmt: skip
+            raise SystemRefusedError(
+                f"MuJoCo's offscreen renderer could not start ({type(err).__name__}: {err}); "
+                f"set MUJOCO_GL=egl or MUJOCO_GL=osmesa (docs/videos.md)"
+            ) from None
         self.camera = mujoco.MjvCamera()
         if camera in CAMERA_MODES:
             mujoco.mj_forward(model, self.data)
@@ -109,8 +122,9 @@ class MujocoScene:
             self.camera.fixedcamid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
         self.shadows = bool(shadows)
 
-    def render(self, qpos: np.ndarray, mocap_pos: np.ndarray | None = None, markers: tuple[Marker, ...] = ()
-               ) -> np.ndarray:  # fmt: skip
+    def render(
+        self, qpos: np.ndarray, mocap_pos: np.ndarray | None = None, markers: tuple[Marker, ...] = ()
+    ) -> np.ndarray:
         """The frame of the model at joint positions ``qpos`` (and mocap body positions), with ``markers``."""
         mj, data = self._mj, self.data
         data.qpos[:] = qpos
@@ -126,12 +140,23 @@ class MujocoScene:
             geom = scene.geoms[scene.ngeom]
             rgba = np.asarray(marker.rgba, dtype=np.float32)
             if marker.end is None:
-                mj.mjv_initGeom(geom, mj.mjtGeom.mjGEOM_SPHERE, np.full(3, marker.size), np.asarray(marker.start),
-                                np.eye(3).flatten(), rgba)  # fmt: skip
+                mj.mjv_initGeom(
+                    geom,
+                    mj.mjtGeom.mjGEOM_SPHERE,
+                    np.full(3, marker.size),
+                    np.asarray(marker.start),
+                    np.eye(3).flatten(),
+                    rgba,
+                )
             else:
                 mj.mjv_initGeom(geom, mj.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.eye(3).flatten(), rgba)
-                mj.mjv_connector(geom, mj.mjtGeom.mjGEOM_CAPSULE, marker.size, np.asarray(marker.start, np.float64),
-                                 np.asarray(marker.end, np.float64))  # fmt: skip
+                mj.mjv_connector(
+                    geom,
+                    mj.mjtGeom.mjGEOM_CAPSULE,
+                    marker.size,
+                    np.asarray(marker.start, np.float64),
+                    np.asarray(marker.end, np.float64),
+                )
             scene.ngeom += 1
         return self.renderer.render()
 

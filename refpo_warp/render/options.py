@@ -45,12 +45,20 @@ class VideoOptions:
 
     option_rules = {
         "flow_steps": ListOf(NUM_FLOW_STEPS, min_len=1, max_len=4, optional=True),
-        "num_envs": Int(1, 64), "length": Int(1, 100_000, optional=True),
-        "width": Int(16, 4096, multiple_of=2), "height": Int(16, 4096, multiple_of=2), "camera": Text(),
-        "format": OneOf(VIDEO_FORMATS), "fps": Real(1, 240, optional=True), "shadows": Flag(), "reference": Flag(),
-        "seed": Int(0, 2**32 - 1, optional=True), "name": Text(optional=True), "at_end": Flag(),
+        "num_envs": Int(1, 64),
+        "length": Int(1, 100_000, optional=True),
+        "width": Int(16, 4096, multiple_of=2),
+        "height": Int(16, 4096, multiple_of=2),
+        "camera": Text(),
+        "format": OneOf(VIDEO_FORMATS),
+        "fps": Real(1, 240, optional=True),
+        "shadows": Flag(),
+        "reference": Flag(),
+        "seed": Int(0, 2**32 - 1, optional=True),
+        "name": Text(optional=True),
+        "at_end": Flag(),
         "interval": Int(0, 10**8),
-    }  # fmt: skip
+    }
 
     def __post_init__(self) -> None:
         values = {f.name: getattr(self, f.name) for f in fields(self)}

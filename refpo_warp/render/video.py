@@ -25,9 +25,17 @@ def write_mp4(frames: list[np.ndarray], path: Path, fps: float) -> Path:
     h, w = frames[0].shape[:2]
     h2, w2 = h - h % 2, w - w % 2
     with atomic_path(path) as tmp:
-        writer = imageio_ffmpeg.write_frames(str(tmp), (w2, h2), fps=fps, codec="libx264", quality=7,
-                                             pix_fmt_out="yuv420p", macro_block_size=1, ffmpeg_log_level="error",
-                                             output_params=["-f", "mp4"])  # fmt: skip
+        writer = imageio_ffmpeg.write_frames(
+            str(tmp),
+            (w2, h2),
+            fps=fps,
+            codec="libx264",
+            quality=7,
+            pix_fmt_out="yuv420p",
+            macro_block_size=1,
+            ffmpeg_log_level="error",
+            output_params=["-f", "mp4"],
+        )
         writer.send(None)  # start ffmpeg
         try:
             for frame in frames:
@@ -43,8 +51,15 @@ def write_gif(frames: list[np.ndarray], path: Path, fps: float) -> Path:
 
     images = [Image.fromarray(frame) for frame in frames]
     with atomic_write(path) as f:
-        images[0].save(f, format="GIF", save_all=True, append_images=images[1:], loop=0,
-                       duration=max(20, round(1000 / fps / 10) * 10), optimize=False)  # fmt: skip
+        images[0].save(
+            f,
+            format="GIF",
+            save_all=True,
+            append_images=images[1:],
+            loop=0,
+            duration=max(20, round(1000 / fps / 10) * 10),
+            optimize=False,
+        )
     return path
 
 

@@ -19,8 +19,14 @@ from refpo_warp.runner.distributed import process_rank, rank_device
 from refpo_warp.runner.runner import Runner
 from refpo_warp.utils.errors import ConfigError
 
-__all__ = ["build_runner", "check_obs_groups", "env_steps_per_iteration", "num_iterations", "rsl_rl_config",
-           "seed_everything"]
+__all__ = [
+    "build_runner",
+    "check_obs_groups",
+    "env_steps_per_iteration",
+    "num_iterations",
+    "rsl_rl_config",
+    "seed_everything",
+]
 
 
 def seed_everything(seed: int) -> None:
@@ -68,8 +74,10 @@ def check_obs_groups(cfg: dict, env) -> None:
     for name, groups in cfg["runner"]["obs_groups"].items():
         missing = [g for g in groups if g not in available]
         if missing:
-            raise ConfigError(f"runner.obs_groups.{name}={groups}: the {cfg['task']} env has no observation group "
-                              f"{', '.join(map(repr, missing))}; its groups are {', '.join(available)}")  # fmt: skip
+            raise ConfigError(
+                f"runner.obs_groups.{name}={groups}: the {cfg['task']} env has no observation group "
+                f"{', '.join(map(repr, missing))}; its groups are {', '.join(available)}"
+            )
 
 
 def build_runner(cfg: dict, log_dir: Path | None, env=None):
@@ -81,11 +89,17 @@ def build_runner(cfg: dict, log_dir: Path | None, env=None):
     rank = process_rank()
     device = rank_device(cfg["device"], rank)
     if env is None:
-        env = make_env(cfg["task"], num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank,
-                       **cfg["env"])  # fmt: skip
+        env = make_env(cfg["task"], num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank, **cfg["env"])
     check_obs_groups(cfg, env)
     log_dir = log_dir if rank.is_main else None
     run_info = {"task": cfg["task"], "algo": cfg["algo"]}  # written into and checked against every checkpoint
-    runner = Runner(env, rsl_rl_config(cfg), log_dir=str(log_dir) if log_dir else None, device=device,
-                    log_full=cfg["runner"]["log_full"], run_info=run_info, verbose=cfg["verbose"])  # fmt: skip
+    runner = Runner(
+        env,
+        rsl_rl_config(cfg),
+        log_dir=str(log_dir) if log_dir else None,
+        device=device,
+        log_full=cfg["runner"]["log_full"],
+        run_info=run_info,
+        verbose=cfg["verbose"],
+    )
     return env, runner

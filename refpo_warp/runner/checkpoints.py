@@ -76,8 +76,10 @@ def _check_contents(path: Path, data: Any) -> None:
         raise CheckpointError(f"{path}: not a checkpoint: it holds a {type(data).__name__}, not a dict of states")
     missing = [k for k in REQUIRED_KEYS if k not in data]
     if missing:
-        raise CheckpointError(f"{path}: not an rsl_rl/refpo_warp checkpoint: missing {', '.join(missing)} "
-                              f"(found: {', '.join(map(str, list(data)[:8])) or 'nothing'})")  # fmt: skip
+        raise CheckpointError(
+            f"{path}: not an rsl_rl/refpo_warp checkpoint: missing {', '.join(missing)} "
+            f"(found: {', '.join(map(str, list(data)[:8])) or 'nothing'})"
+        )
     if not isinstance(data["iter"], int) or isinstance(data["iter"], bool) or data["iter"] < 0:
         raise CheckpointError(f"{path}: 'iter' must be a non-negative integer, got {data['iter']!r}")
     for key in ("actor_state_dict", "critic_state_dict"):
@@ -86,8 +88,9 @@ def _check_contents(path: Path, data: Any) -> None:
             raise CheckpointError(f"{path}: '{key}' is not a state dict of tensors")
         for name, tensor in state.items():
             if tensor.is_floating_point() and not bool(torch.isfinite(tensor).all()):
-                raise CheckpointError(f"{path}: '{key}' holds NaN or infinite values in '{name}'; the weights are "
-                                      f"unusable")  # fmt: skip
+                raise CheckpointError(
+                    f"{path}: '{key}' holds NaN or infinite values in '{name}'; the weights are unusable"
+                )
 
 
 def check_fits(path: str | Path, data: dict, alg, task: str | None = None, algo: str | None = None) -> None:
@@ -96,13 +99,17 @@ def check_fits(path: str | Path, data: dict, alg, task: str | None = None, algo:
     for name, expected in (("task", task), ("algo", algo)):
         if expected is not None and meta.get(name) is not None and meta[name] != expected:
             raise CheckpointError(f"{path}: written by a run with {name}={meta[name]}; this run has {name}={expected}")
-    for key, model in (("actor_state_dict", uncompiled(alg, "actor")), ("critic_state_dict", uncompiled(alg, "critic"))):
+    for key, model in (
+        ("actor_state_dict", uncompiled(alg, "actor")),
+        ("critic_state_dict", uncompiled(alg, "critic")),
+    ):
         have = {k: tuple(v.shape) for k, v in model.state_dict().items()}
         got = {k: tuple(v.shape) for k, v in data[key].items()}
         problems = [f"'{k}' missing" for k in have if k not in got]
         problems += [f"'{k}' unexpected" for k in got if k not in have]
-        problems += [f"'{k}' is {got[k]} in the file, {have[k]} in the model" for k in have
-                     if k in got and got[k] != have[k]]  # fmt: skip
+        problems += [
+            f"'{k}' is {got[k]} in the file, {have[k]} in the model" for k in have if k in got and got[k] != have[k]
+        ]
         if problems:
             more = f" (and {len(problems) - 3} more)" if len(problems) > 3 else ""
             raise CheckpointError(
@@ -143,8 +150,12 @@ def load_latest(runner, run_dir: str | Path, task: str | None = None, algo: str 
             print(f"warning: skipping checkpoint {err}", file=sys.stderr, flush=True)
             continue
         if problems:
-            print(f"warning: continuing from {path.name} (iteration {data['iter']}), the newest usable checkpoint; "
-                  f"{len(problems)} newer one(s) skipped (see above)", file=sys.stderr, flush=True)  # fmt: skip
+            print(
+                f"warning: continuing from {path.name} (iteration {data['iter']}), the newest usable checkpoint; "
+                f"{len(problems)} newer one(s) skipped (see above)",
+                file=sys.stderr,
+                flush=True,
+            )
         return path, data
     if not problems:
         raise CheckpointError(f"{run_dir}: no checkpoint (model_<iteration>.pt) found")

@@ -47,8 +47,9 @@ class ProgressLogger(Logger):
     waits for ``end_chunk`` (which adds the evaluation run between chunks) before it is written and printed.
     """
 
-    def __init__(self, *args, log_full: bool = False, verbose: bool = False, env_steps_per_step: int = 1,
-                 **kwargs) -> None:  # fmt: skip
+    def __init__(
+        self, *args, log_full: bool = False, verbose: bool = False, env_steps_per_step: int = 1, **kwargs
+    ) -> None:
         super().__init__(*args, **kwargs)
         self.log_full = log_full
         self.verbose = verbose
@@ -73,8 +74,9 @@ class ProgressLogger(Logger):
         if self.final_chunk:
             super().stop_logging_writer()
 
-    def log(self, it: int, start_it: int, total_it: int, collect_time: float, learn_time: float,
-            loss_dict: dict, **kwargs) -> None:  # fmt: skip
+    def log(
+        self, it: int, start_it: int, total_it: int, collect_time: float, learn_time: float, loss_dict: dict, **kwargs
+    ) -> None:
         bad = {k: v for k, v in loss_dict.items() if not math.isfinite(float(v))}
         if bad:
             raise NonFiniteLossError(f"Non-finite training statistics at iteration {it}: {bad}")
@@ -129,13 +131,21 @@ class ProgressLogger(Logger):
     def _progress_line(it: int, total_it: int, row: dict) -> str:
         # 0-based, as model_<it>.pt and progress.jsonl count: the last iteration is total_it - 1
         width = len(str(total_it - 1))
-        parts = [f"[it {it:>{width}}/{total_it - 1}]", f"steps {row['env_steps']:>11,}",
-                 f"{row['steps_per_s']:>8,} sps"]
+        parts = [
+            f"[it {it:>{width}}/{total_it - 1}]",
+            f"steps {row['env_steps']:>11,}",
+            f"{row['steps_per_s']:>8,} sps",
+        ]
         if "reward_mean" in row:
             parts.append(f"return {row['reward_mean']:9.2f}")
             parts.append(f"len {row['episode_length_mean']:6.1f}")
-        for key in ("Episode/success", "Flow/ratio_max", "Flow/clip_fraction", "Flow/explosion_rate",
-                    "Flow/straightness_error"):  # fmt: skip
+        for key in (
+            "Episode/success",
+            "Flow/ratio_max",
+            "Flow/clip_fraction",
+            "Flow/explosion_rate",
+            "Flow/straightness_error",
+        ):
             if key in row:
                 parts.append(f"{key.split('/')[-1]} {row[key]:.3g}")
         parts += [f"{k.split('/')[-1]} {v:.1f}" for k, v in row.items() if k.startswith("eval/return")]

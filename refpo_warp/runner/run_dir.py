@@ -45,8 +45,10 @@ def check_new_run_dir(run_dir: Path) -> None:
             return  # a refpo_warp run without checkpoints: starting it again is what the user asks for
     except DataFileError:
         pass
-    raise ConfigError(f"run_dir={run_dir} is not a refpo_warp run directory (no usable {RUN_CONFIG}) but holds "
-                      f"{', '.join(clashes[:5])}, which a run would replace; choose a new or empty directory")
+    raise ConfigError(
+        f"run_dir={run_dir} is not a refpo_warp run directory (no usable {RUN_CONFIG}) but holds "
+        f"{', '.join(clashes[:5])}, which a run would replace; choose a new or empty directory"
+    )
 
 
 @contextlib.contextmanager
@@ -62,8 +64,10 @@ def run_lock(run_dir: Path) -> Iterator[None]:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            raise ConfigError(f"run_dir={run_dir} is in use by another training process; wait for it to finish "
-                              f"or choose another run_dir") from None  # fmt: skip
+            raise ConfigError(
+                f"run_dir={run_dir} is in use by another training process; wait for it to finish "
+                f"or choose another run_dir"
+            ) from None
         yield
     finally:
         os.close(fd)

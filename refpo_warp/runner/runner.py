@@ -38,18 +38,32 @@ class Runner(OnPolicyRunner):
     ``run_info`` (``{"task", "algo"}``) is written into every checkpoint and checked when one is loaded.
     """
 
-    def __init__(self, env, train_cfg: dict, log_dir: str | None = None, device: str = "cpu",
-                 log_full: bool = False, run_info: dict | None = None,
-                 verbose: bool = False) -> None:  # fmt: skip
+    def __init__(
+        self,
+        env,
+        train_cfg: dict,
+        log_dir: str | None = None,
+        device: str = "cpu",
+        log_full: bool = False,
+        run_info: dict | None = None,
+        verbose: bool = False,
+    ) -> None:
         with quiet_stdout(not verbose):  # rsl_rl prints the observation sets and the models
             super().__init__(env, train_cfg, log_dir=log_dir, device=device)
         old = self.logger
         self.logger = ProgressLogger(
-            log_dir=log_dir, cfg=self.cfg, env_cfg=env.cfg, num_envs=env.num_envs,
-            is_distributed=self.is_distributed, gpu_world_size=self.gpu_world_size,
-            gpu_global_rank=self.gpu_global_rank, device=device, log_full=log_full, verbose=verbose,
+            log_dir=log_dir,
+            cfg=self.cfg,
+            env_cfg=env.cfg,
+            num_envs=env.num_envs,
+            is_distributed=self.is_distributed,
+            gpu_world_size=self.gpu_world_size,
+            gpu_global_rank=self.gpu_global_rank,
+            device=device,
+            log_full=log_full,
+            verbose=verbose,
             env_steps_per_step=getattr(env, "env_steps_per_step", 1),
-        )  # fmt: skip
+        )
         self.logger.git_status_repos = old.git_status_repos + [__file__]
         self.run_info = dict(run_info or {})
         self._learned = False
@@ -98,8 +112,10 @@ class Runner(OnPolicyRunner):
         self.cfg["multi_gpu"] = {"global_rank": rank.rank, "local_rank": rank.local_rank, "world_size": rank.world_size}
         device = torch.device(self.device)
         if device.type == "cuda" and device != torch.device("cuda", rank.local_rank):
-            raise ValueError(f"Device '{self.device}' does not match the device of local rank {rank.local_rank}: "
-                             f"cuda:{rank.local_rank}")  # fmt: skip
+            raise ValueError(
+                f"Device '{self.device}' does not match the device of local rank {rank.local_rank}: "
+                f"cuda:{rank.local_rank}"
+            )
         init_process_group(rank, self.device)
 
     def save(self, path: str, infos: dict | None = None) -> None:
@@ -109,8 +125,11 @@ class Runner(OnPolicyRunner):
         saved = self.alg.save()
         saved["iter"] = self.current_learning_iteration
         saved["infos"] = infos
-        saved[META_KEY] = {**self.run_info, "env_steps": int(self.logger.tot_timesteps),
-                           "time_s": float(self.logger.tot_time)}  # fmt: skip
+        saved[META_KEY] = {
+            **self.run_info,
+            "env_steps": int(self.logger.tot_timesteps),
+            "time_s": float(self.logger.tot_time),
+        }
         with atomic_write(path) as f:
             torch.save(saved, f)
         self.logger.save_model(path, self.current_learning_iteration)

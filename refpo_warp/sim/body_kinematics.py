@@ -6,8 +6,9 @@ from refpo_warp.utils.warp_setup import wp
 
 
 @wp.func
-def world_com_velocity(body_qd: wp.array2d(dtype=wp.spatial_vector), body_mass: wp.array2d(dtype=float),
-                       world: int) -> wp.vec3:  # fmt: skip
+def world_com_velocity(
+    body_qd: wp.array2d(dtype=wp.spatial_vector), body_mass: wp.array2d(dtype=float), world: int
+) -> wp.vec3:
     """Linear velocity of the centre of mass of all bodies of ``world``: sum(m_b v_b) / sum(m_b).
 
     Equals MuJoCo's ``subtreelinvel`` sensor of a root body whose subtree is the whole world (e.g. a walker's torso).

@@ -15,4 +15,3 @@ def world_state_finite(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dt
         if not wp.isfinite(joint_qd[world, i]):
             return False
     return True
-

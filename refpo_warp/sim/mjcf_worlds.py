@@ -27,8 +27,15 @@ def mjcf_timestep(mjcf_path: str | Path) -> float:
         raise ValueError(f"{mjcf_path}: <option timestep='{value}'> is not a number") from err
 
 
-def build_mjcf_worlds(mjcf_path: str | Path, num_worlds: int, device: str, contact_gap: float = 0.0,
-                      edit_world=None, ground=None, **mjcf_options):  # fmt: skip
+def build_mjcf_worlds(
+    mjcf_path: str | Path,
+    num_worlds: int,
+    device: str,
+    contact_gap: float = 0.0,
+    edit_world=None,
+    ground=None,
+    **mjcf_options,
+):
     """Import ``mjcf_path`` once and replicate it into ``num_worlds`` worlds of one finalized Newton model.
 
     Args:

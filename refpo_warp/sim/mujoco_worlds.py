@@ -41,9 +41,17 @@ class MuJoCoWorlds:
         build_options: Keyword arguments of ``build_mjcf_worlds`` (``edit_world``, ``ground``, ``add_mjcf`` options).
     """
 
-    def __init__(self, mjcf_path: str | Path, num_worlds: int, device: str, substeps: int = 1,
-                 solver_options: dict | None = None, physics_dt: float | None = None, warn_overflow: bool = True,
-                 **build_options) -> None:  # fmt: skip
+    def __init__(
+        self,
+        mjcf_path: str | Path,
+        num_worlds: int,
+        device: str,
+        substeps: int = 1,
+        solver_options: dict | None = None,
+        physics_dt: float | None = None,
+        warn_overflow: bool = True,
+        **build_options,
+    ) -> None:
         import newton
 
         if substeps < 1:
@@ -128,7 +136,10 @@ class MuJoCoWorlds:
         self.solver.reset(self.state, world_mask=self._world_mask, flags=0)
         # Forward kinematics of the reset worlds only (the solver's step already did it for the others); the FK mask
         # is per articulation, and a world may hold several (e.g. ball and cup).
-        wp.launch(_articulations_of_worlds, dim=self.model.articulation_count,
-                  inputs=[self.reset_mask, self.model.articulation_world, self._articulation_mask],
-                  device=self.model.device)  # fmt: skip
+        wp.launch(
+            _articulations_of_worlds,
+            dim=self.model.articulation_count,
+            inputs=[self.reset_mask, self.model.articulation_world, self._articulation_mask],
+            device=self.model.device,
+        )
         self._eval_fk(self.model, self.state.joint_q, self.state.joint_qd, self.state, mask=self._articulation_mask)

@@ -156,8 +156,9 @@ class SweepExecutor:
                     rc = out.exit_code
                     codes = self.status.get(job.run.key, {}).get("exit_codes", []) if job.attempt > 1 else []
                     finished = rc == 0 and run_state(job.run, prints[job.run.key]) == "done"
-                    self._record(job.run, exit_codes=codes + [rc], seconds=round(out.seconds, 1), node=out.node,
-                                 **out.status)  # fmt: skip
+                    self._record(
+                        job.run, exit_codes=codes + [rc], seconds=round(out.seconds, 1), node=out.node, **out.status
+                    )
                     where = f" on {out.node}" if self.launcher.names_nodes else ""
                     if finished:
                         done_count += 1
@@ -165,14 +166,18 @@ class SweepExecutor:
                         summary.finished.append(job.run.key)
                         self._record(job.run, state="done")
                         eta = self._eta(queue, running)
-                        self.echo(f"[sweep {done_count}/{len(todo)}] done {job.run.key} in {_duration(out.seconds)}"
-                                  f"{where}  {self._returns(job.run)} | running {len(running)}, queued {len(queue)} | "
-                                  f"elapsed {_duration(time.monotonic() - start)}"
-                                  + (f", ETA {_duration(eta)}" if eta is not None else ""))  # fmt: skip
+                        self.echo(
+                            f"[sweep {done_count}/{len(todo)}] done {job.run.key} in {_duration(out.seconds)}"
+                            f"{where}  {self._returns(job.run)} | running {len(running)}, queued {len(queue)} | "
+                            f"elapsed {_duration(time.monotonic() - start)}"
+                            + (f", ETA {_duration(eta)}" if eta is not None else "")
+                        )
                         continue
                     why = out.error or (f"exit {rc}" if rc else "exit 0 without a matching eval.json")
-                    self.echo(f"[sweep] FAILED {job.run.key} (attempt {job.attempt}, {why}, {_duration(out.seconds)}"
-                              f"{where}): {self._last_error(job.log)}\n        log: {job.log}")  # fmt: skip
+                    self.echo(
+                        f"[sweep] FAILED {job.run.key} (attempt {job.attempt}, {why}, {_duration(out.seconds)}"
+                        f"{where}): {self._last_error(job.log)}\n        log: {job.log}"
+                    )
                     if job.attempt <= self.retries:
                         self.echo(f"[sweep] retrying {job.run.key} from scratch (attempt {job.attempt + 1})")
                         queue.appendleft((job.run, job.attempt + 1))

@@ -64,11 +64,17 @@ def reward_curve_grid(curves: dict[str, dict[str, dict[str, tuple[list, list]]]]
         ax.tick_params(labelsize=7)
         ax.xaxis.get_offset_text().set_fontsize(7)
         ax.grid(alpha=0.3)
-    for ax in axes[-min(5, len(axes)):]:
+    for ax in axes[-min(5, len(axes)) :]:
         ax.set_xlabel("env steps", fontsize=8)
     axes[0].set_ylabel("episode return (mean over seeds)", fontsize=8)
-    fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=min(4, max(1, len(handles))),
-               fontsize=7, frameon=False)  # fmt: skip
+    fig.legend(
+        list(handles.values()),
+        list(handles),
+        loc="lower center",
+        ncol=min(4, max(1, len(handles))),
+        fontsize=7,
+        frameon=False,
+    )
     fig.tight_layout(rect=(0, 0.06 + 0.02 * math.ceil(len(handles) / 4), 1, 1))
     save_figure(fig, path, dpi=130)
     plt.close(fig)
@@ -85,8 +91,14 @@ def ratio_spikes(panels: dict[str, dict[str, list[dict]]], path: Path, seed: int
         top, bottom = axes[0, col], axes[1, col]
         for (name, rows), color in zip(methods.items(), colors * 4):
             top.plot(*series(rows, "reward_mean"), color=color, lw=1.0, label=f"{name} (training)")
-            top.plot(*series(rows, "eval/return_N10"), color=color, ls="none", marker="o", ms=3,
-                     label=f"{name} (evaluation, N=10)")  # fmt: skip
+            top.plot(
+                *series(rows, "eval/return_N10"),
+                color=color,
+                ls="none",
+                marker="o",
+                ms=3,
+                label=f"{name} (evaluation, N=10)",
+            )
             key = ratio_key(rows)
             if key:
                 bottom.plot(*series(rows, key), color=color, lw=0.9, label=name)
@@ -115,8 +127,10 @@ def latency_bars(latency: dict, path: Path, names: dict[str, str] | None = None)
         groups.setdefault((row["task"], row["batch"]), []).append(row)
     fig, axes = plt.subplots(1, len(groups), figsize=(3.6 * len(groups), 3.8), squeeze=False)
     for ax, ((task, batch), rows) in zip(axes[0], groups.items()):
-        labels = [names.get(r["algo"], r["algo"]) + (f", N={r['flow_steps']}" if r.get("flow_steps") else ", mean")
-                  for r in rows]  # fmt: skip
+        labels = [
+            names.get(r["algo"], r["algo"]) + (f", N={r['flow_steps']}" if r.get("flow_steps") else ", mean")
+            for r in rows
+        ]
         values = [r["latency_ms"] for r in rows]
         bars = ax.bar(range(len(rows)), values, color=["C0" if r.get("flow_steps") != 1 else "C2" for r in rows])
         ax.bar_label(bars, labels=[f"{v:.3g}" for v in values], fontsize=7)
@@ -150,10 +164,12 @@ def sweep_curves(sweep_dir: str | Path, out_dir: str | Path | None = None, windo
                 ret = [r["reward_mean"] for r in rows if "reward_mean" in r]
                 if len(length) >= 2 * window and len(ret) >= 2 * window:
                     first, last = np.mean(length[:window]), np.mean(length[-window:])
-                    print(f"{task_dir.name} {method_dir.name} {seed_dir.name}: episode length {first:.1f} -> "
-                          f"{last:.1f} ({last / first:.2f}x), return {np.mean(ret[:window]):.2f} -> "
-                          f"{np.mean(ret[-window:]):.2f}, {rows[-1]['env_steps']:,} env steps, "
-                          f"{rows[-1]['time_s']:.0f} s")  # fmt: skip
+                    print(
+                        f"{task_dir.name} {method_dir.name} {seed_dir.name}: episode length {first:.1f} -> "
+                        f"{last:.1f} ({last / first:.2f}x), return {np.mean(ret[:window]):.2f} -> "
+                        f"{np.mean(ret[-window:]):.2f}, {rows[-1]['env_steps']:,} env steps, "
+                        f"{rows[-1]['time_s']:.0f} s"
+                    )
         if any(runs.values()):
             written.append(training_curves({k: v for k, v in runs.items() if v}, out / f"{task_dir.name}_curves.png"))
     return written

@@ -63,10 +63,16 @@ def aggregate(scores: dict[str, np.ndarray], seed: int = 0, reps: int = REPS) ->
         return np.array([metrics.aggregate_mean(matrix), metrics.aggregate_iqm(matrix)])
 
     with _quiet():
-        points, intervals = library.get_interval_estimates(scores, both, reps=reps,
-                                                           random_state=np.random.RandomState(seed))  # fmt: skip
-    return {name: {stat: Estimate(float(points[name][i]), float(intervals[name][0, i]), float(intervals[name][1, i]))
-                   for i, stat in enumerate(("mean", "iqm"))} for name in scores}  # fmt: skip
+        points, intervals = library.get_interval_estimates(
+            scores, both, reps=reps, random_state=np.random.RandomState(seed)
+        )
+    return {
+        name: {
+            stat: Estimate(float(points[name][i]), float(intervals[name][0, i]), float(intervals[name][1, i]))
+            for i, stat in enumerate(("mean", "iqm"))
+        }
+        for name in scores
+    }
 
 
 def improvement(x: np.ndarray, y: np.ndarray, seed: int = 0, reps: int = REPS) -> Estimate:
@@ -77,8 +83,11 @@ def improvement(x: np.ndarray, y: np.ndarray, seed: int = 0, reps: int = REPS) -
     if pair["x"].shape[1] != pair["y"].shape[1]:
         raise ValueError("x and y must have the same tasks (columns)")
     with _quiet():
-        points, intervals = library.get_interval_estimates({"xy": (pair["x"], pair["y"])},
-                                                           metrics.probability_of_improvement, reps=reps,
-                                                           random_state=np.random.RandomState(seed))  # fmt: skip
+        points, intervals = library.get_interval_estimates(
+            {"xy": (pair["x"], pair["y"])},
+            metrics.probability_of_improvement,
+            reps=reps,
+            random_state=np.random.RandomState(seed),
+        )
     low, high = np.asarray(intervals["xy"], dtype=float).ravel()
     return Estimate(float(np.asarray(points["xy"]).ravel()[0]), float(low), float(high))

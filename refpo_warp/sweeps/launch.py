@@ -25,8 +25,9 @@ STOP_GRACE_S = 30.0  # a run's time to exit after SIGINT (checkpoint, summary) b
 PR_SET_PDEATHSIG = 1
 
 
-def train_command(args: Sequence[str], device: str, launcher: Sequence[str] = (),
-                  python: str = sys.executable) -> list[str]:  # fmt: skip
+def train_command(
+    args: Sequence[str], device: str, launcher: Sequence[str] = (), python: str = sys.executable
+) -> list[str]:
     """``[launcher...] python -m refpo_warp train <run args> device=<device>``: what every backend runs for a run."""
     return [*launcher, python, "-m", "refpo_warp", "train", *args, f"device={device}"]
 
@@ -44,8 +45,9 @@ def hostname() -> str:
     return socket.gethostname()
 
 
-def start_training(run_dir: Path, header: str, cmd: Sequence[str], env: Mapping[str, str], cwd: str | Path,
-                   detach: bool = False) -> subprocess.Popen:  # fmt: skip
+def start_training(
+    run_dir: Path, header: str, cmd: Sequence[str], env: Mapping[str, str], cwd: str | Path, detach: bool = False
+) -> subprocess.Popen:
     """Clear the run dir of an earlier attempt (its log becomes ``train.attempt<k>.log``), write ``# <header>: <cmd>``
     as the first line of ``train.log`` and start ``cmd`` with its output there.
 
@@ -61,9 +63,14 @@ def start_training(run_dir: Path, header: str, cmd: Sequence[str], env: Mapping[
         preexec = _detached_child() if detach else None
         # preexec_fn despite a Ray worker's threads: the child only makes two system calls before it execs
         return subprocess.Popen(
-            list(cmd), stdout=f, stderr=subprocess.STDOUT, cwd=cwd, env=dict(env), start_new_session=detach,
+            list(cmd),
+            stdout=f,
+            stderr=subprocess.STDOUT,
+            cwd=cwd,
+            env=dict(env),
+            start_new_session=detach,
             preexec_fn=preexec,  # noqa: PLW1509
-        )  # fmt: skip
+        )
 
 
 def _detached_child():

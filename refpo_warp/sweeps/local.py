@@ -51,6 +51,8 @@ def cuda_devices(sweep: Sweep) -> int:
     import torch
 
     if not torch.cuda.device_count():
-        raise ConfigError(f"Sweep '{sweep.name}' trains on CUDA (device: {sweep.device}) but no CUDA device is "
-                          "available here (--dry-run validates it without training)")  # fmt: skip
+        raise ConfigError(
+            f"Sweep '{sweep.name}' trains on CUDA (device: {sweep.device}) but no CUDA device is "
+            "available here (--dry-run validates it without training)"
+        )
     return torch.cuda.device_count()

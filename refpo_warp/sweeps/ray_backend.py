@@ -75,11 +75,15 @@ def run_resources(sweep: Sweep, options: RayOptions) -> tuple[float, float]:
     if options.cpus_per_run == 0:
         raise ConfigError("--cpus-per-run must be above 0: a run's process needs a CPU")
     if cuda and gpus == 0:
-        raise ConfigError(f"Sweep '{sweep.name}' trains on CUDA (device: {sweep.device}): --gpus-per-run must be above "
-                          "0 (1, or e.g. 0.5 for two runs per GPU)")  # fmt: skip
+        raise ConfigError(
+            f"Sweep '{sweep.name}' trains on CUDA (device: {sweep.device}): --gpus-per-run must be above "
+            "0 (1, or e.g. 0.5 for two runs per GPU)"
+        )
     if not cuda and gpus > 0:
-        raise ConfigError(f"Sweep '{sweep.name}' trains on the CPU (device: {sweep.device}): --gpus-per-run must be 0 "
-                          "(or train on CUDA: device=cuda)")  # fmt: skip
+        raise ConfigError(
+            f"Sweep '{sweep.name}' trains on the CPU (device: {sweep.device}): --gpus-per-run must be 0 "
+            "(or train on CUDA: device=cuda)"
+        )
     return gpus, options.cpus_per_run
 
 
@@ -110,8 +114,9 @@ def _first_line(err: BaseException) -> str:
 class RayLauncher(Launcher):
     names_nodes = True
 
-    def __init__(self, sweep: Sweep, options: RayOptions, jobs: int | None = None, launcher: str = "",
-                 echo=print) -> None:  # fmt: skip
+    def __init__(
+        self, sweep: Sweep, options: RayOptions, jobs: int | None = None, launcher: str = "", echo=print
+    ) -> None:
         self.gpus, self.cpus = run_resources(sweep, options)
         self.ray = ray = import_ray()
         self.sweep, self.prefix, self.echo = sweep, tuple(shlex.split(launcher)), echo
@@ -125,17 +130,23 @@ class RayLauncher(Launcher):
             self.room = {node: self._fits(n.get("Resources", {})) for node, n in self.nodes.items()}
             total = sum(self.room.values())
             if not total:
-                have = "; ".join(f"{self._name(node)}: {n['Resources'].get('CPU', 0):g} CPU, "
-                                 f"{n['Resources'].get('GPU', 0):g} GPU" for node, n in self.nodes.items())  # fmt: skip
-                raise ConfigError(f"No node of the Ray cluster has {self.gpus:g} GPU(s) and {self.cpus:g} CPU(s) for a "
-                                  f"run (--gpus-per-run, --cpus-per-run); its nodes: {have}")  # fmt: skip
+                have = "; ".join(
+                    f"{self._name(node)}: {n['Resources'].get('CPU', 0):g} CPU, {n['Resources'].get('GPU', 0):g} GPU"
+                    for node, n in self.nodes.items()
+                )
+                raise ConfigError(
+                    f"No node of the Ray cluster has {self.gpus:g} GPU(s) and {self.cpus:g} CPU(s) for a "
+                    f"run (--gpus-per-run, --cpus-per-run); its nodes: {have}"
+                )
         except BaseException:
             self.close()
             raise
         self.jobs = jobs or total
         self.watched = time.monotonic()
-        self.where = (f"on Ray ({len(self.nodes)} node(s), room for {total} run(s) at {self.gpus:g} GPU and "
-                      f"{self.cpus:g} CPU each)")  # fmt: skip
+        self.where = (
+            f"on Ray ({len(self.nodes)} node(s), room for {total} run(s) at {self.gpus:g} GPU and "
+            f"{self.cpus:g} CPU each)"
+        )
         self.train = ray.remote(train_run)
         if threading.current_thread() is threading.main_thread():
             # Ctrl-C is taken in wait(), between Ray calls: a KeyboardInterrupt raised inside one of Ray's own calls
@@ -158,8 +169,10 @@ class RayLauncher(Launcher):
                 os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
                 ray.init(address="local", include_dashboard=False)
         except ConnectionError as err:
-            raise ConfigError(f"No Ray cluster at '{address}' ({_first_line(err)}): start one with `ray start --head`"
-                              ", or leave out --ray-address and RAY_ADDRESS for a local Ray") from err  # fmt: skip
+            raise ConfigError(
+                f"No Ray cluster at '{address}' ({_first_line(err)}): start one with `ray start --head`"
+                ", or leave out --ray-address and RAY_ADDRESS for a local Ray"
+            ) from err
         finally:
             if threading.current_thread() is threading.main_thread() and sigterm is not None:
                 signal.signal(signal.SIGTERM, sigterm)
@@ -201,8 +214,10 @@ class RayLauncher(Launcher):
                 try:
                     seen = ray.get(ref)
                 except ray.exceptions.RayError as err:
-                    problems.append(f"node {self._name(node)} cannot run the sweep's tasks ({type(err).__name__}: "
-                                    f"{_first_line(err)}; is the project installed in its Python?)")  # fmt: skip
+                    problems.append(
+                        f"node {self._name(node)} cannot run the sweep's tasks ({type(err).__name__}: "
+                        f"{_first_line(err)}; is the project installed in its Python?)"
+                    )
                     continue
                 missing = seen["missing"] + ([] if seen["token"] else [f"the sweep dir {out}"])
                 if missing:
@@ -210,19 +225,37 @@ class RayLauncher(Launcher):
         finally:
             token_file.unlink(missing_ok=True)
         if problems:
-            raise ConfigError("Ray: " + "; ".join(problems) + ". A Ray sweep needs the package installed on every "
-                              "node, and the sweep dir and the working directory on a filesystem that every node "
-                              "shares, at the same paths (docs/results/README.md, 'On a cluster')")  # fmt: skip
-        self.echo(f"[sweep] Ray: {len(refs)} node(s) see the sweep dir and the working directory: "
-                  + ", ".join(self._name(node) for node in refs))  # fmt: skip
+            raise ConfigError(
+                "Ray: " + "; ".join(problems) + ". A Ray sweep needs the package installed on every "
+                "node, and the sweep dir and the working directory on a filesystem that every node "
+                "shares, at the same paths (docs/results/README.md, 'On a cluster')"
+            )
+        self.echo(
+            f"[sweep] Ray: {len(refs)} node(s) see the sweep dir and the working directory: "
+            + ", ".join(self._name(node) for node in refs)
+        )
 
     # ------------------------------------------------------------------------------------------------ the runs
     def start(self, run: Run, attempt: int, slot: int):
         cwd = os.getcwd()
-        task = TrainTask(self.sweep.name, run.key, attempt, tuple(run.args), os.path.join(cwd, run.run_dir), self.cuda,
-                         max(1, int(self.cpus)), self.prefix, cwd)  # fmt: skip
-        return self.train.options(num_gpus=self.gpus, num_cpus=self.cpus, max_retries=SYSTEM_RETRIES,
-                                  retry_exceptions=False, name=f"train {run.key}").remote(task)  # fmt: skip
+        task = TrainTask(
+            self.sweep.name,
+            run.key,
+            attempt,
+            tuple(run.args),
+            os.path.join(cwd, run.run_dir),
+            self.cuda,
+            max(1, int(self.cpus)),
+            self.prefix,
+            cwd,
+        )
+        return self.train.options(
+            num_gpus=self.gpus,
+            num_cpus=self.cpus,
+            max_retries=SYSTEM_RETRIES,
+            retry_exceptions=False,
+            name=f"train {run.key}",
+        ).remote(task)
 
     def _watch_nodes(self) -> None:
         """Say when a node is lost (Ray re-runs its runs elsewhere) or joins (its runs check their paths there)."""
@@ -232,8 +265,10 @@ class RayLauncher(Launcher):
         alive = {n["NodeID"]: n for n in self.ray.nodes() if n.get("Alive")}
         lost, joined = [n for n in self.nodes if n not in alive], [n for n in alive if n not in self.nodes]
         for node in lost:
-            self.echo(f"[sweep] Ray: lost node {self._name(node)}; Ray re-runs its runs on the other nodes (up to "
-                      f"{SYSTEM_RETRIES} times each)")  # fmt: skip
+            self.echo(
+                f"[sweep] Ray: lost node {self._name(node)}; Ray re-runs its runs on the other nodes (up to "
+                f"{SYSTEM_RETRIES} times each)"
+            )
         self.nodes = alive
         for node in joined:
             self.echo(f"[sweep] Ray: node {self._name(node)} joined (still {self.jobs} run(s) at a time: --jobs)")
@@ -263,8 +298,10 @@ class RayLauncher(Launcher):
             status = {"ray_node_id": done["node_id"], "ray_reruns": done["reruns"]}
             ended.append((job, Outcome(done["exit_code"], done["seconds"], done["host"], done["error"], status)))
             if done["reruns"]:
-                self.echo(f"[sweep] {job.run.key} was re-run by Ray {done['reruns']} time(s) after a lost worker or "
-                          "node (not one of its --retries)")  # fmt: skip
+                self.echo(
+                    f"[sweep] {job.run.key} was re-run by Ray {done['reruns']} time(s) after a lost worker or "
+                    "node (not one of its --retries)"
+                )
         return ended
 
     def stop(self, jobs: list[Job]) -> None:

@@ -46,8 +46,12 @@ def see_paths(paths: list[str], token_file: str, token: str) -> dict:
         same = Path(token_file).read_text() == token
     except OSError:
         same = False
-    return {"host": hostname(), "node_id": ray.get_runtime_context().get_node_id(), "missing": missing_paths(paths),
-            "token": same}  # fmt: skip
+    return {
+        "host": hostname(),
+        "node_id": ray.get_runtime_context().get_node_id(),
+        "missing": missing_paths(paths),
+        "token": same,
+    }
 
 
 def _earlier_executions(run_dir: Path, task_id: str) -> int:

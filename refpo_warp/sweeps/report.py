@@ -62,11 +62,17 @@ def _scan(sweep_dir: Path) -> dict:
         match = re.fullmatch(r"seed(\d+)", path.name)
         if match and path.is_dir() and ((path / "eval.json").exists() or (path / "config.yaml").exists()):
             task, label = path.parent.parent.name, path.parent.name
-            runs.append({"task": task, "label": label, "seed": int(match.group(1)),
-                         "run_dir": str(path.relative_to(sweep_dir))})  # fmt: skip
+            runs.append(
+                {"task": task, "label": label, "seed": int(match.group(1)), "run_dir": str(path.relative_to(sweep_dir))}
+            )
     labels = list(dict.fromkeys(r["label"] for r in runs))
-    return {"name": sweep_dir.name, "tasks": list(dict.fromkeys(r["task"] for r in runs)), "runs": runs,
-            "methods": [{"label": label, "name": label} for label in labels], "report": {}}  # fmt: skip
+    return {
+        "name": sweep_dir.name,
+        "tasks": list(dict.fromkeys(r["task"] for r in runs)),
+        "runs": runs,
+        "methods": [{"label": label, "name": label} for label in labels],
+        "report": {},
+    }
 
 
 def load_spec(sweep_dir: Path) -> dict:
@@ -85,7 +91,8 @@ def _missing(record: RunRecord, status: dict) -> RunRecord:
     else:
         record.status = "missing"
         record.note = {"interrupted": "interrupted", "running": "was running (or the sweep stopped)"}.get(
-            state, "not run yet")  # fmt: skip
+            state, "not run yet"
+        )
     return record
 
 
@@ -112,8 +119,9 @@ def load_record(sweep_dir: Path, entry: dict, status: dict) -> RunRecord:
 def load_records(sweep_dir: Path, spec: dict) -> list[RunRecord]:
     status_path = sweep_dir / "status.json"
     status = json.loads(status_path.read_text()) if status_path.exists() else {}
-    return [load_record(sweep_dir, e, status.get(f"{e['task']}/{e['label']}/seed{e['seed']}", {}))
-            for e in spec["runs"]]  # fmt: skip
+    return [
+        load_record(sweep_dir, e, status.get(f"{e['task']}/{e['label']}/seed{e['seed']}", {})) for e in spec["runs"]
+    ]
 
 
 def _progress(record: RunRecord) -> list[dict]:
@@ -169,18 +177,36 @@ def runs_csv(records: list[RunRecord]) -> str:
     metrics = list(METRIC_TITLES)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["task", "label", "seed", "status", "multi_step_n", *metrics, "headline", "health", "note",
-                     "run_dir"])
+    writer.writerow(
+        ["task", "label", "seed", "status", "multi_step_n", *metrics, "headline", "health", "note", "run_dir"]
+    )
     for r in records:
-        writer.writerow([r.task, r.label, r.seed, r.status, r.multi_n or "",
-                         *[repr(r.metrics[m]) if m in r.metrics else "" for m in metrics], r.headline, r.health, r.note,
-                         r.run_dir])  # fmt: skip
+        writer.writerow(
+            [
+                r.task,
+                r.label,
+                r.seed,
+                r.status,
+                r.multi_n or "",
+                *[repr(r.metrics[m]) if m in r.metrics else "" for m in metrics],
+                r.headline,
+                r.health,
+                r.note,
+                r.run_dir,
+            ]
+        )
     return out.getvalue()
 
 
-def write_report(sweep_dir: str | Path, out_dir: str | Path | None = None, latency: str | Path | None = None,
-                 curve_methods: list[str] | None = None, ratio_tasks: list[str] | None = None,
-                 ratio_methods: list[str] | None = None, seed: int | None = None) -> list[Path]:  # fmt: skip
+def write_report(
+    sweep_dir: str | Path,
+    out_dir: str | Path | None = None,
+    latency: str | Path | None = None,
+    curve_methods: list[str] | None = None,
+    ratio_tasks: list[str] | None = None,
+    ratio_methods: list[str] | None = None,
+    seed: int | None = None,
+) -> list[Path]:
     """Write the tables and figures of a sweep; returns the files written (``report.md`` first)."""
     sweep_dir = Path(sweep_dir)
     spec = load_spec(sweep_dir)
@@ -202,27 +228,40 @@ def write_report(sweep_dir: str | Path, out_dir: str | Path | None = None, laten
     chosen = _choice(curve_methods, spec, "curve_methods", labels, labels, "curve method(s)")
     curves = curve_data(records, [m for m in methods if m[0] in chosen], tasks)
     if curves:
-        figures.append(("Figure 3: reward curves, 10-step/1-step gap shaded, mean over seeds",
-                        reward_curve_grid(curves, out / "fig3_reward_curves.png")))  # fmt: skip
+        figures.append(
+            (
+                "Figure 3: reward curves, 10-step/1-step gap shaded, mean over seeds",
+                reward_curve_grid(curves, out / "fig3_reward_curves.png"),
+            )
+        )
     else:
         notes.append("Figure 3: no finished run has progress.jsonl curves.")
     r_tasks = _choice(ratio_tasks, spec, "ratio_tasks", tasks[:3], tasks, "ratio task(s)")
     r_methods = _choice(ratio_methods, spec, "ratio_methods", labels, labels, "ratio method(s)")
     r_seed, panels = ratio_data(records, [m for m in methods if m[0] in r_methods], r_tasks, seed)
     if panels:
-        figures.append((f"Figure 4: training return and max proxy ratio per update (seed {r_seed})",
-                        ratio_spikes(panels, out / "fig4_ratio_spikes.png", r_seed)))  # fmt: skip
+        figures.append(
+            (
+                f"Figure 4: training return and max proxy ratio per update (seed {r_seed})",
+                ratio_spikes(panels, out / "fig4_ratio_spikes.png", r_seed),
+            )
+        )
     else:
         notes.append("Figure 4: no finished flow run with ratio statistics in progress.jsonl.")
     latency_path = Path(latency) if latency else sweep_dir / "latency.json"
     if latency_path.exists():
         data = json.loads(latency_path.read_text())
         names = {m["algo"]: m.get("name", m["label"]) for m in spec["methods"] if m["label"] == m.get("algo")}
-        figures.append((f"Figure 5b: action latency, N = 1 vs N = 10 ({latency_path})",
-                        latency_bars(data, out / "fig5b_latency.png", names)))  # fmt: skip
+        figures.append(
+            (
+                f"Figure 5b: action latency, N = 1 vs N = 10 ({latency_path})",
+                latency_bars(data, out / "fig5b_latency.png", names),
+            )
+        )
     else:
-        notes.append(f"Figure 5b: no {latency_path}; write it with `refpo bench latency "
-                     f"--tasks <task> --json {latency_path}`.")  # fmt: skip
+        notes.append(
+            f"Figure 5b: no {latency_path}; write it with `refpo bench latency --tasks <task> --json {latency_path}`."
+        )
     written += [path for _, path in figures]
     _write(out / "report.md", report_markdown(spec, records, mrows, trows, figures, notes, sweep_dir, out))
     return written
@@ -233,15 +272,32 @@ def report_markdown(spec, records, mrows, trows, figures, notes, sweep_dir: Path
     lines = [f"# Sweep report: {spec.get('name', sweep_dir.name)}", ""]
     if spec.get("description"):
         lines += [spec["description"], ""]
-    lines += [f"Sweep dir `{sweep_dir}` (device profile: {spec.get('device', '?')}); {len(records)} runs, "
-              f"{len(ok)} finished, {len(records) - len(ok)} missing. Written by "
-              f"`refpo report {sweep_dir}`.", "",
-              "## DMC table (the paper's \"MuJoCo Playground results\")", "", main_markdown(mrows), AGGREGATION, "",
-              SOURCES_MAIN, "", "## Per task", "", task_markdown(trows),
-              "## Run health: FPO++'s cliff rule on each run's training reward", "", cliffs_markdown(records),
-              "## Appendix C: Jacobian and policy-ratio diagnostics", "", appendix_c_markdown(mrows),
-              SOURCES_APPENDIX_C, "",
-              "CSV: `main.csv`, `per_task.csv`, `appendix_c.csv` (full precision), `runs.csv` (one row per run).", ""]
+    lines += [
+        f"Sweep dir `{sweep_dir}` (device profile: {spec.get('device', '?')}); {len(records)} runs, "
+        f"{len(ok)} finished, {len(records) - len(ok)} missing. Written by "
+        f"`refpo report {sweep_dir}`.",
+        "",
+        '## DMC table (the paper\'s "MuJoCo Playground results")',
+        "",
+        main_markdown(mrows),
+        AGGREGATION,
+        "",
+        SOURCES_MAIN,
+        "",
+        "## Per task",
+        "",
+        task_markdown(trows),
+        "## Run health: FPO++'s cliff rule on each run's training reward",
+        "",
+        cliffs_markdown(records),
+        "## Appendix C: Jacobian and policy-ratio diagnostics",
+        "",
+        appendix_c_markdown(mrows),
+        SOURCES_APPENDIX_C,
+        "",
+        "CSV: `main.csv`, `per_task.csv`, `appendix_c.csv` (full precision), `runs.csv` (one row per run).",
+        "",
+    ]
     if figures or notes:
         lines += ["## Figures", ""]
         for title, path in figures:
@@ -251,4 +307,3 @@ def report_markdown(spec, records, mrows, trows, figures, notes, sweep_dir: Path
     lines += ["## Missing runs", ""]
     lines += [f"- {r.task} / {r.label} / seed {r.seed}: {r.status}: {r.note}" for r in missing] or ["None."]
     return "\n".join(lines) + "\n"
-

@@ -43,16 +43,25 @@ class SweepLock:
         self.file.close()
 
 
-def make_launcher(backend: str, sweep: Sweep, jobs: int | None, launcher: str, ray: RayOptions | None,
-                  echo=print) -> Launcher:  # fmt: skip
+def make_launcher(
+    backend: str, sweep: Sweep, jobs: int | None, launcher: str, ray: RayOptions | None, echo=print
+) -> Launcher:
     """The backend's launcher; a CUDA sweep without a GPU, or a Ray cluster without room for a run, fails here."""
     if backend == "ray":
         return RayLauncher(sweep, ray or RayOptions(), jobs, launcher, echo)
     return LocalLauncher(sweep, jobs, launcher)
 
 
-def run_sweep(sweep: Sweep, jobs: int | None = None, retries: int = 1, launcher: str = "", dry_run: bool = False,
-              echo=print, backend: str = "local", ray: RayOptions | None = None) -> Summary:  # fmt: skip
+def run_sweep(
+    sweep: Sweep,
+    jobs: int | None = None,
+    retries: int = 1,
+    launcher: str = "",
+    dry_run: bool = False,
+    echo=print,
+    backend: str = "local",
+    ray: RayOptions | None = None,
+) -> Summary:
     """Validate the whole grid, then train what is not done yet; returns what finished, was skipped or failed.
 
     ``backend``: ``local`` (default) or ``ray`` with its ``RayOptions`` (address, GPUs and CPUs per run)."""
@@ -65,8 +74,12 @@ def run_sweep(sweep: Sweep, jobs: int | None = None, retries: int = 1, launcher:
     prints = validate(sweep)
     shape = f"{len(sweep.tasks)} task(s) x {len(sweep.methods)} method(s) x {len(sweep.seeds)} seed(s)"
     echo(f"[sweep] {sweep.name}: {len(sweep.runs)} runs ({shape}) in {sweep.out_dir}; every config resolves")
-    words = {"done": "done (skipped)", "new": "new", "unfinished": "unfinished (rerun from scratch)",
-             "stale": "stale: config changed (rerun from scratch)"}  # fmt: skip
+    words = {
+        "done": "done (skipped)",
+        "new": "new",
+        "unfinished": "unfinished (rerun from scratch)",
+        "stale": "stale: config changed (rerun from scratch)",
+    }
     if dry_run:
         todo, done, states = plan(sweep, prints)
         echo("[sweep] " + ", ".join(f"{len(v)} {words[k]}" for k, v in states.items()))
@@ -80,8 +93,11 @@ def run_sweep(sweep: Sweep, jobs: int | None = None, retries: int = 1, launcher:
         try:
             todo, done, states = plan(sweep, prints)
             runner.prepare(sweep)
-            echo("[sweep] " + ", ".join(f"{len(v)} {words[k]}" for k, v in states.items())
-                 + f"; {runner.jobs} at a time {runner.where}")  # fmt: skip
+            echo(
+                "[sweep] "
+                + ", ".join(f"{len(v)} {words[k]}" for k, v in states.items())
+                + f"; {runner.jobs} at a time {runner.where}"
+            )
             write_spec(sweep, prints)
             summary = SweepExecutor(sweep, runner, retries, echo).execute(todo, prints, done)
         finally:

@@ -36,6 +36,7 @@ from refpo_warp.config.config_path import config_path
 from refpo_warp.config.dotted import LEAF_KEYS, parse_overrides
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
+
 SPEC_KEYS = ("name", "description", "device", "tasks", "seeds", "overrides", "methods", "report", "out")
 METHOD_KEYS = ("label", "algo", "name", "overrides")
 REPORT_KEYS = ("curve_methods", "ratio_tasks", "ratio_methods")
@@ -80,7 +81,6 @@ class Sweep:
     out_dir: Path
     report: dict[str, list[str]]
     runs: list[Run] = field(default_factory=list)
-
 
 
 def _flat_overrides(values: Any, where: str, prefix: str = "") -> dict[str, Any]:
@@ -174,8 +174,11 @@ def _list_valued(cfg: dict, key: str) -> bool:
 
 def expand_method(entry: dict, overrides: dict[str, Any], probe: dict) -> list[Method]:
     """The variants of one method entry: one per combination of its list-valued (axis) overrides."""
-    axes = {k: v for k, v in overrides.items() if isinstance(v, list)
-            and (not _list_valued(probe, k) or (v and all(isinstance(x, list) for x in v)))}  # fmt: skip
+    axes = {
+        k: v
+        for k, v in overrides.items()
+        if isinstance(v, list) and (not _list_valued(probe, k) or (v and all(isinstance(x, list) for x in v)))
+    }
     fixed = {k: v for k, v in overrides.items() if k not in axes}
     for key, values in axes.items():
         if not values:
@@ -206,8 +209,14 @@ def _method_entries(spec: dict, where: str) -> list[dict]:
             if key not in METHOD_KEYS:
                 raise unknown(f"method key in {where}", key, METHOD_KEYS)
         label = str(entry.get("label", entry["algo"]))
-        out.append({"label": label, "algo": str(entry["algo"]), "name": str(entry.get("name", label)),
-                    "overrides": _flat_overrides(entry.get("overrides"), where)})  # fmt: skip
+        out.append(
+            {
+                "label": label,
+                "algo": str(entry["algo"]),
+                "name": str(entry.get("name", label)),
+                "overrides": _flat_overrides(entry.get("overrides"), where),
+            }
+        )
     return out
 
 
@@ -268,14 +277,27 @@ def load_sweep(source: str, args: list[str] | None = None) -> Sweep:
                 raise unknown(f"method of sweep '{name}'", label, choices)
         methods = [(e, m) for e, m in methods if e in keep or m.label in keep]
     if cli:  # command-line run options apply to every kept method; their lists expand the grid further
-        methods = [(e, v) for e, m in methods for v in expand_method(
-            {"label": m.label, "name": m.name, "algo": m.algo}, {**m.overrides, **cli}, probes[m.algo])]
+        methods = [
+            (e, v)
+            for e, m in methods
+            for v in expand_method(
+                {"label": m.label, "name": m.name, "algo": m.algo}, {**m.overrides, **cli}, probes[m.algo]
+            )
+        ]
     labels = [m.label for _, m in methods]
     if len(set(labels)) != len(labels):
         raise ConfigError(f"{where}: method labels must be unique after expansion, got {labels}")
-    sweep = Sweep(name, str(path), str(spec.get("description", "")).strip(), device, tasks, seeds,
-                  [m for _, m in methods], out_dir,
-                  {k: _as_list(v, f"report.{k}", str) for k, v in report.items()})  # fmt: skip
+    sweep = Sweep(
+        name,
+        str(path),
+        str(spec.get("description", "")).strip(),
+        device,
+        tasks,
+        seeds,
+        [m for _, m in methods],
+        out_dir,
+        {k: _as_list(v, f"report.{k}", str) for k, v in report.items()},
+    )
     sweep.runs = [_make_run(sweep, task, method, seed) for seed in seeds for task in tasks for method in sweep.methods]
     return sweep
 
@@ -321,7 +343,8 @@ def validate(sweep: Sweep) -> dict[str, str]:
             prints[run.key] = fingerprint({**resolved[cell], "seed": run.seed})
     if errors:
         lines = [f"- {len(keys)} (task, method) cell(s), e.g. {keys[0]}: {msg}" for msg, keys in errors.items()]
-        raise ConfigError(f"Sweep '{sweep.name}': {sum(map(len, errors.values()))} of "
-                          f"{len(sweep.tasks) * len(sweep.methods)} (task, method) configs do not resolve:\n"
-                          + "\n".join(lines))  # fmt: skip
+        raise ConfigError(
+            f"Sweep '{sweep.name}': {sum(map(len, errors.values()))} of "
+            f"{len(sweep.tasks) * len(sweep.methods)} (task, method) configs do not resolve:\n" + "\n".join(lines)
+        )
     return prints

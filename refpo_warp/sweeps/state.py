@@ -55,20 +55,32 @@ def write_spec(sweep: Sweep, prints: dict[str, str]) -> Path:
     path = sweep.out_dir / SPEC_FILE
     old = load_yaml(path) if path.exists() else {}
     methods = {m["label"]: m for m in old.get("methods", [])}
-    methods.update({m.label: {"label": m.label, "name": m.name, "algo": m.algo, "overrides": m.overrides}
-                    for m in sweep.methods})  # fmt: skip
+    methods.update(
+        {m.label: {"label": m.label, "name": m.name, "algo": m.algo, "overrides": m.overrides} for m in sweep.methods}
+    )
     runs = {r["run_dir"]: r for r in old.get("runs", [])}
     for run in sweep.runs:
         rel = str(run.run_dir.relative_to(sweep.out_dir))
-        runs[rel] = {"task": run.task, "label": run.method.label, "algo": run.method.algo, "seed": run.seed,
-                     "run_dir": rel, "args": list(run.args), "fingerprint": prints[run.key]}  # fmt: skip
+        runs[rel] = {
+            "task": run.task,
+            "label": run.method.label,
+            "algo": run.method.algo,
+            "seed": run.seed,
+            "run_dir": rel,
+            "args": list(run.args),
+            "fingerprint": prints[run.key],
+        }
     spec = {
-        "name": sweep.name, "source": sweep.source, "description": sweep.description, "device": sweep.device,
+        "name": sweep.name,
+        "source": sweep.source,
+        "description": sweep.description,
+        "device": sweep.device,
         "tasks": list(dict.fromkeys(old.get("tasks", []) + sweep.tasks)),
         "seeds": sorted(set(old.get("seeds", [])) | set(sweep.seeds)),
-        "methods": list(methods.values()), "report": {**old.get("report", {}), **sweep.report},
+        "methods": list(methods.values()),
+        "report": {**old.get("report", {}), **sweep.report},
         "runs": sorted(runs.values(), key=lambda r: (r["seed"], r["task"], r["label"])),
-    }  # fmt: skip
+    }
     dump_config(json.loads(json.dumps(spec)), path)  # a plain copy: no YAML anchors for shared lists
     return path
 

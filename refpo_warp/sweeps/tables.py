@@ -71,9 +71,9 @@ AGGREGATION = (
 )
 
 SOURCES_MAIN = (
-    "Sources per run (`eval.json`): 10-step Reward = `results[\"N=<largest N>\"].return_mean` (Gaussian policies: "
-    "`results[\"mean_action\"]`; `(N=4)` marks a multi-step N other than 10), 1-step Reward = "
-    "`results[\"N=1\"].return_mean`, the same under zero initial noise = `results[\"N=<n>/zero\"]` (where the run "
+    'Sources per run (`eval.json`): 10-step Reward = `results["N=<largest N>"].return_mean` (Gaussian policies: '
+    '`results["mean_action"]`; `(N=4)` marks a multi-step N other than 10), 1-step Reward = '
+    '`results["N=1"].return_mean`, the same under zero initial noise = `results["N=<n>/zero"]` (where the run '
     "evaluated it), Straightness = `diagnostics.straightness_error`, Explosion = "
     "`diagnostics.explosion_rate`; 1-step Err. (ours, not in the paper) = `diagnostics.one_step_error_eval`, the "
     "mean squared gap between the 1-step and the N-step action from the same noise in the env's action space on the "
@@ -169,8 +169,13 @@ def aggregate(points: list[tuple[str, int, float]]) -> Stat:
         by_seed.setdefault(seed, []).append(value)
     task_means = [statistics.fmean(v) for v in by_task.values()]
     seed_means = [statistics.fmean(v) for v in by_seed.values()]
-    return Stat(statistics.fmean(values), statistics.pstdev(values), len(values), statistics.pstdev(task_means),
-                statistics.pstdev(seed_means))  # fmt: skip
+    return Stat(
+        statistics.fmean(values),
+        statistics.pstdev(values),
+        len(values),
+        statistics.pstdev(task_means),
+        statistics.pstdev(seed_means),
+    )
 
 
 def fmt_number(x: float | None) -> str:
@@ -217,8 +222,10 @@ def cliffs_markdown(records: list[RunRecord]) -> str:
     if judged and not lines:
         lines = [f"No cliff in the {judged} runs long enough for the rule."]
     if short:
-        lines.append(f"{short} of {len(ok)} finished runs are too short for the rule, or peak under its minimum "
-                     f"(insufficient data).")  # fmt: skip
+        lines.append(
+            f"{short} of {len(ok)} finished runs are too short for the rule, or peak under its minimum "
+            f"(insufficient data)."
+        )
     return "\n".join(lines) + "\n" if lines else "None.\n"
 
 
@@ -254,26 +261,36 @@ def main_markdown(rows: list[dict]) -> str:
     body = []
     for row in rows:
         s = row["stats"]
-        body.append([row["name"], _runs_cell(row["records"]),
-                     fmt_stat(s["return_multi"]) + (_multi_note(row["records"]) if s["return_multi"].n else "")]
-                    + [fmt_stat(s[m]) for m in REWARD_METRICS[1:]]
-                    + [fmt_stat(s[m], False) for m in MAIN_METRICS[len(REWARD_METRICS):]]
-                    + [cliff_count(row["records"])])  # fmt: skip
+        body.append(
+            [
+                row["name"],
+                _runs_cell(row["records"]),
+                fmt_stat(s["return_multi"]) + (_multi_note(row["records"]) if s["return_multi"].n else ""),
+            ]
+            + [fmt_stat(s[m]) for m in REWARD_METRICS[1:]]
+            + [fmt_stat(s[m], False) for m in MAIN_METRICS[len(REWARD_METRICS) :]]
+            + [cliff_count(row["records"])]
+        )
     return markdown_table(header, body)
 
 
 def task_markdown(rows: list[dict]) -> str:
     header = ["Task", "Method", "Runs"] + [METRIC_TITLES[m] for m in MAIN_METRICS] + ["Cliffs"]
-    body = [[row["task"], row["name"], _runs_cell(row["records"])]
-            + [fmt_stat(row["stats"][m]) for m in MAIN_METRICS] + [cliff_count(row["records"])]
-            for row in rows]  # fmt: skip
+    body = [
+        [row["task"], row["name"], _runs_cell(row["records"])]
+        + [fmt_stat(row["stats"][m]) for m in MAIN_METRICS]
+        + [cliff_count(row["records"])]
+        for row in rows
+    ]
     return markdown_table(header, body)
 
 
 def appendix_c_markdown(rows: list[dict]) -> str:
     header = ["Method", "Runs"] + [METRIC_TITLES[m] for m in APPENDIX_C_METRICS]
-    body = [[row["name"], _runs_cell(row["records"])] + [fmt_stat(row["stats"][m], False) for m in APPENDIX_C_METRICS]
-            for row in rows]  # fmt: skip
+    body = [
+        [row["name"], _runs_cell(row["records"])] + [fmt_stat(row["stats"][m], False) for m in APPENDIX_C_METRICS]
+        for row in rows
+    ]
     return markdown_table(header, body)
 
 
@@ -286,8 +303,12 @@ def to_csv(rows: list[dict], metrics, per_task: bool = False) -> str:
     writer = csv.DictWriter(out, fieldnames=fields, lineterminator="\n")
     writer.writeheader()
     for row in rows:
-        line = {"method": row["name"], "label": row["label"], "runs_total": len(row["records"]),
-                "runs_finished": sum(r.status == "ok" for r in row["records"])}  # fmt: skip
+        line = {
+            "method": row["name"],
+            "label": row["label"],
+            "runs_total": len(row["records"]),
+            "runs_finished": sum(r.status == "ok" for r in row["records"]),
+        }
         if per_task:
             line["task"] = row["task"]
         for m in metrics:

@@ -67,8 +67,9 @@ def run_config(tuning: Tuning, run: Run) -> dict:
     from refpo_warp.config.resolve import resolve_config
     from refpo_warp.sweeps.spec import device_type
 
-    return resolve_config(parse_overrides([*run.args, f"device={tuning.device}"]),
-                          device_type=device_type(tuning.device))  # fmt: skip
+    return resolve_config(
+        parse_overrides([*run.args, f"device={tuning.device}"]), device_type=device_type(tuning.device)
+    )
 
 
 def _resolve(tuning: Tuning, method: TunedMethod, task: str, values: dict[str, Any]) -> dict:
@@ -109,8 +110,10 @@ def enqueued_values(tuning: Tuning, method: TunedMethod) -> list[dict[str, Any]]
             if dim.key not in values:
                 raise ConfigError(f"Method '{method.label}': an enqueued trial lacks '{dim.key}'")
             if not dim.contains(values[dim.key]):
-                raise ConfigError(f"Method '{method.label}': enqueued {dim.key} = {values[dim.key]!r} lies outside "
-                                  f"its space {dim.describe()}")  # fmt: skip
+                raise ConfigError(
+                    f"Method '{method.label}': enqueued {dim.key} = {values[dim.key]!r} lies outside "
+                    f"its space {dim.describe()}"
+                )
         extra = sorted(set(values) - {d.key for d in method.space})
         if extra:
             raise ConfigError(f"Method '{method.label}': enqueued values of options not searched: {extra}")
@@ -130,8 +133,9 @@ def validate(tuning: Tuning) -> dict[str, list[dict[str, Any]]]:
             errors.append(f"- {method.label}: {err}")
             continue
         base = enqueued[method.label][0] if enqueued[method.label] else {}
-        probes = [base] + [{**base, d.key: v} for d in method.space
-                           for v in (d.choices if d.choices else (d.low, d.high))]  # fmt: skip
+        probes = [base] + [
+            {**base, d.key: v} for d in method.space for v in (d.choices if d.choices else (d.low, d.high))
+        ]
         for task in tuning.tasks:
             for values in probes:
                 try:
@@ -219,8 +223,9 @@ class TrialRunner:
                     reported += 1
                     if trial.should_prune():
                         stop_training([p for _, p in running.values()])
-                        return TrialResult("pruned", None, {}, time.monotonic() - started,
-                                           f"at periodic evaluation {reported}")  # fmt: skip
+                        return TrialResult(
+                            "pruned", None, {}, time.monotonic() - started, f"at periodic evaluation {reported}"
+                        )
         except KeyboardInterrupt:
             stop_training([p for _, p in running.values()])
             return TrialResult("interrupted", None, {}, time.monotonic() - started)
@@ -231,8 +236,9 @@ class TrialRunner:
         metric = self.tuning.objective.metric
         missing = [t for t, v in values.items() if metric not in v]
         if missing:
-            return TrialResult("failed", None, values, time.monotonic() - started,
-                               f"eval.json of {missing} has no '{metric}'")  # fmt: skip
+            return TrialResult(
+                "failed", None, values, time.monotonic() - started, f"eval.json of {missing} has no '{metric}'"
+            )
         score = self.tuning.objective.score({t: v[metric] for t, v in values.items()})
         return TrialResult("complete", score, values, time.monotonic() - started)
 
@@ -249,8 +255,11 @@ def _spent(study) -> list:
     cut off by an interruption (failed without a reason, and enqueued again)."""
     from optuna.trial import TrialState
 
-    return [t for t in study.trials if t.state in (TrialState.COMPLETE, TrialState.PRUNED)
-            or (t.state == TrialState.FAIL and "why" in t.user_attrs)]  # fmt: skip
+    return [
+        t
+        for t in study.trials
+        if t.state in (TrialState.COMPLETE, TrialState.PRUNED) or (t.state == TrialState.FAIL and "why" in t.user_attrs)
+    ]
 
 
 class Tuner:
@@ -270,8 +279,9 @@ class Tuner:
         p = self.tuning.pruner
         if p is None:
             return self.optuna.pruners.NopPruner()
-        return self.optuna.pruners.PercentilePruner(p["percentile"], n_startup_trials=p["startup_trials"],
-                                                    n_warmup_steps=p["warmup_evaluations"])  # fmt: skip
+        return self.optuna.pruners.PercentilePruner(
+            p["percentile"], n_startup_trials=p["startup_trials"], n_warmup_steps=p["warmup_evaluations"]
+        )
 
     def studies(self, storage, enqueued: dict[str, list[dict]]) -> dict[str, Any]:
         """One study per method (created with its enqueued trials first); trials left running by a process that
@@ -280,8 +290,13 @@ class Tuner:
 
         out = {}
         for method in self.tuning.methods:
-            study = self.optuna.create_study(study_name=method.label, storage=storage, direction="maximize",
-                                             load_if_exists=True, pruner=self._pruner())  # fmt: skip
+            study = self.optuna.create_study(
+                study_name=method.label,
+                storage=storage,
+                direction="maximize",
+                load_if_exists=True,
+                pruner=self._pruner(),
+            )
             if not study.trials:
                 for i, values in enumerate(enqueued[method.label]):
                     study.enqueue_trial(values, user_attrs={"slot": i, "enqueued": True})
@@ -308,11 +323,16 @@ class Tuner:
             return
         for task in self.tuning.tasks:
             old, new = flatten(then.get(task, {})), flatten(now[task])
-            changed = [f"{k}: {old.get(k, '(absent)')} -> {new.get(k, '(absent)')}" for k in sorted({*old, *new})
-                       if old.get(k, "(absent)") != new.get(k, "(absent)")]  # fmt: skip
+            changed = [
+                f"{k}: {old.get(k, '(absent)')} -> {new.get(k, '(absent)')}"
+                for k in sorted({*old, *new})
+                if old.get(k, "(absent)") != new.get(k, "(absent)")
+            ]
             if changed:
-                self.echo(f"[tune] note: {method.label} on {task} resolves differently from when its search began "
-                          f"(its trials compare across both): " + "; ".join(changed))  # fmt: skip
+                self.echo(
+                    f"[tune] note: {method.label} on {task} resolves differently from when its search began "
+                    f"(its trials compare across both): " + "; ".join(changed)
+                )
 
     @staticmethod
     def _requeue(study, trial) -> None:
@@ -326,8 +346,10 @@ class Tuner:
         """Run the rounds until every method has spent its trials; returns False when interrupted."""
         t = self.tuning
         enqueued = validate(t)
-        self.echo(f"[tune] {t.name}: {len(t.methods)} method(s) x {t.trials} trials, each trial {len(t.tasks)} run(s) "
-                  f"({', '.join(t.tasks)}) on seed {t.seed}, {self.jobs} at a time; every config resolves")  # fmt: skip
+        self.echo(
+            f"[tune] {t.name}: {len(t.methods)} method(s) x {t.trials} trials, each trial {len(t.tasks)} run(s) "
+            f"({', '.join(t.tasks)}) on seed {t.seed}, {self.jobs} at a time; every config resolves"
+        )
         self.echo(
             f"[tune] objective: mean over tasks of {t.objective.metric} / "
             + ", ".join(f"{k} {v:g}" for k, v in t.objective.reference.items())
@@ -357,8 +379,9 @@ class Tuner:
                 self.write_records(studies)
         finally:
             lock.release()
-        self.echo(f"[tune] done: {t.trials} trials per method; records: {t.out_dir / TRIALS_FILE}, "
-                  f"{t.out_dir / CHOSEN_FILE}")  # fmt: skip
+        self.echo(
+            f"[tune] done: {t.trials} trials per method; records: {t.out_dir / TRIALS_FILE}, {t.out_dir / CHOSEN_FILE}"
+        )
         if t.evaluation is not None:
             self.echo(f"[tune] the chosen values on fresh seeds: refpo sweep {t.out_dir / EVALUATION_FILE}")
         return True
@@ -369,14 +392,17 @@ class Tuner:
         t = self.tuning
         study = studies[method.label]
         spent = len(_spent(study))
-        study.sampler = self.optuna.samplers.TPESampler(seed=stream_seed(t.seed, index, spent) % 2**32,
-                                                        n_startup_trials=t.startup_trials)  # fmt: skip
+        study.sampler = self.optuna.samplers.TPESampler(
+            seed=stream_seed(t.seed, index, spent) % 2**32, n_startup_trials=t.startup_trials
+        )
         trial = study.ask()
         values = {d.key: _suggest(trial, d) for d in method.space}
         slot = int(trial.user_attrs.get("slot", spent))
         trial.set_user_attr("slot", slot)
-        shown = ", ".join(f"{k.rsplit('.', 1)[-1]}={v:.3g}" if isinstance(v, float) else f"{k.rsplit('.', 1)[-1]}={v}"
-                          for k, v in values.items())  # fmt: skip
+        shown = ", ".join(
+            f"{k.rsplit('.', 1)[-1]}={v:.3g}" if isinstance(v, float) else f"{k.rsplit('.', 1)[-1]}={v}"
+            for k, v in values.items()
+        )
         self.echo(f"[tune {method.label} {spent + 1}/{t.trials}] trial {slot:02d}: {shown}")
         header = f"tune {t.name}, {method.label} trial {slot:02d} on {runner.host}"
         result = runner.run(t.trial_runs(method, slot, values), trial, header)
@@ -398,8 +424,10 @@ class Tuner:
                 f"{task} {v.get('return_multi', float('nan')):.1f}" for task, v in result.values.items()
             )
             best = study.best_trial
-            self.echo(f"        score {result.score:.3f} ({returns}) in {_duration(result.seconds)}; best so far "
-                      f"trial {best.user_attrs['slot']:02d} {best.value:.3f} | elapsed {elapsed}")  # fmt: skip
+            self.echo(
+                f"        score {result.score:.3f} ({returns}) in {_duration(result.seconds)}; best so far "
+                f"trial {best.user_attrs['slot']:02d} {best.value:.3f} | elapsed {elapsed}"
+            )
         else:
             study.tell(trial, state=TrialState.PRUNED if result.state == "pruned" else TrialState.FAIL)
             self.echo(f"        {result.state} {result.why} in {_duration(result.seconds)} | elapsed {elapsed}")
@@ -420,10 +448,14 @@ def trial_rows(tuning: Tuning, studies: dict[str, Any]) -> list[dict[str, Any]]:
     for method in tuning.methods:
         study = studies.get(method.label)
         for t in _spent(study) if study is not None else []:
-            row = {"method": method.label, "trial": t.user_attrs.get("slot", t.number), "state": t.state.name.lower(),
-                   "enqueued": bool(t.user_attrs.get("enqueued")),
-                   "score": t.value if t.state.name == "COMPLETE" else None,
-                   "seconds": t.user_attrs.get("seconds")}  # fmt: skip
+            row = {
+                "method": method.label,
+                "trial": t.user_attrs.get("slot", t.number),
+                "state": t.state.name.lower(),
+                "enqueued": bool(t.user_attrs.get("enqueued")),
+                "score": t.value if t.state.name == "COMPLETE" else None,
+                "seconds": t.user_attrs.get("seconds"),
+            }
             for task in tuning.tasks:
                 for metric in ("return_multi", "return_1"):
                     row[f"{task}/{metric}"] = t.user_attrs.get(f"{task}/{metric}")
@@ -456,9 +488,13 @@ def chosen_values(tuning: Tuning, studies: dict[str, Any]) -> dict[str, dict[str
         if not complete:
             continue
         best = max(complete, key=lambda t: t.value)
-        out[method.label] = {"algo": method.algo, "trial": best.user_attrs.get("slot"), "score": best.value,
-                             "trials_spent": len(_spent(study)),
-                             "overrides": {**method.overrides, **best.params}}  # fmt: skip
+        out[method.label] = {
+            "algo": method.algo,
+            "trial": best.user_attrs.get("slot"),
+            "score": best.value,
+            "trials_spent": len(_spent(study)),
+            "overrides": {**method.overrides, **best.params},
+        }
     return out
 
 
@@ -483,16 +519,29 @@ def evaluation_sweep(tuning: Tuning, studies: dict[str, Any]) -> str | None:
     done = all(len(_spent(studies[m.label])) >= tuning.trials and m.label in chosen for m in tuning.methods)
     if ev is None or not done:
         return None
-    methods = [{"label": m.label, "algo": m.algo, "name": f"{m.name} (tuned)",
-                "overrides": chosen[m.label]["overrides"]} for m in tuning.methods]  # fmt: skip
+    methods = [
+        {"label": m.label, "algo": m.algo, "name": f"{m.name} (tuned)", "overrides": chosen[m.label]["overrides"]}
+        for m in tuning.methods
+    ]
     for v in ev.variants:
-        methods.append({"label": v["label"], "algo": v["algo"], "name": f"{v['name']} (tuned {v['of']})",
-                        "overrides": chosen[v["of"]]["overrides"]})  # fmt: skip
+        methods.append(
+            {
+                "label": v["label"],
+                "algo": v["algo"],
+                "name": f"{v['name']} (tuned {v['of']})",
+                "overrides": chosen[v["of"]]["overrides"],
+            }
+        )
     spec = {
         "description": f"the chosen values of refpo tune {tuning.name} on fresh seeds {ev.seeds}",
-        "device": tuning.device, "tasks": ev.tasks, "seeds": ev.seeds, "methods": methods,
+        "device": tuning.device,
+        "tasks": ev.tasks,
+        "seeds": ev.seeds,
+        "methods": methods,
         "out": str(tuning.out_dir / "evaluate"),
-    }  # fmt: skip
-    head = (f"# Written by refpo tune {tuning.name} when every method had spent its {tuning.trials} trials: each "
-            f"method's best trial (chosen.yaml). Run: refpo sweep <this file>\n")  # fmt: skip
+    }
+    head = (
+        f"# Written by refpo tune {tuning.name} when every method had spent its {tuning.trials} trials: each "
+        f"method's best trial (chosen.yaml). Run: refpo sweep <this file>\n"
+    )
     return head + yaml.safe_dump(json.loads(json.dumps(spec)), sort_keys=False)  # a plain copy: no YAML anchors

@@ -41,8 +41,20 @@ from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.sweeps.spec import Method, Run, _flat_overrides, cli_value, device_type
 from refpo_warp.utils.errors import ConfigError, unknown
 
-SPEC_KEYS = ("description", "device", "tasks", "seed", "trials", "overrides", "objective", "sampler", "pruner",
-             "methods", "evaluate", "out")  # fmt: skip
+SPEC_KEYS = (
+    "description",
+    "device",
+    "tasks",
+    "seed",
+    "trials",
+    "overrides",
+    "objective",
+    "sampler",
+    "pruner",
+    "methods",
+    "evaluate",
+    "out",
+)
 METHOD_KEYS = ("label", "algo", "name", "overrides", "enqueue", "space")
 OBJECTIVE_KEYS = ("metric", "reference", "description")
 SAMPLER_KEYS = ("startup_trials",)
@@ -161,8 +173,10 @@ def _dimension(key: str, spec: Any, where: str) -> Dimension:
 
 def _method(entry: Any, where: str) -> TunedMethod:
     if not isinstance(entry, dict) or "algo" not in entry or "space" not in entry:
-        raise ConfigError(f"{where}: each method needs 'algo' and 'space' (and optionally label, name, overrides, "
-                          f"enqueue), got {entry!r}")  # fmt: skip
+        raise ConfigError(
+            f"{where}: each method needs 'algo' and 'space' (and optionally label, name, overrides, "
+            f"enqueue), got {entry!r}"
+        )
     for key in entry:
         if key not in METHOD_KEYS:
             raise unknown(f"method key in {where}", key, METHOD_KEYS)
@@ -180,8 +194,10 @@ def _method(entry: Any, where: str) -> TunedMethod:
         raise ConfigError(f"{where}: method '{label}': 'enqueue' must be a list of '{CONFIG_VALUES}' or mappings")
     for item in enqueue:
         if item != CONFIG_VALUES and not isinstance(item, dict):
-            raise ConfigError(f"{where}: method '{label}': an 'enqueue' entry is '{CONFIG_VALUES}' or a mapping of "
-                              f"searched values, got {item!r}")  # fmt: skip
+            raise ConfigError(
+                f"{where}: method '{label}': an 'enqueue' entry is '{CONFIG_VALUES}' or a mapping of "
+                f"searched values, got {item!r}"
+            )
     return TunedMethod(label, str(entry.get("name", label)), str(entry["algo"]), overrides, dims, enqueue)
 
 
@@ -207,7 +223,6 @@ def _evaluation(spec: Any, labels: list[str], where: str) -> Evaluation | None:
             raise unknown(f"tuned method (evaluate variant '{entry['label']}' of) in {where}", entry["of"], labels)
         variants.append({k: str(entry.get(k, entry["label"])) for k in VARIANT_KEYS})
     return Evaluation([str(t) for t in tasks], [_int(s, "evaluate.seeds", where, 0) for s in seeds], variants)
-
 
 
 def _int(value: Any, key: str, where: str, low: int) -> int:
@@ -245,8 +260,9 @@ def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
         or sorted(reference) != sorted(tasks)
         or not all(isinstance(v, (int, float)) and v > 0 for v in reference.values())
     ):
-        raise ConfigError(f"{where}: objective.reference needs one positive number for each of {tasks}, got "
-                          f"{reference!r}")  # fmt: skip
+        raise ConfigError(
+            f"{where}: objective.reference needs one positive number for each of {tasks}, got {reference!r}"
+        )
     sampler = spec.get("sampler") or {}
     for key in sampler:
         if key not in SAMPLER_KEYS:
@@ -281,16 +297,29 @@ def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
     device = str(spec.get("device", "cpu"))
     device_type(device)
     return Tuning(
-        name=path.stem, source=str(path), description=str(spec.get("description", "")).strip(), device=device,
-        tasks=[str(t) for t in tasks], seed=_int(spec.get("seed", 101), "seed", where, 0), trials=trials,
+        name=path.stem,
+        source=str(path),
+        description=str(spec.get("description", "")).strip(),
+        device=device,
+        tasks=[str(t) for t in tasks],
+        seed=_int(spec.get("seed", 101), "seed", where, 0),
+        trials=trials,
         overrides=overrides,
-        objective=Objective(str(objective["metric"]), {str(k): float(v) for k, v in reference.items()},
-                            str(objective.get("description", "")).strip()),
+        objective=Objective(
+            str(objective["metric"]),
+            {str(k): float(v) for k, v in reference.items()},
+            str(objective.get("description", "")).strip(),
+        ),
         startup_trials=_int(sampler.get("startup_trials", 4), "sampler.startup_trials", where, 0),
-        pruner=None if pruner is None else {
+        pruner=None
+        if pruner is None
+        else {
             "percentile": float(pruner.get("percentile", 25)),
             "startup_trials": _int(pruner.get("startup_trials", 3), "pruner.startup_trials", where, 0),
-            "warmup_evaluations": _int(pruner.get("warmup_evaluations", 5), "pruner.warmup_evaluations", where, 0)},
-        methods=methods, out_dir=Path(str(cli.pop("out", spec.get("out") or Path("runs") / "tune" / path.stem))),
-        evaluation=evaluation, folders=folders,
-    )  # fmt: skip
+            "warmup_evaluations": _int(pruner.get("warmup_evaluations", 5), "pruner.warmup_evaluations", where, 0),
+        },
+        methods=methods,
+        out_dir=Path(str(cli.pop("out", spec.get("out") or Path("runs") / "tune" / path.stem))),
+        evaluation=evaluation,
+        folders=folders,
+    )

@@ -38,20 +38,22 @@ def load_init_from(runner, cfg: dict) -> Path:
         raise DataFileError(f"init_from={source}: {err}") from None
     differences = init_differences(saved, cfg)
     if differences:
-        raise DataFileError(f"init_from={source}: the cloned actor does not fit this run; these differ (clone -> "
-                            f"run): {'; '.join(differences)}")  # fmt: skip
+        raise DataFileError(
+            f"init_from={source}: the cloned actor does not fit this run; these differ (clone -> "
+            f"run): {'; '.join(differences)}"
+        )
     path = latest_checkpoint(source)
     if path is None:
-        raise DataFileError(f"init_from={source}: no checkpoint (model_<iteration>.pt) in it; run refpo pretrain "
-                            f"first")  # fmt: skip
+        raise DataFileError(f"init_from={source}: no checkpoint (model_<iteration>.pt) in it; run refpo pretrain first")
     data = read_checkpoint(path, map_location=runner.device)
     actor = uncompiled(runner.alg, "actor")
     _check_shapes(path, "actor", actor.state_dict(), data["actor_state_dict"])
     actor.load_state_dict(data["actor_state_dict"])
     critic = uncompiled(runner.alg, "critic")
     normaliser = {k: v for k, v in data["critic_state_dict"].items() if "obs_normalizer" in k}
-    if normaliser and all(k in critic.state_dict() and critic.state_dict()[k].shape == v.shape
-                          for k, v in normaliser.items()):  # fmt: skip
+    if normaliser and all(
+        k in critic.state_dict() and critic.state_dict()[k].shape == v.shape for k, v in normaliser.items()
+    ):
         critic.load_state_dict(normaliser, strict=False)
     ema = getattr(runner.alg, "ema", None)
     if ema is not None and hasattr(ema, "reset"):
@@ -62,8 +64,11 @@ def load_init_from(runner, cfg: dict) -> Path:
 def _check_shapes(path: Path, name: str, have: dict, got: dict) -> None:
     problems = [f"'{k}' missing" for k in have if k not in got]
     problems += [f"'{k}' unexpected" for k in got if k not in have]
-    problems += [f"'{k}' is {tuple(got[k].shape)} in the file, {tuple(have[k].shape)} in the model" for k in have
-                 if k in got and got[k].shape != have[k].shape]  # fmt: skip
+    problems += [
+        f"'{k}' is {tuple(got[k].shape)} in the file, {tuple(have[k].shape)} in the model"
+        for k in have
+        if k in got and got[k].shape != have[k].shape
+    ]
     if problems:
         more = f" (and {len(problems) - 3} more)" if len(problems) > 3 else ""
         raise CheckpointError(f"{path}: does not fit this run's {name} network: {'; '.join(problems[:3])}{more}")

@@ -72,11 +72,15 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
     check_writable(run_dir)
     checkpoint = latest_checkpoint(run_dir) if run_dir.is_dir() else None
     if checkpoint is not None and not resume:
-        raise ConfigError(f"{run_dir} already holds checkpoints ({checkpoint.name}); pass resume=true to continue "
-                          f"that run, or choose another run_dir")  # fmt: skip
+        raise ConfigError(
+            f"{run_dir} already holds checkpoints ({checkpoint.name}); pass resume=true to continue "
+            f"that run, or choose another run_dir"
+        )
     if checkpoint is None and resume:
-        raise ConfigError(f"resume=true, but {run_dir} holds no checkpoint (model_<iteration>.pt) to continue from; "
-                          f"start it again without resume=true (that replaces its config.yaml and progress.jsonl)")
+        raise ConfigError(
+            f"resume=true, but {run_dir} holds no checkpoint (model_<iteration>.pt) to continue from; "
+            f"start it again without resume=true (that replaces its config.yaml and progress.jsonl)"
+        )
     if not resume:
         check_new_run_dir(run_dir)
     rank = process_rank()
@@ -131,10 +135,14 @@ def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: in
         alg.learning_rate = float(cfg["algorithm"]["learning_rate"])
         for group in alg.optimizer.param_groups:
             group["lr"] = alg.learning_rate
-        print(f"[refpo_warp] learning_rate {alg.learning_rate:g} from the command line replaces {restored:g} "
-              f"restored from {path.name}", flush=True)  # fmt: skip
-    print(f"[refpo_warp] resuming {run_dir} from {path.name}: iteration {iteration}, {env_steps:,} env steps",
-          flush=True)  # fmt: skip
+        print(
+            f"[refpo_warp] learning_rate {alg.learning_rate:g} from the command line replaces {restored:g} "
+            f"restored from {path.name}",
+            flush=True,
+        )
+    print(
+        f"[refpo_warp] resuming {run_dir} from {path.name}: iteration {iteration}, {env_steps:,} env steps", flush=True
+    )
     return runner.continue_after(iteration, env_steps, time_s or 0.0)
 
 
@@ -146,8 +154,11 @@ def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
         print(f"[refpo_warp] NOTE: {notice}", flush=True)
     ranks = f" x {rank.world_size} ranks" if rank.is_distributed else ""
     steps = total * env_steps_per_iteration(cfg, rank.world_size)
-    print(f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs{ranks}, "
-          f"iterations {start}..{total - 1} ({steps:,} env steps), run dir {run_dir}", flush=True)  # fmt: skip
+    print(
+        f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs{ranks}, "
+        f"iterations {start}..{total - 1} ({steps:,} env steps), run dir {run_dir}",
+        flush=True,
+    )
     if cfg["eval"]["interval"] is None:  # periodic evaluation on by default: 10 evaluations per run
         cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
     interval = int(cfg["eval"]["interval"])
@@ -163,8 +174,11 @@ def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
             err.learning_rate = float(runner.alg.learning_rate)
             raise
     else:
-        print(f"[refpo_warp] nothing to train: the run is at iteration {start} and the budget is {total} iterations "
-              f"(raise max_iterations or total_env_steps to continue)", flush=True)  # fmt: skip
+        print(
+            f"[refpo_warp] nothing to train: the run is at iteration {start} and the budget is {total} iterations "
+            f"(raise max_iterations or total_env_steps to continue)",
+            flush=True,
+        )
     results = {}
     if cfg["eval"]["at_end"] and rank.is_main:
         results = evaluate_run(run_dir, cfg=cfg, runner=runner)
@@ -203,8 +217,9 @@ def with_videos(evaluate, cfg: dict, runner, run_dir: Path, interval: int):
     return evaluate_and_record
 
 
-def _learn_in_chunks(runner, start: int, total: int, interval: int, evaluate, init_at_random_ep_len: bool,
-                     warmup: int = 0) -> None:  # fmt: skip
+def _learn_in_chunks(
+    runner, start: int, total: int, interval: int, evaluate, init_at_random_ep_len: bool, warmup: int = 0
+) -> None:
     """Iterations ``start .. total - 1`` in chunks that end where periodic evaluation is due (every ``interval``
     iterations and at the last); the evaluation runs here, between chunks, and its numbers join the progress row
     of the chunk's last iteration (``eval/return_N<n>`` ...). Every rank learns in the same chunks. Iterations

@@ -75,8 +75,13 @@ def wants_help(argv: list[str]) -> bool:
     return any(a in HELP for a in argv)
 
 
-def parse_arguments(command: str, argv: list[str], flags: tuple[Flag, ...] = (), subjects: int = 0,
-                    renamed: dict[str, str] | None = None) -> Arguments:  # fmt: skip
+def parse_arguments(
+    command: str,
+    argv: list[str],
+    flags: tuple[Flag, ...] = (),
+    subjects: int = 0,
+    renamed: dict[str, str] | None = None,
+) -> Arguments:
     """Split ``argv``; a flag not declared, a missing flag value, an extra subject or an old spelling (``renamed``:
     ``--flag`` or ``key=`` -> its name now) raises ``ConfigError``."""
     declared = {flag.name: flag for flag in flags}
@@ -91,8 +96,11 @@ def parse_arguments(command: str, argv: list[str], flags: tuple[Flag, ...] = (),
         if arg.startswith("--"):
             name, has_value, value = arg.partition("=")
             if name not in declared:
-                raise unknown(f"flag of refpo {command}", name, declared) if declared else ConfigError(
-                    f"refpo {command} takes no flags, got {name}")  # fmt: skip
+                raise (
+                    unknown(f"flag of refpo {command}", name, declared)
+                    if declared
+                    else ConfigError(f"refpo {command} takes no flags, got {name}")
+                )
             flag = declared[name]
             if flag.kind is None:
                 if has_value:
@@ -112,9 +120,13 @@ def parse_arguments(command: str, argv: list[str], flags: tuple[Flag, ...] = (),
         elif len(out.subjects) < subjects:
             out.subjects.append(arg)
         else:
-            raise ConfigError(f"unexpected argument {arg!r}: refpo {command} takes key=value options"
-                              + (f" and the flags {', '.join(declared)}" if declared else "")
-                              + "; see refpo " + command + " --help")  # fmt: skip
+            raise ConfigError(
+                f"unexpected argument {arg!r}: refpo {command} takes key=value options"
+                + (f" and the flags {', '.join(declared)}" if declared else "")
+                + "; see refpo "
+                + command
+                + " --help"
+            )
     return out
 
 
@@ -123,8 +135,13 @@ def usage(synopsis: str, summary: str, flags: tuple[Flag, ...]) -> str:
     return "\n".join([synopsis, "", summary.strip(), "", "Flags:", *(f.line() for f in flags)])
 
 
-def parse_flags(command: str, argv: list[str], flags: tuple[Flag, ...], options: tuple[str, ...] = (),
-                renamed: dict[str, str] | None = None) -> tuple[SimpleNamespace, dict[str, str]]:  # fmt: skip
+def parse_flags(
+    command: str,
+    argv: list[str],
+    flags: tuple[Flag, ...],
+    options: tuple[str, ...] = (),
+    renamed: dict[str, str] | None = None,
+) -> tuple[SimpleNamespace, dict[str, str]]:
     """A benchmark's arguments through the convention: its flags as attributes (``--num-envs 8`` ->
     ``.num_envs``, the declared default when not given) and its ``key=value`` options whose key starts with one of
     ``options`` (e.g. ``env.``), as text."""
@@ -133,8 +150,11 @@ def parse_flags(command: str, argv: list[str], flags: tuple[Flag, ...], options:
     for option in args.options:
         key, _, value = option.partition("=")
         if not key.startswith(options) or not options:
-            raise ConfigError(f"refpo {command} takes " + (f"{', '.join(o + '<key>=' for o in options)} options and "
-                              if options else "") + f"flags, not {option!r}; see refpo {command} --help")  # fmt: skip
+            raise ConfigError(
+                f"refpo {command} takes "
+                + (f"{', '.join(o + '<key>=' for o in options)} options and " if options else "")
+                + f"flags, not {option!r}; see refpo {command} --help"
+            )
         given[key] = value
     values = {f.name.lstrip("-").replace("-", "_"): args.get(f) for f in flags}
     return SimpleNamespace(**values), given

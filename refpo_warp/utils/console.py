@@ -63,8 +63,10 @@ def health_line(health: dict) -> str:
     N=10 peak 950 (it 39), final 940 (-1 %)``."""
     cliff = health.get("cliff") or {}
     parts = [f"cliff: {cliff['status'].replace('_', ' ')} ({cliff['message']})"] if cliff else []
-    parts += [f"{setting} peak {h['peak']:.4g} (it {h['peak_iteration']}), final {h['final']:.4g} "
-              f"({-100 * h['drop']:+.0f} %)" for setting, h in (health.get("curves") or {}).items()]  # fmt: skip
+    parts += [
+        f"{setting} peak {h['peak']:.4g} (it {h['peak_iteration']}), final {h['final']:.4g} ({-100 * h['drop']:+.0f} %)"
+        for setting, h in (health.get("curves") or {}).items()
+    ]
     return ";  ".join(parts)
 
 

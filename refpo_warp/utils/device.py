@@ -10,8 +10,10 @@ from refpo_warp.utils.errors import ConfigError
 
 def check_device_name(device: str) -> str:
     """``device`` if it is a device name (auto, cpu, cuda, cuda:N), whether or not this machine has it."""
-    if not (isinstance(device, str) and (device in ("auto", "cpu", "cuda") or
-                                         (device.startswith("cuda:") and device[5:].isdigit()))):  # fmt: skip
+    if not (
+        isinstance(device, str)
+        and (device in ("auto", "cpu", "cuda") or (device.startswith("cuda:") and device[5:].isdigit()))
+    ):
         raise ConfigError(f"device={device!r} is invalid; expected auto, cpu, cuda or cuda:N")
     return device
 
@@ -29,11 +31,14 @@ def resolve_device(device: str = "auto") -> str:
     index = device[5:] if device.startswith("cuda:") else None
     if index is not None:
         if not torch.cuda.is_available():
-            raise ConfigError(f"device={device} was requested but no CUDA device is available; use device=cpu or "
-                              f"device=auto")  # fmt: skip
+            raise ConfigError(
+                f"device={device} was requested but no CUDA device is available; use device=cpu or device=auto"
+            )
         if int(index) >= torch.cuda.device_count():
-            raise ConfigError(f"device={device} is not available: this machine has {torch.cuda.device_count()} "
-                              f"CUDA device(s), cuda:0 .. cuda:{torch.cuda.device_count() - 1}")  # fmt: skip
+            raise ConfigError(
+                f"device={device} is not available: this machine has {torch.cuda.device_count()} "
+                f"CUDA device(s), cuda:0 .. cuda:{torch.cuda.device_count() - 1}"
+            )
     return device
 
 

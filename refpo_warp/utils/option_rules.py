@@ -81,9 +81,18 @@ class Rule:
 class Num(Rule):
     """A finite number in [lo, hi] (``lo_open``/``hi_open`` exclude the bound); ``integer`` requires a whole number."""
 
-    def __init__(self, lo: float | None = None, hi: float | None = None, *, integer: bool = False,
-                 lo_open: bool = False, hi_open: bool = False, multiple_of: int | None = None,
-                 optional: bool = False, fixed: bool | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        lo: float | None = None,
+        hi: float | None = None,
+        *,
+        integer: bool = False,
+        lo_open: bool = False,
+        hi_open: bool = False,
+        multiple_of: int | None = None,
+        optional: bool = False,
+        fixed: bool | None = None,
+    ) -> None:
         super().__init__(optional, fixed)
         self.lo, self.hi, self.integer = lo, hi, integer
         self.lo_open, self.hi_open, self.multiple_of = lo_open, hi_open, multiple_of
@@ -182,8 +191,14 @@ class Text(Rule):
 class ListOf(Rule):
     """A list of ``min_len`` to ``max_len`` items, each valid for ``item``."""
 
-    def __init__(self, item: Rule, min_len: int = 1, max_len: int | None = None, optional: bool = False,
-                 fixed: bool | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        item: Rule,
+        min_len: int = 1,
+        max_len: int | None = None,
+        optional: bool = False,
+        fixed: bool | None = None,
+    ) -> None:
         super().__init__(optional, fixed)
         self.item, self.min_len, self.max_len = item, min_len, max_len
 
@@ -202,8 +217,9 @@ class ListOf(Rule):
 class Check(Rule):
     """A rule given by a function ``fn(key, value) -> value`` that raises ``ConfigError`` (for the odd option)."""
 
-    def __init__(self, fn: Callable[[str, Any], Any], description: str, optional: bool = False,
-                 fixed: bool | None = None) -> None:  # fmt: skip
+    def __init__(
+        self, fn: Callable[[str, Any], Any], description: str, optional: bool = False, fixed: bool | None = None
+    ) -> None:
         super().__init__(optional, fixed)
         self.fn, self.description = fn, description
 
@@ -304,6 +320,13 @@ def _fmt(x: float) -> str:
 
 
 def _show(value: Any) -> str:
-    text = repr(value) if isinstance(value, str) else "null" if value is None else str(value).lower() \
-        if isinstance(value, bool) else str(value)  # fmt: skip
+    text = (
+        repr(value)
+        if isinstance(value, str)
+        else "null"
+        if value is None
+        else str(value).lower()
+        if isinstance(value, bool)
+        else str(value)
+    )
     return text if len(text) <= 80 else text[:77] + "..."

@@ -17,9 +17,11 @@ def _packaged_config_dir() -> Path:
     # The package data folder itself, not an import of it: find_spec locates it in a wheel and in an editable install.
     spec = importlib.util.find_spec("refpo_warp.configs")
     if spec is None or not spec.submodule_search_locations:
-        raise ImportError("refpo_warp's shipped configs (refpo_warp.configs) are not installed beside it: install the "
-                          "package again (pip install -e . in a checkout; an editable install from before the configs "
-                          "moved into the package lacks them)")
+        raise ImportError(
+            "refpo_warp's shipped configs (refpo_warp.configs) are not installed beside it: install the "
+            "package again (pip install -e . in a checkout; an editable install from before the configs "
+            "moved into the package lacks them)"
+        )
     return Path(spec.submodule_search_locations[0]).resolve()
 
 

@@ -47,8 +47,7 @@ def print_title(title: str) -> None:
     print(f"\n### {title}\n", flush=True)
 
 
-def print_table(rows: list[dict], columns: list[str], title: str | None = None,
-                notes: tuple[str, ...] = ()) -> None:  # fmt: skip
+def print_table(rows: list[dict], columns: list[str], title: str | None = None, notes: tuple[str, ...] = ()) -> None:
     """Print rows as an aligned plain-text table (also valid Markdown), under ``title`` and followed by ``notes``."""
     if title:
         print_title(title)

@@ -9,7 +9,12 @@ from refpo_warp.tasks.dmc import suite
 from refpo_warp.tasks.dmc.cfg import DmcCfg
 
 TASKS = [
-    TaskSpec(f"dmc_{name}", "refpo_warp.tasks.dmc.env:DmcEnv", DmcCfg, {"task": name},
-             description=f"DMC {suite.describe(name)}; {DmcCfg.max_episode_length}-step episodes")
+    TaskSpec(
+        f"dmc_{name}",
+        "refpo_warp.tasks.dmc.env:DmcEnv",
+        DmcCfg,
+        {"task": name},
+        description=f"DMC {suite.describe(name)}; {DmcCfg.max_episode_length}-step episodes",
+    )
     for name in suite.task_names()
-]  # fmt: skip
+]

@@ -109,16 +109,25 @@ def main(argv: list[str]) -> None:
     if unknown:
         raise ConfigError(f"unknown DMC task(s) {unknown}; choose from {', '.join(TASKS)}")
     torch.manual_seed(0)
-    print(f"DMC env steps/s on {device}: {num_envs} envs, random actions, graph-captured step"
-          + ("" if args.no_mujoco_c else "; MuJoCo C on the same model and number of worlds (1 thread)"), flush=True)
+    print(
+        f"DMC env steps/s on {device}: {num_envs} envs, random actions, graph-captured step"
+        + ("" if args.no_mujoco_c else "; MuJoCo C on the same model and number of worlds (1 thread)"),
+        flush=True,
+    )
     rows = []
     for task in tasks:
         rate, env = ours(task, num_envs, device, args.seconds)
         row = {"task": task, "substeps": env.task.substeps, "ours (env steps/s)": f"{rate:,.0f}"}
         if not args.no_mujoco_c:
             c_rollout, c_loop = mujoco_c(env, args.seconds)
-            row.update({"C rollout": f"{c_rollout:,.0f}", "ours / C rollout": f"{rate / c_rollout:.2f}",
-                        "C loop": f"{c_loop:,.0f}", "ours / C loop": f"{rate / c_loop:.2f}"})  # fmt: skip
+            row.update(
+                {
+                    "C rollout": f"{c_rollout:,.0f}",
+                    "ours / C rollout": f"{rate / c_rollout:.2f}",
+                    "C loop": f"{c_loop:,.0f}",
+                    "ours / C loop": f"{rate / c_loop:.2f}",
+                }
+            )
         rows.append(row)
         print(f"  {task}: {row}", flush=True)
         del env

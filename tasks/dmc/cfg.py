@@ -22,5 +22,9 @@ class DmcCfg(EnvCfg):
     reset_bank_size: int = 0
     """Settled initial states pre-computed by tasks whose reset lets the model settle first (cheetah);
     0 means max(num_envs, 256)."""
-    option_rules = {"task": OneOf(task_names(), fixed=True), "solver_iterations": Int(0, 10_000),
-                    "solver_ls_iterations": Int(0, 10_000), "reset_bank_size": Int(0, 10_000_000)}  # fmt: skip
+    option_rules = {
+        "task": OneOf(task_names(), fixed=True),
+        "solver_iterations": Int(0, 10_000),
+        "solver_ls_iterations": Int(0, 10_000),
+        "reset_bank_size": Int(0, 10_000_000),
+    }

@@ -66,12 +66,15 @@ class DmcEnv(WarpVecEnv):
             options["ls_iterations"] = cfg.solver_ls_iterations
         # warn_overflow off: MuJoCo Warp would print a line per step when the models' (deliberately low, Playground's)
         # iteration caps are hit.
-        self.sim = MuJoCoWorlds(task_class.model_path(), self.num_envs, self.device, task_class.substeps, options,
-                                warn_overflow=False)  # fmt: skip
+        self.sim = MuJoCoWorlds(
+            task_class.model_path(), self.num_envs, self.device, task_class.substeps, options, warn_overflow=False
+        )
         ctrl = self.sim.views.ctrl
         if ctrl is None or ctrl.shape[1] != task_class.num_actions:
-            raise ValueError(f"{task_class.model_file}: expected {task_class.num_actions} actuators, found "
-                             f"{0 if ctrl is None else ctrl.shape[1]}")  # fmt: skip
+            raise ValueError(
+                f"{task_class.model_file}: expected {task_class.num_actions} actuators, found "
+                f"{0 if ctrl is None else ctrl.shape[1]}"
+            )
         self.task = task_class(self.sim, cfg, self.buffers.rng)
         self.task.prepare()
         self._no_resets = wp.zeros(self.num_envs, dtype=wp.bool)  # observe() mask for the pre-reset observation
@@ -82,9 +85,11 @@ class DmcEnv(WarpVecEnv):
         sim.simulate()
         task.after_physics()
         task.reward(b.rewards)
-        wp.launch(end_diverged_worlds, dim=self.num_envs,
-                  inputs=[sim.views.joint_q, sim.views.joint_qd, b.rewards, b.terminated,
-                          b.metrics["nonfinite_resets"]])  # fmt: skip
+        wp.launch(
+            end_diverged_worlds,
+            dim=self.num_envs,
+            inputs=[sim.views.joint_q, sim.views.joint_qd, b.rewards, b.terminated, b.metrics["nonfinite_resets"]],
+        )
 
     def _observe_final(self) -> None:
         self.task.observe(self.buffers.final_obs["policy"], self._no_resets)

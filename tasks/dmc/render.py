@@ -21,8 +21,9 @@ class DmcFrames:
         if camera == "default":
             camera = task.render_camera
         elevation, azimuth = task.render_view
-        self.scene = MujocoScene(model, width, height, camera, task.track_body, shadows, task.render_distance,
-                                 elevation, azimuth)  # fmt: skip
+        self.scene = MujocoScene(
+            model, width, height, camera, task.track_body, shadows, task.render_distance, elevation, azimuth
+        )
         self.control_hz = 1.0 / env.sim.control_dt
 
     def frame(self, i: int) -> tuple[np.ndarray, list[str]]:

@@ -31,8 +31,16 @@ QUADRATIC = wp.constant(6)
 TANH_SQUARED = wp.constant(7)
 DEFAULT_VALUE_AT_MARGIN = wp.constant(0.1)
 
-SIGMOIDS = {"gaussian": 0, "hyperbolic": 1, "long_tail": 2, "reciprocal": 3, "cosine": 4, "linear": 5,
-            "quadratic": 6, "tanh_squared": 7}  # fmt: skip
+SIGMOIDS = {
+    "gaussian": 0,
+    "hyperbolic": 1,
+    "long_tail": 2,
+    "reciprocal": 3,
+    "cosine": 4,
+    "linear": 5,
+    "quadratic": 6,
+    "tanh_squared": 7,
+}
 
 
 @wp.func

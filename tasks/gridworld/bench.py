@@ -53,8 +53,12 @@ def main(argv: list[str]) -> None:
     env = make_env("gridworld", num_envs=args.num_envs, device=device)
     warp_sps = env_steps_per_second(env, steps=500)
     gym_sps = gym_steps_per_second(args.num_envs, args.gym_steps)
-    print_table([
-        {"env": "refpo_warp GridWorld (Warp kernel)", "env steps/s": f"{warp_sps:,.0f}"},
-        {"env": "gymnasium SyncVectorEnv (numpy)", "env steps/s": f"{gym_sps:,.0f}"},
-        {"env": "speed-up", "env steps/s": f"{warp_sps / gym_sps:,.0f}x"},
-    ], ["env", "env steps/s"], title=f"Env steps per second, {args.num_envs} envs, uniform random actions")  # fmt: skip
+    print_table(
+        [
+            {"env": "refpo_warp GridWorld (Warp kernel)", "env steps/s": f"{warp_sps:,.0f}"},
+            {"env": "gymnasium SyncVectorEnv (numpy)", "env steps/s": f"{gym_sps:,.0f}"},
+            {"env": "speed-up", "env steps/s": f"{warp_sps / gym_sps:,.0f}x"},
+        ],
+        ["env", "env steps/s"],
+        title=f"Env steps per second, {args.num_envs} envs, uniform random actions",
+    )

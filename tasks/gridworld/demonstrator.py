@@ -38,9 +38,14 @@ class Demonstrator:
         return torch.stack([sideways, direction], dim=-1).to(obs["policy"].device)
 
     def describe(self) -> dict:
-        return {"kind": "scripted", "task_family": "gridworld", "up_share": self.up_share, "band": self.band,
-                "rule": "nearer goal band outside the middle band; inside it up with probability up_share, else "
-                        "down, at every step; x action uniform in [-1, 1]"}  # fmt: skip
+        return {
+            "kind": "scripted",
+            "task_family": "gridworld",
+            "up_share": self.up_share,
+            "band": self.band,
+            "rule": "nearer goal band outside the middle band; inside it up with probability up_share, else "
+            "down, at every step; x action uniform in [-1, 1]",
+        }
 
 
 def make_demonstrator(env_cfg, generator: torch.Generator, **options) -> Demonstrator:

@@ -118,15 +118,29 @@ class GridWorldEnv(WarpVecEnv):
 
     def _step_impl(self) -> None:
         b, c = self.buffers, self.cfg
-        wp.launch(step_kernel, dim=self.num_envs,
-                  inputs=[b.actions, self.pos, b.rng, c.size, c.goal_reward, self.max_episode_length,
-                          b.episode_length],
-                  outputs=[b.obs["policy"], b.rewards, b.terminated, b.truncated, b.done, b.metrics["success"],
-                           b.metrics["reached_top"], b.final_obs["policy"]])  # fmt: skip
+        wp.launch(
+            step_kernel,
+            dim=self.num_envs,
+            inputs=[b.actions, self.pos, b.rng, c.size, c.goal_reward, self.max_episode_length, b.episode_length],
+            outputs=[
+                b.obs["policy"],
+                b.rewards,
+                b.terminated,
+                b.truncated,
+                b.done,
+                b.metrics["success"],
+                b.metrics["reached_top"],
+                b.final_obs["policy"],
+            ],
+        )
 
     def _reset_impl(self, mask) -> None:
-        wp.launch(reset_kernel, dim=self.num_envs, inputs=[mask, self.pos, self.buffers.rng, self.cfg.size],
-                  outputs=[self.buffers.obs["policy"]])  # fmt: skip
+        wp.launch(
+            reset_kernel,
+            dim=self.num_envs,
+            inputs=[mask, self.pos, self.buffers.rng, self.cfg.size],
+            outputs=[self.buffers.obs["policy"]],
+        )
 
     @property
     def positions(self) -> torch.Tensor:

@@ -111,8 +111,9 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
     size = int(cfg["env"].get("size", 25))
     device = next(actor.parameters()).device
     env_cfg = {**cfg["env"], "action_chunk": 1, "reset_group_size": 1}  # one move per step from the set starts
-    env = make_env(cfg["task"], num_envs=len(FIGURE_STARTS) * 20, device=str(device), seed=cfg["seed"] + 20_000,
-                   **env_cfg)  # fmt: skip
+    env = make_env(
+        cfg["task"], num_envs=len(FIGURE_STARTS) * 20, device=str(device), seed=cfg["seed"] + 20_000, **env_cfg
+    )
     written = []
     for n in FIGURE_FLOW_STEPS if hasattr(actor, "num_flow_steps") else (None,):
         suffix, policy = (f"_N{n}", f"{n}-step flow") if n else ("", "Gaussian policy")
@@ -121,8 +122,18 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
         _draw_grid(ax, size)
         ys, xs = torch.meshgrid(torch.arange(size), torch.arange(size), indexing="ij")
         for s in range(field.shape[2]):
-            ax.quiver(xs, ys, field[:, :, s, 0], field[:, :, s, 1], angles="xy", scale_units="xy", scale=2.2,
-                      width=0.004, alpha=0.35, color="#1f4e9c")  # fmt: skip
+            ax.quiver(
+                xs,
+                ys,
+                field[:, :, s, 0],
+                field[:, :, s, 1],
+                angles="xy",
+                scale_units="xy",
+                scale=2.2,
+                width=0.004,
+                alpha=0.35,
+                color="#1f4e9c",
+            )
         ax.set_title(f"Sampled actions, {policy}")
         path = Path(run_dir) / f"gridworld_field{suffix}.png"
         save_figure(fig, path, dpi=120, bbox_inches="tight")

@@ -7,13 +7,20 @@ from refpo_warp.tasks.humanoid.cfg import HumanoidTrackingCfg
 _VARIANTS = {
     "humanoid_all": ("every body's targets observed", {"conditioning": "all"}),
     "humanoid_root_hands": ("only pelvis and wrist positions observed", {"conditioning": "root_hands"}),
-    "humanoid_all_residual": ("every body's targets observed, PD targets relative to the reference",
-                              {"conditioning": "all"}),
+    "humanoid_all_residual": (
+        "every body's targets observed, PD targets relative to the reference",
+        {"conditioning": "all"},
+    ),
     "humanoid_root": ("only the pelvis position observed", {"conditioning": "root"}),
 }
 
 TASKS = [
-    TaskSpec(task_id, "refpo_warp.tasks.humanoid.env:HumanoidTrackingEnv", HumanoidTrackingCfg, fixed,
-             description=f"SMPL humanoid tracking, {description}")
+    TaskSpec(
+        task_id,
+        "refpo_warp.tasks.humanoid.env:HumanoidTrackingEnv",
+        HumanoidTrackingCfg,
+        fixed,
+        description=f"SMPL humanoid tracking, {description}",
+    )
     for task_id, (description, fixed) in _VARIANTS.items()
-]  # fmt: skip
+]

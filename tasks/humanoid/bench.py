@@ -42,8 +42,9 @@ class _CountEpisodes:
         return out
 
 
-def measure(task: str, num_envs: int, device: str, steps: int, warmup: int, seed: int = 0, with_c: bool = True,
-            **env_cfg) -> dict:  # fmt: skip
+def measure(
+    task: str, num_envs: int, device: str, steps: int, warmup: int, seed: int = 0, with_c: bool = True, **env_cfg
+) -> dict:
     """Build the env, warm up, time ``steps`` random-action steps, then (``with_c``) the MuJoCo C anchor."""
     start = time.perf_counter()
     env = make_env(task, num_envs=num_envs, device=device, seed=seed, **env_cfg)
@@ -56,11 +57,18 @@ def measure(task: str, num_envs: int, device: str, steps: int, warmup: int, seed
     rate = env_steps_per_second(counted, steps=steps, warmup=0, seed=seed)
     ended = int(counted.ended)
     result = {
-        "task": task, "device": env.device, "num_envs": num_envs, "steps": steps,
-        "env_steps_per_s": rate, "ms_per_step": 1e3 * num_envs / rate, "episodes_ended": ended,
-        "mean_episode_length": steps * num_envs / ended if ended else None, "build_s": build_s,
-        "warmup_s": warmup_s, "graph_captured": env._graph is not None,
-    }  # fmt: skip
+        "task": task,
+        "device": env.device,
+        "num_envs": num_envs,
+        "steps": steps,
+        "env_steps_per_s": rate,
+        "ms_per_step": 1e3 * num_envs / rate,
+        "episodes_ended": ended,
+        "mean_episode_length": steps * num_envs / ended if ended else None,
+        "build_s": build_s,
+        "warmup_s": warmup_s,
+        "graph_captured": env._graph is not None,
+    }
     if with_c:
         length = round(result["mean_episode_length"]) if ended else steps
         result.update(mujoco_c(env, steps, length, seed))
@@ -109,8 +117,11 @@ FLAGS = (
     Flag("--no-mujoco-c", doc="skip the MuJoCo C anchor", default=False),
     Flag("--json", doc="print the result as one JSON line", default=False),
 )
-USAGE = usage("refpo bench humanoid [flags] [env.<option>=VALUE ...]", __doc__.split("\n\n")[0]
-              + " env.<option>=VALUE sets an env cfg option (e.g. env.njmax=320).", FLAGS)  # fmt: skip
+USAGE = usage(
+    "refpo bench humanoid [flags] [env.<option>=VALUE ...]",
+    __doc__.split("\n\n")[0] + " env.<option>=VALUE sets an env cfg option (e.g. env.njmax=320).",
+    FLAGS,
+)
 
 
 def main(argv: list[str]) -> None:
@@ -126,22 +137,30 @@ def main(argv: list[str]) -> None:
         print(json.dumps(result))
         return
     print_title(f"{result['task']} env steps per second on {result['device']}, {num_envs} envs")
-    print(f"{result['task']} on {result['device']}: {num_envs} envs, {steps} steps after {args.warmup} warm-up "
-          f"(graph captured: {result['graph_captured']}), uniform random actions in [-1, 1]"
-          + (f"; env options {env_cfg}" if env_cfg else ""))  # fmt: skip
+    print(
+        f"{result['task']} on {result['device']}: {num_envs} envs, {steps} steps after {args.warmup} warm-up "
+        f"(graph captured: {result['graph_captured']}), uniform random actions in [-1, 1]"
+        + (f"; env options {env_cfg}" if env_cfg else "")
+    )
     length = result["mean_episode_length"]
-    print(f"  ours: {result['env_steps_per_s']:,.0f} env steps/s ({result['ms_per_step']:.1f} ms per step, "
-          f"{result['episodes_ended']} episodes ended, mean length {length or float('nan'):.1f}); "
-          f"build {result['build_s']:.1f} s, warm-up {result['warmup_s']:.1f} s")  # fmt: skip
-    print("    includes: PD targets, physics substeps, reference sampling, reward/termination/metrics, resets of "
-          "finished episodes, observations")  # fmt: skip
+    print(
+        f"  ours: {result['env_steps_per_s']:,.0f} env steps/s ({result['ms_per_step']:.1f} ms per step, "
+        f"{result['episodes_ended']} episodes ended, mean length {length or float('nan'):.1f}); "
+        f"build {result['build_s']:.1f} s, warm-up {result['warmup_s']:.1f} s"
+    )
+    print(
+        "    includes: PD targets, physics substeps, reference sampling, reward/termination/metrics, resets of "
+        "finished episodes, observations"
+    )
     if "c_env_steps_per_s" in result:
         c = result["c_settings"]
-        print(f"  MuJoCo C (mujoco.rollout, 1 thread): {result['c_env_steps_per_s']:,.0f} env steps/s; same model, "
-              f"{num_envs} worlds, dt {c['timestep']:.5f} s x {result['substeps']} substeps, {c['integrator']}, "
-              f"{c['solver']} {c['iterations']}/{c['ls_iterations']} iterations, tolerance {c['tolerance']:.0e}, "
-              f"{c['cone']}; episodes of {result['c_episode_length']} control steps from the env's "
-              f"reference-state starts")  # fmt: skip
+        print(
+            f"  MuJoCo C (mujoco.rollout, 1 thread): {result['c_env_steps_per_s']:,.0f} env steps/s; same model, "
+            f"{num_envs} worlds, dt {c['timestep']:.5f} s x {result['substeps']} substeps, {c['integrator']}, "
+            f"{c['solver']} {c['iterations']}/{c['ls_iterations']} iterations, tolerance {c['tolerance']:.0e}, "
+            f"{c['cone']}; episodes of {result['c_episode_length']} control steps from the env's "
+            f"reference-state starts"
+        )
         print("    physics only: no rewards, observations, resets or reference sampling")
         print(f"  ours / MuJoCo C: {result['ours_over_c']:.2f}")
 

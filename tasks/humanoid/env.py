@@ -59,8 +59,14 @@ class HumanoidTrackingEnv(WarpVecEnv):
         if c.eval_mode:
             # Episodes end only at a clip's end or on failure; the cap covers the longest clip.
             self.max_episode_length = int(steps_per_clip.max()) + 1
-        options = SimOptions(substeps=c.substeps, control_dt=self.step_dt, nconmax=c.nconmax, njmax=c.njmax,
-                             iterations=c.solver_iterations, ls_iterations=c.solver_ls_iterations)  # fmt: skip
+        options = SimOptions(
+            substeps=c.substeps,
+            control_dt=self.step_dt,
+            nconmax=c.nconmax,
+            njmax=c.njmax,
+            iterations=c.solver_iterations,
+            ls_iterations=c.solver_ls_iterations,
+        )
         self.sim = HumanoidSim(n, dev, options)
         self.ref = self.motion.allocate_frames(n)
 
@@ -89,23 +95,56 @@ class HumanoidTrackingEnv(WarpVecEnv):
     def _step_impl(self) -> None:
         b, c, s, n = self.buffers, self.cfg, self.sim, self.num_envs
         # self.ref holds the reference of the observed frame (sampled at obs_time by the last step or reset).
-        wp.launch(apply_actions_kernel, dim=(n, sk.NUM_DOFS),
-                  inputs=[b.actions, self.action_scale, self.frozen_dof, int(c.residual_actions), self.ref, s.joint_q],
-                  outputs=[s.joint_target])  # fmt: skip
+        wp.launch(
+            apply_actions_kernel,
+            dim=(n, sk.NUM_DOFS),
+            inputs=[b.actions, self.action_scale, self.frozen_dof, int(c.residual_actions), self.ref, s.joint_q],
+            outputs=[s.joint_target],
+        )
         s.simulate()
-        wp.launch(advance_time_kernel, dim=n, inputs=[self.start_time, b.episode_length, self.step_dt],
-                  outputs=[self.ref_time])  # fmt: skip
+        wp.launch(
+            advance_time_kernel,
+            dim=n,
+            inputs=[self.start_time, b.episode_length, self.step_dt],
+            outputs=[self.ref_time],
+        )
         self.motion.sample(self.clip_id, self.ref_time, self.ref)
         wp.launch(
             reward_and_termination_kernel,
             dim=n,
-            inputs=[s.body_q, s.body_qd, s.body_com, s.joint_q, s.joint_qd, s.joint_target, self.kp, self.kd,
-                    EFFORT_LIMIT, self.ref, self.eval_body, self.clip_id, self.ref_time,
-                    self.motion.clip_duration_device, b.episode_length, int(c.eval_mode), c.termination_distance,
-                    c.eval_termination_distance, c.max_joint_speed, self.reward_params, self.mpjpe_sum],
-            outputs=[b.rewards, b.terminated, b.truncated, b.metrics["success"], b.metrics["mpjpe_mm"],
-                     b.metrics["alive_steps"], b.reward_terms],
-        )  # fmt: skip
+            inputs=[
+                s.body_q,
+                s.body_qd,
+                s.body_com,
+                s.joint_q,
+                s.joint_qd,
+                s.joint_target,
+                self.kp,
+                self.kd,
+                EFFORT_LIMIT,
+                self.ref,
+                self.eval_body,
+                self.clip_id,
+                self.ref_time,
+                self.motion.clip_duration_device,
+                b.episode_length,
+                int(c.eval_mode),
+                c.termination_distance,
+                c.eval_termination_distance,
+                c.max_joint_speed,
+                self.reward_params,
+                self.mpjpe_sum,
+            ],
+            outputs=[
+                b.rewards,
+                b.terminated,
+                b.truncated,
+                b.metrics["success"],
+                b.metrics["mpjpe_mm"],
+                b.metrics["alive_steps"],
+                b.reward_terms,
+            ],
+        )
 
     def _reset_impl(self, mask) -> None:
         """New episodes where ``mask`` is set (simulator set to the reference), then every env's observation."""
@@ -113,21 +152,30 @@ class HumanoidTrackingEnv(WarpVecEnv):
         wp.launch(
             start_episodes_kernel,
             dim=n,
-            inputs=[mask, b.rng, self.motion.num_clips, self.motion.clip_duration_device, self.step_dt,
-                    int(self.cfg.eval_mode)],
+            inputs=[
+                mask,
+                b.rng,
+                self.motion.num_clips,
+                self.motion.clip_duration_device,
+                self.step_dt,
+                int(self.cfg.eval_mode),
+            ],
             outputs=[self.clip_id, self.start_time, self.ref_time, self.mpjpe_sum, s.reset_mask],
-        )  # fmt: skip
+        )
         # Only the starting envs need the reference at their (new) start; every row is resampled below.
         self.motion.sample(self.clip_id, self.ref_time, r, mask=s.reset_mask)
-        wp.launch(write_reference_state_kernel, dim=n,
-                  inputs=[s.reset_mask, r, s.root_com],
-                  outputs=[s.joint_q, s.joint_qd])  # fmt: skip
+        wp.launch(
+            write_reference_state_kernel, dim=n, inputs=[s.reset_mask, r, s.root_com], outputs=[s.joint_q, s.joint_qd]
+        )
         s.after_reset()
         wp.launch(_shift_time_kernel, dim=n, inputs=[self.ref_time, self.step_dt], outputs=[self.obs_time])
         self.motion.sample(self.clip_id, self.obs_time, r)
-        wp.launch(observation_kernel, dim=(n, sk.NUM_BODIES),
-                  inputs=[s.body_q, s.body_qd, s.body_com, r, self.mask],
-                  outputs=[b.obs["critic"], b.obs["policy"]])  # fmt: skip
+        wp.launch(
+            observation_kernel,
+            dim=(n, sk.NUM_BODIES),
+            inputs=[s.body_q, s.body_qd, s.body_com, r, self.mask],
+            outputs=[b.obs["critic"], b.obs["policy"]],
+        )
 
     # ------------------------------------------------------------------------------------------------ inspection
     def reference_at(self, times: torch.Tensor | None = None):

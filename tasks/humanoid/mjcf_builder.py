@@ -41,7 +41,7 @@ _CAPSULES = {
     "Torso": (0.0, 1.0, 0.09), "Spine": (0.0, 1.0, 0.09), "Chest": (0.0, 0.55, 0.1), "Neck": (0.0, 0.8, 0.045),
     "Thorax": (0.35, 0.8, 0.045), "Shoulder": (0.1, 0.9, 0.045), "Elbow": (0.1, 0.9, 0.04),
     "Wrist": (0.2, 0.9, 0.035),
-}  # fmt: skip
+}  # fmt: skip  # one row per body region
 PELVIS_RADIUS = 0.09
 HEAD_RADIUS = 0.1
 HEAD_CENTER = (0.02, 0.0, 0.09)

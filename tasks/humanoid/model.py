@@ -58,11 +58,25 @@ class HumanoidSim(MuJoCoWorlds):
     def __init__(self, num_envs: int, device, options: SimOptions = SimOptions()) -> None:
         import newton
 
-        solver_options = {"njmax": options.njmax, "nconmax": options.nconmax, "iterations": options.iterations,
-                          "ls_iterations": options.ls_iterations, "integrator": options.integrator}  # fmt: skip
-        super().__init__(MJCF_PATH, num_envs, device, options.substeps, solver_options, physics_dt=options.physics_dt,
-                         edit_world=_set_pd_gains, ground=newton.ModelBuilder.ShapeConfig(mu=GROUND_FRICTION, gap=0.0),
-                         floating=True, enable_self_collisions=True)  # fmt: skip
+        solver_options = {
+            "njmax": options.njmax,
+            "nconmax": options.nconmax,
+            "iterations": options.iterations,
+            "ls_iterations": options.ls_iterations,
+            "integrator": options.integrator,
+        }
+        super().__init__(
+            MJCF_PATH,
+            num_envs,
+            device,
+            options.substeps,
+            solver_options,
+            physics_dt=options.physics_dt,
+            edit_world=_set_pd_gains,
+            ground=newton.ModelBuilder.ShapeConfig(mu=GROUND_FRICTION, gap=0.0),
+            floating=True,
+            enable_self_collisions=True,
+        )
         self.options = options
         self.num_envs = num_envs
         self.device = device
@@ -100,8 +114,10 @@ def _check_layout(robot, mjcf: Path) -> None:
     if tuple(names) != sk.BODY_NAMES:
         raise ValueError(f"{mjcf}: body order {names} differs from skeleton.BODY_NAMES")
     if robot.joint_coord_count != FREE_COORDS + sk.NUM_DOFS or robot.joint_dof_count != FREE_DOFS + sk.NUM_DOFS:
-        raise ValueError(f"{mjcf}: expected {FREE_COORDS + sk.NUM_DOFS} coordinates and {FREE_DOFS + sk.NUM_DOFS} "
-                         f"DoF, got {robot.joint_coord_count} and {robot.joint_dof_count}")  # fmt: skip
+        raise ValueError(
+            f"{mjcf}: expected {FREE_COORDS + sk.NUM_DOFS} coordinates and {FREE_DOFS + sk.NUM_DOFS} "
+            f"DoF, got {robot.joint_coord_count} and {robot.joint_dof_count}"
+        )
     expected = FREE_DOFS + 3 * np.arange(sk.NUM_JOINTS)
     if list(robot.joint_qd_start[1:]) != expected.tolist():
         raise ValueError(f"{mjcf}: joint DoF starts {robot.joint_qd_start} are not one 3-DoF joint per body")

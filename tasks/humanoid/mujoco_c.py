@@ -34,11 +34,15 @@ def solver_settings(model) -> dict:
 
     o = model.opt
     return {
-        "timestep": float(o.timestep), "integrator": mujoco.mjtIntegrator(o.integrator).name,
-        "solver": mujoco.mjtSolver(o.solver).name, "iterations": int(o.iterations),
-        "ls_iterations": int(o.ls_iterations), "tolerance": float(o.tolerance), "cone": mujoco.mjtCone(o.cone).name,
+        "timestep": float(o.timestep),
+        "integrator": mujoco.mjtIntegrator(o.integrator).name,
+        "solver": mujoco.mjtSolver(o.solver).name,
+        "iterations": int(o.iterations),
+        "ls_iterations": int(o.ls_iterations),
+        "tolerance": float(o.tolerance),
+        "cone": mujoco.mjtCone(o.cone).name,
         "jacobian": mujoco.mjtJacobian(o.jacobian).name,
-    }  # fmt: skip
+    }
 
 
 def newton_to_mujoco(joint_q: np.ndarray, joint_qd: np.ndarray, root_com: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

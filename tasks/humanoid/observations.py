@@ -24,22 +24,40 @@ O_REF_ROT = wp.constant(OFFSET["ref_rot"])
 
 
 @wp.func
-def put(critic: wp.array2d(dtype=float), policy: wp.array2d(dtype=float), mask: wp.array(dtype=float), i: int,
-        k: int, value: float):  # fmt: skip
+def put(
+    critic: wp.array2d(dtype=float),
+    policy: wp.array2d(dtype=float),
+    mask: wp.array(dtype=float),
+    i: int,
+    k: int,
+    value: float,
+):
     critic[i, k] = value
     policy[i, k] = value * mask[k]
 
 
 @wp.func
-def put3(critic: wp.array2d(dtype=float), policy: wp.array2d(dtype=float), mask: wp.array(dtype=float), i: int,
-         k: int, v: wp.vec3):  # fmt: skip
+def put3(
+    critic: wp.array2d(dtype=float),
+    policy: wp.array2d(dtype=float),
+    mask: wp.array(dtype=float),
+    i: int,
+    k: int,
+    v: wp.vec3,
+):
     for a in range(3):
         put(critic, policy, mask, i, k + a, v[a])
 
 
 @wp.func
-def put6(critic: wp.array2d(dtype=float), policy: wp.array2d(dtype=float), mask: wp.array(dtype=float), i: int,
-         k: int, q: wp.quat):  # fmt: skip
+def put6(
+    critic: wp.array2d(dtype=float),
+    policy: wp.array2d(dtype=float),
+    mask: wp.array(dtype=float),
+    i: int,
+    k: int,
+    q: wp.quat,
+):
     put3(critic, policy, mask, i, k, tangent(q))
     put3(critic, policy, mask, i, k + 3, normal(q))
 

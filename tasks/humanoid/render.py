@@ -21,8 +21,9 @@ JOINT_RADIUS, BONE_RADIUS = 0.045, 0.025
 class HumanoidFrames:
     """``frame(i)`` of a ``HumanoidTrackingEnv`` (see the module docstring)."""
 
-    def __init__(self, env, width: int, height: int, camera: str = "default", shadows: bool = False,
-                 reference: bool = True) -> None:  # fmt: skip
+    def __init__(
+        self, env, width: int, height: int, camera: str = "default", shadows: bool = False, reference: bool = True
+    ) -> None:
         self.env = env
         model = copy.copy(env.sim.solver.mj_model)  # one world: the humanoid and the ground
         camera = "track" if camera == "default" else camera
@@ -46,8 +47,11 @@ class HumanoidFrames:
         markers = []
         if self.reference:
             markers = [Marker(tuple(p), JOINT_RADIUS, REFERENCE_RGBA) for p in ref]
-            markers += [Marker(tuple(ref[k]), BONE_RADIUS, REFERENCE_RGBA, tuple(ref[parent]))
-                        for k, parent in enumerate(sk.PARENTS) if parent >= 0]  # fmt: skip
+            markers += [
+                Marker(tuple(ref[k]), BONE_RADIUS, REFERENCE_RGBA, tuple(ref[parent]))
+                for k, parent in enumerate(sk.PARENTS)
+                if parent >= 0
+            ]
         clip = int(wp.to_torch(env.clip_id)[i])
         frame_index = int(round(float(wp.to_torch(env.ref_time)[i]) * env.motion.fps))
         lines = [f"clip {env.motion.clip_names[clip]}  frame {frame_index}", f"MPJPE {mpjpe_mm:.0f} mm"]
@@ -57,6 +61,7 @@ class HumanoidFrames:
         self.scene.close()
 
 
-def frame_source(env, width: int, height: int, camera: str = "default", shadows: bool = False,
-                 reference: bool = True, **_) -> HumanoidFrames:  # fmt: skip
+def frame_source(
+    env, width: int, height: int, camera: str = "default", shadows: bool = False, reference: bool = True, **_
+) -> HumanoidFrames:
     return HumanoidFrames(env, width, height, camera, shadows, reference)

@@ -62,9 +62,16 @@ def advance_time_kernel(
 
 
 @wp.func
-def choose_start(rng: wp.array(dtype=wp.uint32), i: int, num_clips: int, clip_duration: wp.array(dtype=float),
-                 dt: float, eval_mode: int, clip_id: wp.array(dtype=int),
-                 start_time: wp.array(dtype=float)):  # fmt: skip
+def choose_start(
+    rng: wp.array(dtype=wp.uint32),
+    i: int,
+    num_clips: int,
+    clip_duration: wp.array(dtype=float),
+    dt: float,
+    eval_mode: int,
+    clip_id: wp.array(dtype=int),
+    start_time: wp.array(dtype=float),
+):
     """Eval: env i plays clip i from its start. Train: a uniformly random clip at a uniformly random time that
     leaves at least one control step."""
     if eval_mode != 0:

@@ -17,8 +17,9 @@ N, T, OBS, ACT = 6, 3, 4, 2
 
 
 def build(**kwargs) -> ReFPO:
-    return small_flow_algorithm(ReFPO, N, T, OBS, ACT, num_mc_samples=3, num_learning_epochs=1, num_mini_batches=1,
-                                **kwargs)[0]
+    return small_flow_algorithm(
+        ReFPO, N, T, OBS, ACT, num_mc_samples=3, num_learning_epochs=1, num_mini_batches=1, **kwargs
+    )[0]
 
 
 def test_the_coupled_term_on_a_batch_is_the_cfm_error_of_the_rollouts_own_pairs():
@@ -31,8 +32,9 @@ def test_the_coupled_term_on_a_batch_is_the_cfm_error_of_the_rollouts_own_pairs(
     t = tau.unsqueeze(-1)
     x = (1 - t) * eps0.unsqueeze(1) + t * a.unsqueeze(1)  # x_tau on the straight path from eps_0 to a
     feat = alg.actor.velocity.project_obs(alg.actor.encode(batch.observations))
-    v = alg.actor.velocity(feat.unsqueeze(1).expand(-1, tau.shape[1], -1).reshape(-1, feat.shape[-1]),
-                           x.reshape(-1, ACT), tau.reshape(-1)).reshape(x.shape)  # fmt: skip
+    v = alg.actor.velocity(
+        feat.unsqueeze(1).expand(-1, tau.shape[1], -1).reshape(-1, feat.shape[-1]), x.reshape(-1, ACT), tau.reshape(-1)
+    ).reshape(x.shape)
     expected = (v - (a - eps0).unsqueeze(1)).square().mean()
     torch.testing.assert_close(stats["reflow"], expected, rtol=1e-5, atol=1e-6)
     independent = build()
@@ -48,9 +50,20 @@ def test_every_rollout_action_is_the_flow_of_its_stored_noise_with_chunks_and_re
     from refpo_warp.config.resolve import resolve_config
     from refpo_warp.runner.build import build_runner
 
-    cfg = resolve_config(["task=gridworld", "algo=refpo", "device=cpu", "num_envs=4", "runner.num_steps_per_env=6",
-                          "env.action_chunk=2", "env.max_episode_length=3", "algorithm.reflow_pairs=coupled",
-                          "algorithm.num_mc_samples=2", "eval.interval=0"])  # fmt: skip
+    cfg = resolve_config(
+        [
+            "task=gridworld",
+            "algo=refpo",
+            "device=cpu",
+            "num_envs=4",
+            "runner.num_steps_per_env=6",
+            "env.action_chunk=2",
+            "env.max_episode_length=3",
+            "algorithm.reflow_pairs=coupled",
+            "algorithm.num_mc_samples=2",
+            "eval.interval=0",
+        ]
+    )
     env, runner = build_runner(cfg, None)
     alg = runner.alg
     fill_rollout(env, alg)
@@ -58,8 +71,9 @@ def test_every_rollout_action_is_the_flow_of_its_stored_noise_with_chunks_and_re
     eps0 = alg.store.flat("eps0")
     assert eps0.shape == actions.shape == (6 * 4, 4)  # every action of the rollout, a whole chunk each
     with torch.no_grad():
-        again = alg.actor.velocity.integrate(alg.actor.velocity.project_obs(alg.actor.encode(obs)), eps0,
-                                             alg.actor.num_flow_steps)  # fmt: skip
+        again = alg.actor.velocity.integrate(
+            alg.actor.velocity.project_obs(alg.actor.encode(obs)), eps0, alg.actor.num_flow_steps
+        )
     torch.testing.assert_close(again, actions)
     assert alg.storage.dones.any()  # the rollout did cross episode ends
 
@@ -91,8 +105,10 @@ def test_coupled_pairs_make_one_step_land_where_n_steps_do_on_a_bimodal_toy():
     independent, coupled = copy.deepcopy(actor), copy.deepcopy(actor)
     fit(independent, 200, coupled=False)
     fit(coupled, 200, coupled=True)
-    errors = [one_step_consistency(m, obs, 10, generator=torch.Generator().manual_seed(1))["one_step_error"]
-              for m in (independent, coupled)]  # fmt: skip
+    errors = [
+        one_step_consistency(m, obs, 10, generator=torch.Generator().manual_seed(1))["one_step_error"]
+        for m in (independent, coupled)
+    ]
     assert errors[0] > 0.3 and errors[1] < 0.2 * errors[0], errors
 
 

@@ -51,8 +51,16 @@ def build(cls=ReFPO, **kwargs):
     actor = FlowActor(obs, groups, "actor", ACT, hidden_dims=[16], num_flow_steps=4, obs_normalization=True)
     critic = MLPModel(obs, groups, "critic", 1, hidden_dims=[16])
     storage = RolloutStorage("rl", N, T, obs, [ACT])
-    return cls(actor, critic, storage, num_mc_samples=2, num_learning_epochs=2, num_mini_batches=2,
-               learning_rate=1e-2, **kwargs), obs  # fmt: skip
+    return cls(
+        actor,
+        critic,
+        storage,
+        num_mc_samples=2,
+        num_learning_epochs=2,
+        num_mini_batches=2,
+        learning_rate=1e-2,
+        **kwargs,
+    ), obs
 
 
 def train(alg, updates: int) -> None:
@@ -93,8 +101,9 @@ def test_before_the_warmup_evaluation_checkpoints_and_export_use_the_live_weight
         torch.testing.assert_close(a, b, rtol=0, atol=0)
     train(alg, 1)
     saved = alg.save()
-    assert not torch.equal(saved["ema_actor_state_dict"]["velocity.head.weight"],
-                           saved["actor_state_dict"]["velocity.head.weight"])  # fmt: skip
+    assert not torch.equal(
+        saved["ema_actor_state_dict"]["velocity.head.weight"], saved["actor_state_dict"]["velocity.head.weight"]
+    )
     default, _ = build(FPOPlusPlus)  # FPO++'s 500 updates: a short run never uses its average
     train(default, 2)
     assert default.ema.warmup == 500 and default.get_policy() is default.actor

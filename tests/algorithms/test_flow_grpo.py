@@ -76,15 +76,20 @@ def make_actor(**kwargs):
     torch.manual_seed(0)
     obs = TensorDict({"policy": torch.randn(N, OBS)}, batch_size=[N])
     groups = {"actor": ["policy"], "critic": ["policy"]}
-    actor = FlowActor(obs, groups, "actor", ACT, hidden_dims=[16, 16], num_flow_steps=4, obs_normalization=True,
-                      **kwargs)  # fmt: skip
+    actor = FlowActor(
+        obs, groups, "actor", ACT, hidden_dims=[16, 16], num_flow_steps=4, obs_normalization=True, **kwargs
+    )
     return actor, obs, groups
 
 
 def make_flow_grpo(**kwargs):
     actor, obs, groups = make_actor()
-    alg = FlowGRPO(actor, NoCritic(obs, groups, "critic", 1), RolloutStorage("rl", N, T, obs, [ACT]),
-                   **{"num_learning_epochs": 1, "num_mini_batches": 1, **kwargs})  # fmt: skip
+    alg = FlowGRPO(
+        actor,
+        NoCritic(obs, groups, "critic", 1),
+        RolloutStorage("rl", N, T, obs, [ACT]),
+        **{"num_learning_epochs": 1, "num_mini_batches": 1, **kwargs},
+    )
     alg.set_group_size(4)
     return alg
 
@@ -143,11 +148,13 @@ def test_discounted_reward_to_go_hand_worked():
 def test_group_advantages_hand_worked():
     returns = torch.tensor([[1.0, 3.0, 2.0, 6.0]])  # groups {1, 3} and {2, 6}: centred -1, 1, -2, 2
     # global std: population std of (1, 3, 2, 6) = sqrt(3.5) = 1.870829
-    torch.testing.assert_close(group_advantages(returns, 2, "global", None),
-                               torch.tensor([[-1.0, 1.0, -2.0, 2.0]]) / (math.sqrt(3.5) + 1e-4))  # fmt: skip
+    torch.testing.assert_close(
+        group_advantages(returns, 2, "global", None), torch.tensor([[-1.0, 1.0, -2.0, 2.0]]) / (math.sqrt(3.5) + 1e-4)
+    )
     # per-group std: 1 and 2
-    torch.testing.assert_close(group_advantages(returns, 2, "group", None),
-                               torch.tensor([[-1 / 1.0001, 1 / 1.0001, -2 / 2.0001, 2 / 2.0001]]))  # fmt: skip
+    torch.testing.assert_close(
+        group_advantages(returns, 2, "group", None), torch.tensor([[-1 / 1.0001, 1 / 1.0001, -2 / 2.0001, 2 / 2.0001]])
+    )
     torch.testing.assert_close(group_advantages(returns, 2, "group", 0.5), torch.tensor([[-0.5, 0.5, -0.5, 0.5]]))
     # time steps are normalised separately; a group of equal returns gets 0
     two_steps = torch.tensor([[1.0, 3.0, 2.0, 6.0], [5.0, 5.0, 0.0, 10.0]])
@@ -161,8 +168,9 @@ def test_compute_returns_gives_group_relative_advantages():
     alg = make_flow_grpo(adv_clip=None)
     fill_storage(alg)
     st = alg.storage
-    expected = group_advantages(discounted_reward_to_go(st.rewards.squeeze(-1) * 1.0, st.dones.squeeze(-1),
-                                                        alg.gamma), 4, "global", None)  # fmt: skip
+    expected = group_advantages(
+        discounted_reward_to_go(st.rewards.squeeze(-1) * 1.0, st.dones.squeeze(-1), alg.gamma), 4, "global", None
+    )
     torch.testing.assert_close(st.advantages.squeeze(-1), expected)
     assert st.advantages.reshape(T, 2, 4).sum(dim=-1).abs().max() < 1e-5  # zero mean within each group
 
@@ -170,12 +178,13 @@ def test_compute_returns_gives_group_relative_advantages():
 def test_runner_builds_it_without_a_critic_and_takes_the_group_size_from_the_env():
     env = make_env("gridworld", num_envs=16, device="cpu", seed=1, reset_group_size=8)
     cfg = {
-        "num_steps_per_env": 8, "save_interval": 100, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "num_steps_per_env": 8,
+        "save_interval": 100,
+        "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
         "actor": {"class_name": "refpo_warp.models:FlowActor", "hidden_dims": [16], "num_flow_steps": 4},
         "critic": {"class_name": "MLPModel", "hidden_dims": [64, 64]},  # ignored: Flow-GRPO has no critic
-        "algorithm": {"class_name": "refpo_warp.algorithms:FlowGRPO", "num_learning_epochs": 1,
-                      "num_mini_batches": 2},
-    }  # fmt: skip
+        "algorithm": {"class_name": "refpo_warp.algorithms:FlowGRPO", "num_learning_epochs": 1, "num_mini_batches": 2},
+    }
     runner = OnPolicyRunner(env, copy.deepcopy(cfg), log_dir=None, device="cpu")
     assert isinstance(runner.alg.critic, NoCritic) and runner.alg.group_size == 8
     before = [p.detach().clone() for p in runner.alg.actor.parameters()]

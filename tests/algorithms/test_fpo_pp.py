@@ -125,9 +125,21 @@ def test_reflow_term_is_the_uncapped_mean_cfm_loss_of_the_same_pairs():
 def test_defaults_are_fpo_plus_plus_and_refpo_accepts_the_trust_region():
     alg, _ = make()
     assert (alg.reflow_coef, alg.ratio_mode, alg.trust_region, alg.tau_sampling, alg.output_mode) == (
-        0.0, "per_sample", "aspo", "uniform_inset", "u")  # fmt: skip
-    assert (alg.cfm_reduction, alg.loss_cap, alg.negative_advantage_loss_cap, alg.log_ratio_cap,
-            alg.advantage_clip, alg.ema.decay, alg.ema.warmup) == ("sqrt_dim", 20.0, 20.0, 10.0, 100.0, 0.95, 500)
+        0.0,
+        "per_sample",
+        "aspo",
+        "uniform_inset",
+        "u",
+    )
+    assert (
+        alg.cfm_reduction,
+        alg.loss_cap,
+        alg.negative_advantage_loss_cap,
+        alg.log_ratio_cap,
+        alg.advantage_clip,
+        alg.ema.decay,
+        alg.ema.warmup,
+    ) == ("sqrt_dim", 20.0, 20.0, 10.0, 100.0, 0.95, 500)
     assert make(ReFPO)[0].trust_region == "ppo"
     for trust_region in ("ppo", "spo", "aspo"):
         assert make(ReFPO, trust_region=trust_region)[0].trust_region == trust_region

@@ -15,8 +15,9 @@ N, T, OBS, ACT = 6, 3, 4, 2
 
 
 def build(**kwargs) -> ReFPO:
-    return small_flow_algorithm(ReFPO, N, T, OBS, ACT, num_mc_samples=3, num_learning_epochs=1, num_mini_batches=1,
-                                **kwargs)[0]
+    return small_flow_algorithm(
+        ReFPO, N, T, OBS, ACT, num_mc_samples=3, num_learning_epochs=1, num_mini_batches=1, **kwargs
+    )[0]
 
 
 def test_the_one_step_term_is_the_one_step_samplers_error_against_the_rollout_action():

@@ -20,8 +20,9 @@ def build(cls, **kwargs):
     torch.manual_seed(0)
     obs = TensorDict({"policy": torch.randn(N, OBS)}, batch_size=[N])
     groups = {"actor": ["policy"], "critic": ["policy"]}
-    actor = MLPModel(obs, groups, "actor", ACT, hidden_dims=[16, 16], obs_normalization=True,
-                     distribution_cfg=dict(GAUSSIAN))  # fmt: skip
+    actor = MLPModel(
+        obs, groups, "actor", ACT, hidden_dims=[16, 16], obs_normalization=True, distribution_cfg=dict(GAUSSIAN)
+    )
     critic = MLPModel(obs, groups, "critic", 1, hidden_dims=[16], obs_normalization=True)
     return cls(actor, critic, RolloutStorage("rl", N, T, obs, [ACT]), **kwargs)
 
@@ -38,9 +39,14 @@ def rollout(alg, seed=1, time_outs=True):
         alg.compute_returns(obs)
 
 
-@pytest.mark.parametrize("options", [dict(schedule="adaptive", desired_kl=0.001, use_clipped_value_loss=True),
-                                     dict(schedule="fixed", normalize_advantage_per_mini_batch=True)],
-                         ids=["adaptive-clipped", "fixed-per-minibatch"])  # fmt: skip
+@pytest.mark.parametrize(
+    "options",
+    [
+        dict(schedule="adaptive", desired_kl=0.001, use_clipped_value_loss=True),
+        dict(schedule="fixed", normalize_advantage_per_mini_batch=True),
+    ],
+    ids=["adaptive-clipped", "fixed-per-minibatch"],
+)
 def test_update_matches_rsl_rl_ppo(options):
     kwargs = dict(num_learning_epochs=3, num_mini_batches=4, learning_rate=3e-3, entropy_coef=0.01, **options)
     ours, theirs = build(PPO, **kwargs), build(RslPPO, **kwargs)
@@ -102,8 +108,10 @@ def test_joint_clip_bounds_the_norm_of_actor_and_critic_together():
 
     def step_norms(joint):
         alg, (actor, critic), _, _ = sgd_step(max_grad_norm=1e-3, joint_grad_clip=joint)
-        return [torch.cat([(p - q).flatten() for p, q in zip(new.parameters(), old.parameters())]).norm().item()
-                for new, old in ((alg.actor, actor), (alg.critic, critic))]  # fmt: skip
+        return [
+            torch.cat([(p - q).flatten() for p, q in zip(new.parameters(), old.parameters())]).norm().item()
+            for new, old in ((alg.actor, actor), (alg.critic, critic))
+        ]
 
     separate, joint = step_norms(False), step_norms(True)
     assert separate == pytest.approx([1e-4, 1e-4], rel=1e-4)

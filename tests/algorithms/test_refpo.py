@@ -22,8 +22,7 @@ N, T, OBS, ACT = 6, 3, 4, 2
 
 
 def make_refpo(actor_kwargs=None, **kwargs):
-    defaults = dict(num_mc_samples=4, num_learning_epochs=1, num_mini_batches=1, max_grad_norm=1e9,
-                    value_loss_coef=0.0)  # fmt: skip
+    defaults = dict(num_mc_samples=4, num_learning_epochs=1, num_mini_batches=1, max_grad_norm=1e9, value_loss_coef=0.0)
     return small_flow_algorithm(ReFPO, N, T, OBS, ACT, actor_kwargs, **{**defaults, **kwargs})
 
 
@@ -109,8 +108,20 @@ def test_old_losses_use_rollout_parameters_before_any_step():
 
 @pytest.mark.parametrize(
     "reflow_coef, actor_kwargs",
-    [(0.0, {}), (0.5, {}), (0.5, {"parameterization": "data", "output_mode": "data", "loss_scale": 200.0,
-                                   "time_conditioning": "adaln", "time_embed_dim": 16})],  # fmt: skip
+    [
+        (0.0, {}),
+        (0.5, {}),
+        (
+            0.5,
+            {
+                "parameterization": "data",
+                "output_mode": "data",
+                "loss_scale": 200.0,
+                "time_conditioning": "adaln",
+                "time_embed_dim": 16,
+            },
+        ),
+    ],
     ids=["fpo", "refpo", "refpo-data-adaln-scaled"],
 )
 def test_reflow_term_gradient(reflow_coef, actor_kwargs):

@@ -59,8 +59,16 @@ def build(cls, **kwargs):
     groups = {"actor": ["policy"], "critic": ["policy"]}
     actor = FlowActor(obs, groups, "actor", ACT, hidden_dims=[16, 16], num_flow_steps=5)
     critic = MLPModel(obs, groups, "critic", 1, hidden_dims=[16])
-    return cls(actor, critic, RolloutStorage("rl", N, T, obs, [ACT]), num_mc_samples=4, num_learning_epochs=2,
-               num_mini_batches=2, reflow_coef=0.5, **kwargs)  # fmt: skip
+    return cls(
+        actor,
+        critic,
+        RolloutStorage("rl", N, T, obs, [ACT]),
+        num_mc_samples=4,
+        num_learning_epochs=2,
+        num_mini_batches=2,
+        reflow_coef=0.5,
+        **kwargs,
+    )
 
 
 def rollout(alg, advantages):
@@ -100,12 +108,18 @@ def test_plain_rsl_rl_runner_trains_it_by_class_name():
     from refpo_warp import make_env
 
     cfg = {
-        "num_steps_per_env": 8, "save_interval": 100, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "num_steps_per_env": 8,
+        "save_interval": 100,
+        "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
         "actor": {"class_name": "refpo_warp.models:FlowActor", "hidden_dims": [16], "num_flow_steps": 4},
         "critic": {"class_name": "MLPModel", "hidden_dims": [16]},
-        "algorithm": {"class_name": "refpo_warp.algorithms:AdvantageWeightedReFPO", "reflow_weighting": "softplus",
-                      "num_learning_epochs": 1, "num_mini_batches": 2},
-    }  # fmt: skip
+        "algorithm": {
+            "class_name": "refpo_warp.algorithms:AdvantageWeightedReFPO",
+            "reflow_weighting": "softplus",
+            "num_learning_epochs": 1,
+            "num_mini_batches": 2,
+        },
+    }
     runner = OnPolicyRunner(make_env("gridworld", num_envs=8, device="cpu", seed=1), cfg, log_dir=None, device="cpu")
     before = [p.detach().clone() for p in runner.alg.actor.parameters()]
     runner.learn(2)

@@ -104,8 +104,12 @@ def test_deterministic_sampling_runs_the_noiseless_chain():
 def make_reinflow(**kwargs):
     actor, obs, groups = make_actor()
     critic = MLPModel(obs, groups, "critic", 1, hidden_dims=[16])
-    return ReinFlow(actor, critic, RolloutStorage("rl", N, T, obs, [ACT]),
-                    **{"num_learning_epochs": 1, "num_mini_batches": 1, **kwargs})  # fmt: skip
+    return ReinFlow(
+        actor,
+        critic,
+        RolloutStorage("rl", N, T, obs, [ACT]),
+        **{"num_learning_epochs": 1, "num_mini_batches": 1, **kwargs},
+    )
 
 
 def fill_storage(alg, seed=1):
@@ -160,11 +164,13 @@ def test_plain_rsl_rl_runner_trains_it_by_class_name_on_chunked_actions():
 
     env = make_env("gridworld", num_envs=8, device="cpu", seed=1, action_chunk=2)
     cfg = {
-        "num_steps_per_env": 8, "save_interval": 100, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "num_steps_per_env": 8,
+        "save_interval": 100,
+        "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
         "actor": {"class_name": "refpo_warp.models:ReinFlowActor", "hidden_dims": [16]},
         "critic": {"class_name": "MLPModel", "hidden_dims": [16]},
         "algorithm": {"class_name": "refpo_warp.algorithms:ReinFlow", "num_learning_epochs": 1, "num_mini_batches": 2},
-    }  # fmt: skip
+    }
     runner = OnPolicyRunner(env, cfg, log_dir=None, device="cpu")
     assert runner.alg.actor.action_dim == 4  # a chunk of two 2-D moves
     before = [p.detach().clone() for p in runner.alg.actor.parameters()]

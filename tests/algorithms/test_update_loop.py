@@ -60,8 +60,12 @@ def test_a_non_finite_loss_in_a_later_minibatch_stops_the_update_and_undoes_it()
     fill_storage(alg, advantages=None)
     alg.update()  # the optimizer has state (Adam's moments) to keep
     fill_storage(alg, advantages=None)
-    before = (copy.deepcopy(alg.actor.state_dict()), copy.deepcopy(alg.critic.state_dict()),
-              copy.deepcopy(alg.optimizer.state_dict()), alg.learning_rate)  # fmt: skip
+    before = (
+        copy.deepcopy(alg.actor.state_dict()),
+        copy.deepcopy(alg.critic.state_dict()),
+        copy.deepcopy(alg.optimizer.state_dict()),
+        alg.learning_rate,
+    )
     policy_loss, calls = alg.policy_loss, [0]
 
     def nan_in_the_fourth(batch):
@@ -73,8 +77,11 @@ def test_a_non_finite_loss_in_a_later_minibatch_stops_the_update_and_undoes_it()
         return loss, stats
 
     alg.policy_loss = nan_in_the_fourth
-    with pytest.raises(NonFiniteLossError, match=r"Non-finite ReFPO loss \(surrogate=nan, .*the update was stopped "
-                                                 r"before applying it"):  # fmt: skip
+    with pytest.raises(
+        NonFiniteLossError,
+        match=r"Non-finite ReFPO loss \(surrogate=nan, .*the update was stopped "
+        r"before applying it",
+    ):
         alg.update()
     assert calls[0] == 6  # every minibatch ran: the loss is read once, after them
     after = (alg.actor.state_dict(), alg.critic.state_dict(), alg.optimizer.state_dict(), alg.learning_rate)
@@ -82,7 +89,8 @@ def test_a_non_finite_loss_in_a_later_minibatch_stops_the_update_and_undoes_it()
         assert all(torch.equal(old[k], new[k]) for k in old)
     old_state, new_state = before[2]["state"], after[2]["state"]
     assert old_state.keys() == new_state.keys() and all(
-        torch.equal(old_state[i][k], new_state[i][k]) for i in old_state for k in old_state[i])  # fmt: skip
+        torch.equal(old_state[i][k], new_state[i][k]) for i in old_state for k in old_state[i]
+    )
     assert after[3] == before[3] and alg.num_updates == 1
 
 

@@ -15,13 +15,20 @@ SMALL = ["video.width=64", "video.height=48"]
 
 
 def play(*args, env=None):
-    return subprocess.run([sys.executable, "tools/play.py", *map(str, args)], cwd=REPO_ROOT, capture_output=True,
-                          text=True, timeout=300, env=env)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "tools/play.py", *map(str, args)],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
 
 
 def test_a_random_agents_video_in_both_formats(tmp_path):
-    proc = play("task=dmc_cartpole_balance", "agent=random", "video.length=9", "video.format=both", f"out={tmp_path}",
-                *SMALL)
+    proc = play(
+        "task=dmc_cartpole_balance", "agent=random", "video.length=9", "video.format=both", f"out={tmp_path}", *SMALL
+    )
     assert proc.returncode == 0, proc.stderr
     every = math.ceil(100 / 30)  # cartpole steps at 100 Hz, a video at most 30 frames per second
     frames = math.ceil(9 / every) + 1  # the drawn steps and the final frame
@@ -32,8 +39,20 @@ def test_a_random_agents_video_in_both_formats(tmp_path):
 
 def test_one_step_beside_ten_from_a_trained_run(tmp_path):
     run_dir = tmp_path / "run"
-    train(["task=gridworld", "algo=refpo", "device=cpu", "max_iterations=1", "num_envs=8", "runner.num_steps_per_env=8",
-           "algorithm.num_mc_samples=2", "eval.at_end=false", "eval.interval=0", f"run_dir={run_dir}"])  # fmt: skip
+    train(
+        [
+            "task=gridworld",
+            "algo=refpo",
+            "device=cpu",
+            "max_iterations=1",
+            "num_envs=8",
+            "runner.num_steps_per_env=8",
+            "algorithm.num_mc_samples=2",
+            "eval.at_end=false",
+            "eval.interval=0",
+            f"run_dir={run_dir}",
+        ]
+    )
     proc = play(f"run_dir={run_dir}", "video.flow_steps=[1, 10]", "video.num_envs=2", "video.length=5", *SMALL)
     assert proc.returncode == 0, proc.stderr
     (video,) = (run_dir / "videos").glob("*.mp4")
@@ -41,8 +60,14 @@ def test_one_step_beside_ten_from_a_trained_run(tmp_path):
     frames = read_video(video)
     assert frames.shape[1:] == (48, 2 * 2 * 64, 3)  # two panels side by side, two envs tiled in each
     # both initial-noise protocols: one panel per (protocol, N)
-    proc = play(f"run_dir={run_dir}", "video.flow_steps=[1]", "eval.initial_noise=[random, zero]", "video.num_envs=1",
-                "video.length=3", *SMALL)
+    proc = play(
+        f"run_dir={run_dir}",
+        "video.flow_steps=[1]",
+        "eval.initial_noise=[random, zero]",
+        "video.num_envs=1",
+        "video.length=3",
+        *SMALL,
+    )
     assert proc.returncode == 0, proc.stderr
     video = run_dir / "videos" / "model_0_N1_random-zero.mp4"
     assert read_video(video).shape[1:] == (48, 2 * 64, 3)
@@ -53,16 +78,20 @@ def test_one_step_beside_ten_from_a_trained_run(tmp_path):
 def test_bad_options_and_a_missing_gl_platform_get_one_message_and_an_exit_code(tmp_path, capsys):
     # the bad options through the command's own entry point here (tools/play.py calls the same); the GL platform in a
     # fresh interpreter, since MuJoCo reads MUJOCO_GL once, when first imported
-    bad = [(("agent=random", "video.camera=overhead", "video.length=2", *SMALL), "camera='overhead' is invalid; "
-            "expected one of 'track', 'fixed'"),
-           (("agent=walk",), "agent='walk' is invalid; expected one of zero, random"),
-           (("agent=zero", "video.widht=64"), "Did you mean 'video.width'"),
-           (("agent=zero", "env.action_transfrom=tanh"), "Did you mean 'env.action_transform'"),
-           # the spellings refpo play once took, refused with the names refpo train gives them
-           (("agent=zero", "length=2"), "'length=' is spelled 'video.length='"),
-           (("agent=zero", "flow_steps=[1]"), "'flow_steps=' is spelled 'video.flow_steps='"),
-           (("agent=zero", "action_transform=tanh"), "'action_transform=' is spelled 'env.action_transform='"),
-           (("agent=zero", "initial_noise=zero"), "'initial_noise=' is spelled 'eval.initial_noise='")]  # fmt: skip
+    bad = [
+        (
+            ("agent=random", "video.camera=overhead", "video.length=2", *SMALL),
+            "camera='overhead' is invalid; expected one of 'track', 'fixed'",
+        ),
+        (("agent=walk",), "agent='walk' is invalid; expected one of zero, random"),
+        (("agent=zero", "video.widht=64"), "Did you mean 'video.width'"),
+        (("agent=zero", "env.action_transfrom=tanh"), "Did you mean 'env.action_transform'"),
+        # the spellings refpo play once took, refused with the names refpo train gives them
+        (("agent=zero", "length=2"), "'length=' is spelled 'video.length='"),
+        (("agent=zero", "flow_steps=[1]"), "'flow_steps=' is spelled 'video.flow_steps='"),
+        (("agent=zero", "action_transform=tanh"), "'action_transform=' is spelled 'env.action_transform='"),
+        (("agent=zero", "initial_noise=zero"), "'initial_noise=' is spelled 'eval.initial_noise='"),
+    ]
     for options, message in bad:
         code = main(["play", "task=dmc_cartpole_balance", *options, f"out={tmp_path}"])
         err = capsys.readouterr().err

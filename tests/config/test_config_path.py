@@ -47,8 +47,17 @@ def test_tasks_lists_the_users_task_and_explain_names_its_file(user_configs, cap
     assert main(["train", "--tasks", f"config_dir={user_configs}"]) == 0
     listed = capsys.readouterr().out
     assert "gridworld " in listed and "grid_small" in listed and "grid_small.yaml" in listed
-    code = main(["train", "task=grid_small", "algo=my_refpo", "device=cpu", f"config_dir={user_configs}", "--explain",
-                 "algorithm.reflow_coef"])  # fmt: skip
+    code = main(
+        [
+            "train",
+            "task=grid_small",
+            "algo=my_refpo",
+            "device=cpu",
+            f"config_dir={user_configs}",
+            "--explain",
+            "algorithm.reflow_coef",
+        ]
+    )
     assert code == 0
     explained = capsys.readouterr().out
     assert f"algorithm.reflow_coef = 0.3\n  set by  {user_configs / 'algo' / 'my_refpo.yaml'}" in explained
@@ -60,14 +69,17 @@ def test_a_user_sweep_is_found_by_name(user_configs):
     assert f'config_dir="{user_configs}"' in sweep.runs[0].args  # every run gets the folder
 
 
-@pytest.mark.parametrize("case,match", [
-    ("missing", r"config_dir=.*nowhere: no such directory"),
-    ("no_layout", r"config_dir=.*has none of the folders task/, algo/, sweep/"),
-    ("shadow", r"my_configs/algo/refpo.yaml has the name of configs/algo/refpo.yaml .*base: refpo\)"),
-    ("no_env", r"orphan.yaml: a task file of your own .* names none. Registered tasks: dmc_acrobot"),
-    ("defaults", r"holds a default.yaml, which is never read"),
-    ("bad_base", r"Unknown base of .*my_refpo.yaml .* 'refpoo'. Did you mean 'refpo'"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "case,match",
+    [
+        ("missing", r"config_dir=.*nowhere: no such directory"),
+        ("no_layout", r"config_dir=.*has none of the folders task/, algo/, sweep/"),
+        ("shadow", r"my_configs/algo/refpo.yaml has the name of configs/algo/refpo.yaml .*base: refpo\)"),
+        ("no_env", r"orphan.yaml: a task file of your own .* names none. Registered tasks: dmc_acrobot"),
+        ("defaults", r"holds a default.yaml, which is never read"),
+        ("bad_base", r"Unknown base of .*my_refpo.yaml .* 'refpoo'. Did you mean 'refpo'"),
+    ],
+)
 def test_mistakes_name_the_file_or_option(user_configs, tmp_path, case, match):
     folder = user_configs
     if case == "missing":

@@ -28,8 +28,17 @@ def test_layers_task_over_algo_over_default():
 
 
 def test_overrides_are_typed_like_their_defaults():
-    cfg = resolve_config(["task=gridworld", "algorithm.learning_rate=3e-4", "seed=7", "eval.flow_steps=[1, 5]",
-                          "env.size=9", "runner.log_full=true"], device_type="cpu")  # fmt: skip
+    cfg = resolve_config(
+        [
+            "task=gridworld",
+            "algorithm.learning_rate=3e-4",
+            "seed=7",
+            "eval.flow_steps=[1, 5]",
+            "env.size=9",
+            "runner.log_full=true",
+        ],
+        device_type="cpu",
+    )
     assert cfg["algorithm"]["learning_rate"] == 3e-4 and isinstance(cfg["algorithm"]["learning_rate"], float)
     assert cfg["seed"] == 7 and cfg["eval"]["flow_steps"] == [1, 5]
     assert cfg["env"]["size"] == 9 and cfg["runner"]["log_full"] is True
@@ -66,15 +75,17 @@ def test_merge_is_deep_and_does_not_mutate():
 
 
 def test_cli_unknown_task_exits_nonzero_with_suggestion():
-    proc = subprocess.run([sys.executable, "tools/train.py", "task=gridwrld"], cwd=ROOT, capture_output=True,
-                          text=True, timeout=120)  # fmt: skip
+    proc = subprocess.run(
+        [sys.executable, "tools/train.py", "task=gridwrld"], cwd=ROOT, capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 2
     assert "Did you mean 'gridworld'" in proc.stderr
 
 
 def test_cli_lists_tasks():
-    proc = subprocess.run([sys.executable, "tools/train.py", "--tasks"], cwd=ROOT, capture_output=True, text=True,
-                          timeout=120)  # fmt: skip
+    proc = subprocess.run(
+        [sys.executable, "tools/train.py", "--tasks"], cwd=ROOT, capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 0 and "gridworld" in proc.stdout
 
 

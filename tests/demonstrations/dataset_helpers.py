@@ -14,10 +14,13 @@ def episode(length: int, obs_dim: int = 2, action_dim: int = 2, seed: int = 0, t
     rng = np.random.default_rng(seed)
     ends = np.zeros(length, bool)
     ends[-1] = True
-    return Episode(rng.normal(size=(length + 1, obs_dim)).astype(np.float32),
-                   rng.uniform(-1, 1, size=(length, action_dim)).astype(np.float32),
-                   rng.normal(size=length).astype(np.float32), ends if terminated else np.zeros(length, bool),
-                   np.zeros(length, bool) if terminated else ends)  # fmt: skip
+    return Episode(
+        rng.normal(size=(length + 1, obs_dim)).astype(np.float32),
+        rng.uniform(-1, 1, size=(length, action_dim)).astype(np.float32),
+        rng.normal(size=length).astype(np.float32),
+        ends if terminated else np.zeros(length, bool),
+        np.zeros(length, bool) if terminated else ends,
+    )
 
 
 def write(path, episodes=None, task="gridworld", **kw):

@@ -50,8 +50,9 @@ def test_gaussian_nll_by_hand():
     from rsl_rl.models import MLPModel
 
     obs = TensorDict({"policy": torch.zeros(1, 3)}, batch_size=[1])
-    actor = MLPModel(obs, {"actor": ["policy"]}, "actor", 2, hidden_dims=[4],
-                     distribution_cfg={"class_name": "GaussianDistribution"})  # fmt: skip
+    actor = MLPModel(
+        obs, {"actor": ["policy"]}, "actor", 2, hidden_dims=[4], distribution_cfg={"class_name": "GaussianDistribution"}
+    )
     with torch.no_grad():
         actor.mlp[-1].weight.zero_()
         actor.mlp[-1].bias.copy_(torch.tensor([0.2, -0.1]))
@@ -99,8 +100,15 @@ def test_flow_clone_keeps_both_modes_and_stops_early():
         return sample_tau(shape, "uniform", 10, 0.0, 1.0, "cpu")
 
     rows = []
-    summary = clone(actor, make_loss(actor, tau, 8), {"policy": 1}, (obs[:2700], actions[:2700]),
-                    (obs[2700:], actions[2700:]), CloneOptions(400, 256, 3e-3, 5, 8, 0), rows.append)  # fmt: skip
+    summary = clone(
+        actor,
+        make_loss(actor, tau, 8),
+        {"policy": 1},
+        (obs[:2700], actions[:2700]),
+        (obs[2700:], actions[2700:]),
+        CloneOptions(400, 256, 3e-3, 5, 8, 0),
+        rows.append,
+    )
     assert summary["stopped_early"] and summary["epochs_run"] == len(rows) < 400
     assert summary["best_val_loss"] == min(r["val_loss"] for r in rows)
     with torch.no_grad():

@@ -51,8 +51,19 @@ def test_a_dataset_made_by_minari_loads(tmp_path):
     box = gym.spaces.Box(-1, 1, shape=(2,), dtype=np.float32)
     storage = MinariStorage.new(tmp_path / "other", observation_space=box, action_space=box)
     e = episode(4)
-    storage.update_episodes([EpisodeBuffer(id=0, observations=e.observations, actions=e.actions, rewards=e.rewards,
-                                           terminations=e.terminations, truncations=e.truncations, infos={})])
+    storage.update_episodes(
+        [
+            EpisodeBuffer(
+                id=0,
+                observations=e.observations,
+                actions=e.actions,
+                rewards=e.rewards,
+                terminations=e.terminations,
+                truncations=e.truncations,
+                infos={},
+            )
+        ]
+    )
     data = read_dataset(tmp_path / "other")
     check_spaces(data, "gridworld", 2, 2)
     with pytest.raises(DataFileError, match="observation dim 2, action dim 2.*observation dim 3, action dim 2"):
@@ -76,12 +87,20 @@ def test_an_existing_dataset_is_kept_unless_overwrite(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["data"]
 
 
-@pytest.mark.parametrize("kind,culprit", [
-    ("missing", "no such dataset"), ("file", "found a file"), ("not JSON", "not readable as JSON"),
-    ("unknown format", "unknown or unsupported data_format 'arrow'"), ("empty", "holds no episode"),
-    ("NaN", "'actions' holds 1 NaN or infinite"), ("inf", "'observations' holds 1 NaN or infinite"),
-    ("truncated mid-episode", "truncated mid-episode"), ("damaged hdf5", "cannot be read as a Minari dataset"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "kind,culprit",
+    [
+        ("missing", "no such dataset"),
+        ("file", "found a file"),
+        ("not JSON", "not readable as JSON"),
+        ("unknown format", "unknown or unsupported data_format 'arrow'"),
+        ("empty", "holds no episode"),
+        ("NaN", "'actions' holds 1 NaN or infinite"),
+        ("inf", "'observations' holds 1 NaN or infinite"),
+        ("truncated mid-episode", "truncated mid-episode"),
+        ("damaged hdf5", "cannot be read as a Minari dataset"),
+    ],
+)
 def test_bad_datasets_are_refused_naming_the_file(tmp_path, kind, culprit):
     path = damage(kind, write(tmp_path / "data"))
     with pytest.raises(DataFileError, match=culprit) as err:

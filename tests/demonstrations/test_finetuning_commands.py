@@ -21,9 +21,19 @@ from dataset_helpers import damage, episode, write
 from reliability_helpers import assert_refused, call_tool, tree_hash
 
 USAGE, BAD_FILE = 2, 4
-TINY = ["task=gridworld", "device=cpu", "num_envs=4", "runner.num_steps_per_env=8", "actor.hidden_dims=[16]",
-        "critic.hidden_dims=[16]", "algorithm.num_mc_samples=2", "algorithm.num_learning_epochs=1",
-        "algorithm.num_mini_batches=1", "eval.num_envs=4", "eval.flow_steps=[1, 2]"]  # fmt: skip
+TINY = [
+    "task=gridworld",
+    "device=cpu",
+    "num_envs=4",
+    "runner.num_steps_per_env=8",
+    "actor.hidden_dims=[16]",
+    "critic.hidden_dims=[16]",
+    "algorithm.num_mc_samples=2",
+    "algorithm.num_learning_epochs=1",
+    "algorithm.num_mini_batches=1",
+    "eval.num_envs=4",
+    "eval.flow_steps=[1, 2]",
+]
 PRETRAIN = [*TINY, "pretrain.epochs=3", "pretrain.batch_size=64"]
 
 
@@ -31,8 +41,9 @@ PRETRAIN = [*TINY, "pretrain.epochs=3", "pretrain.batch_size=64"]
 def workflow(tmp_path_factory):
     """A scripted-demonstrator dataset and a flow clone of it (seconds)."""
     root = tmp_path_factory.mktemp("workflow")
-    proc = call_tool("collect", "task=gridworld", "demonstrator=scripted", "episodes=40", "num_envs=8",
-                     f"out={root / 'data'}")  # fmt: skip
+    proc = call_tool(
+        "collect", "task=gridworld", "demonstrator=scripted", "episodes=40", "num_envs=8", f"out={root / 'data'}"
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     proc = call_tool("pretrain", *PRETRAIN, "algo=refpo", f"dataset={root / 'data'}", f"run_dir={root / 'clone'}")
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
@@ -97,9 +108,17 @@ def test_pretrain_writes_a_run_that_rsl_rl_loads(workflow):
 def test_fine_tuning_starts_from_the_clone_and_keeps_it_through_the_warmup(workflow, tmp_path):
     clone = torch.load(workflow / "clone" / "model_0.pt", weights_only=True)
     run = tmp_path / "tuned"
-    proc = call_tool("train", *TINY, "algo=refpo", f"init_from={workflow / 'clone'}", "max_iterations=2",
-                     "critic_warmup_iterations=1", "runner.save_interval=1", "eval.at_end=false",
-                     f"run_dir={run}")  # fmt: skip
+    proc = call_tool(
+        "train",
+        *TINY,
+        "algo=refpo",
+        f"init_from={workflow / 'clone'}",
+        "max_iterations=2",
+        "critic_warmup_iterations=1",
+        "runner.save_interval=1",
+        "eval.at_end=false",
+        f"run_dir={run}",
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "starting from the cloned actor" in proc.stdout and "iterations 0..0 train the critic alone" in proc.stdout
     warm, moved = (torch.load(run / f"model_{i}.pt", weights_only=True) for i in (0, 1))
@@ -111,10 +130,13 @@ def test_fine_tuning_starts_from_the_clone_and_keeps_it_through_the_warmup(workf
     assert rows[0]["Flow/clip_fraction"] == 0.0
 
 
-@pytest.mark.parametrize("override,culprits", [
-    ("actor.hidden_dims=[32]", ["actor.hidden_dims: [16] -> [32]"]),
-    ("algo=ppo", ["actor.class_name: 'refpo_warp.models:FlowActor' -> 'rsl_rl.models:MLPModel'"]),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "override,culprits",
+    [
+        ("actor.hidden_dims=[32]", ["actor.hidden_dims: [16] -> [32]"]),
+        ("algo=ppo", ["actor.class_name: 'refpo_warp.models:FlowActor' -> 'rsl_rl.models:MLPModel'"]),
+    ],
+)
 def test_a_clone_that_does_not_fit_is_refused_before_anything_is_written(workflow, tmp_path, override, culprits):
     dropped = {override.split("=")[0], *(["algorithm.num_mc_samples"] if override == "algo=ppo" else [])}
     args = [a for a in TINY if a.split("=")[0] not in dropped]
@@ -136,11 +158,18 @@ def point_mass_dataset(path):
     return write(path, [episode(5, obs_dim=4, action_dim=2, seed=1)], task="dmc_point_mass")
 
 
-@pytest.mark.parametrize("kind,culprit", [
-    ("missing", "no such dataset"), ("empty", "holds no episode"), ("NaN", "NaN or infinite"),
-    ("truncated mid-episode", "truncated mid-episode"), ("unknown format", "unsupported data_format"),
-    ("other task", "recorded on task dmc_point_mass"), ("other spaces", "observation dim 4"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "kind,culprit",
+    [
+        ("missing", "no such dataset"),
+        ("empty", "holds no episode"),
+        ("NaN", "NaN or infinite"),
+        ("truncated mid-episode", "truncated mid-episode"),
+        ("unknown format", "unsupported data_format"),
+        ("other task", "recorded on task dmc_point_mass"),
+        ("other spaces", "observation dim 4"),
+    ],
+)
 def test_a_bad_dataset_is_refused_with_no_run_dir(tmp_path, kind, culprit):
     if kind == "other task":
         path = point_mass_dataset(tmp_path / "data")
@@ -156,8 +185,14 @@ def test_a_bad_dataset_is_refused_with_no_run_dir(tmp_path, kind, culprit):
 
 def test_a_bad_pretrain_option_is_refused_before_the_dataset_is_read(tmp_path):
     run = tmp_path / "clone"
-    proc = call_tool("pretrain", *PRETRAIN, "algo=refpo", "pretrain.validation_fraction=1",
-                     f"dataset={tmp_path / 'nowhere'}", f"run_dir={run}")  # fmt: skip
+    proc = call_tool(
+        "pretrain",
+        *PRETRAIN,
+        "algo=refpo",
+        "pretrain.validation_fraction=1",
+        f"dataset={tmp_path / 'nowhere'}",
+        f"run_dir={run}",
+    )
     assert_refused(proc, USAGE, "pretrain.validation_fraction=1")
     assert not run.exists()
 
@@ -178,8 +213,14 @@ def test_a_resumed_fine_tuning_run_finishes_its_warmup(workflow, tmp_path):
     clone = torch.load(workflow / "clone" / "model_0.pt", weights_only=True)["actor_state_dict"]
     run = tmp_path / "tuned"
     common = [*TINY, "algo=refpo", "runner.save_interval=1", "eval.at_end=false"]
-    proc = call_tool("train", *common, f"init_from={workflow / 'clone'}", "critic_warmup_iterations=3",
-                     "max_iterations=2", f"run_dir={run}")  # fmt: skip
+    proc = call_tool(
+        "train",
+        *common,
+        f"init_from={workflow / 'clone'}",
+        "critic_warmup_iterations=3",
+        "max_iterations=2",
+        f"run_dir={run}",
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     proc = call_tool("train", f"run_dir={run}", "resume=true", "max_iterations=4")
     assert proc.returncode == 0, proc.stderr[-3000:]

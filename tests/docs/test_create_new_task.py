@@ -25,8 +25,13 @@ class LineCfg(EnvCfg):
 
 # --- env (tasks/line/env.py)
 @wp.kernel
-def line_step(actions: wp.array2d(dtype=float), pos: wp.array(dtype=float), speed: float,
-              rewards: wp.array(dtype=float), terminated: wp.array(dtype=wp.bool)):  # fmt: skip
+def line_step(
+    actions: wp.array2d(dtype=float),
+    pos: wp.array(dtype=float),
+    speed: float,
+    rewards: wp.array(dtype=float),
+    terminated: wp.array(dtype=wp.bool),
+):
     i = wp.tid()
     x = pos[i] + speed * wp.clamp(actions[i, 0], -1.0, 1.0)
     pos[i] = x
@@ -35,8 +40,12 @@ def line_step(actions: wp.array2d(dtype=float), pos: wp.array(dtype=float), spee
 
 
 @wp.kernel
-def line_reset(mask: wp.array(dtype=wp.bool), rng: wp.array(dtype=wp.uint32), pos: wp.array(dtype=float),
-               obs: wp.array2d(dtype=float)):  # fmt: skip
+def line_reset(
+    mask: wp.array(dtype=wp.bool),
+    rng: wp.array(dtype=wp.uint32),
+    pos: wp.array(dtype=float),
+    obs: wp.array2d(dtype=float),
+):
     i = wp.tid()
     if mask[i]:
         state = rng[i]
@@ -56,8 +65,12 @@ class LineEnv(WarpVecEnv):
 
     def _step_impl(self):
         b = self.buffers
-        wp.launch(line_step, dim=self.num_envs, inputs=[b.actions, self.pos, self.cfg.speed],
-                  outputs=[b.rewards, b.terminated])  # fmt: skip
+        wp.launch(
+            line_step,
+            dim=self.num_envs,
+            inputs=[b.actions, self.pos, self.cfg.speed],
+            outputs=[b.rewards, b.terminated],
+        )
 
     def _reset_impl(self, mask):
         b = self.buffers
@@ -88,8 +101,15 @@ def line_task(tmp_path):
     from refpo_warp.envs.registry import _TASKS, register_task
 
     (tmp_path / "line.yaml").write_text(CONFIG)
-    register_task(TaskSpec("line", f"{__name__}:LineEnv", LineCfg, description="stay near 0 on a line",
-                           config_file=tmp_path / "line.yaml"))  # fmt: skip
+    register_task(
+        TaskSpec(
+            "line",
+            f"{__name__}:LineEnv",
+            LineCfg,
+            description="stay near 0 on a line",
+            config_file=tmp_path / "line.yaml",
+        )
+    )
     yield tmp_path
     del _TASKS["line"]
 
@@ -120,15 +140,31 @@ def test_the_new_task_and_algorithm_train_one_iteration(line_task):
     from refpo_warp.training import train
 
     run_dir = line_task / "run"
-    results = train(["task=line", "algo=refpo", "device=cpu", "max_iterations=1", f"run_dir={run_dir}",
-                     f"algorithm.class_name={__name__}:CappedReflowReFPO", "algorithm.reflow_cap=0.5",
-                     "algorithm.num_mc_samples=4"])  # fmt: skip
+    results = train(
+        [
+            "task=line",
+            "algo=refpo",
+            "device=cpu",
+            "max_iterations=1",
+            f"run_dir={run_dir}",
+            f"algorithm.class_name={__name__}:CappedReflowReFPO",
+            "algorithm.reflow_cap=0.5",
+            "algorithm.num_mc_samples=4",
+        ]
+    )
     (row,) = read_rows(run_dir)
     assert row["env_steps"] == 8 * 16 and 0.0 <= row["Loss/reflow"] <= 0.5
     assert (run_dir / "model_0.pt").is_file() and set(results["results"]) == {"N=1", "N=2"}
     with pytest.raises(Exception, match="reflow_cap"):  # the option's rule is checked at config time
-        train(["task=line", "device=cpu", f"run_dir={line_task / 'bad'}",
-               f"algorithm.class_name={__name__}:CappedReflowReFPO", "algorithm.reflow_cap=-1"])  # fmt: skip
+        train(
+            [
+                "task=line",
+                "device=cpu",
+                f"run_dir={line_task / 'bad'}",
+                f"algorithm.class_name={__name__}:CappedReflowReFPO",
+                "algorithm.reflow_cap=-1",
+            ]
+        )
 
 
 ALGO_FILE = """# ReFPO with its Reflow term capped per action (refpo_warp/algorithms/capped_reflow.py)
@@ -149,11 +185,26 @@ def test_an_algo_file_derived_from_refpo_takes_every_tasks_refpo_settings(tmp_pa
     configs = tmp_path / "my_configs"
     (configs / "algo").mkdir(parents=True)
     (configs / "algo" / "capped_reflow.yaml").write_text(ALGO_FILE.replace("refpo_warp.algorithms:", f"{__name__}:"))
-    env = {**os.environ, "REFPO_CONFIG_PATH": str(configs),
-           "PYTHONPATH": os.pathsep.join([os.path.dirname(__file__), os.environ.get("PYTHONPATH", "")])}  # fmt: skip
-    proc = subprocess.run([sys.executable, "tools/train.py", "task=gridworld", "algo=capped_reflow", "--explain",
-                           "algorithm.reflow_cap,algorithm.reflow_coef,algorithm.num_mc_samples"],
-                          cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=300)  # fmt: skip
+    env = {
+        **os.environ,
+        "REFPO_CONFIG_PATH": str(configs),
+        "PYTHONPATH": os.pathsep.join([os.path.dirname(__file__), os.environ.get("PYTHONPATH", "")]),
+    }
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "tools/train.py",
+            "task=gridworld",
+            "algo=capped_reflow",
+            "--explain",
+            "algorithm.reflow_cap,algorithm.reflow_coef,algorithm.num_mc_samples",
+        ],
+        cwd=REPO_ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout
     assert f"  5. {configs / 'algo' / 'capped_reflow.yaml'}\n" in out

@@ -14,14 +14,20 @@ DOCS = REPO_ROOT / "docs"
 
 
 def test_every_table_is_the_one_its_class_makes():
-    stale = [str(page.relative_to(REPO_ROOT)) for page in sorted(DOCS.rglob("*.md"))
-             if with_tables(page.read_text(encoding="utf-8")) != page.read_text(encoding="utf-8")]  # fmt: skip
+    stale = [
+        str(page.relative_to(REPO_ROOT))
+        for page in sorted(DOCS.rglob("*.md"))
+        if with_tables(page.read_text(encoding="utf-8")) != page.read_text(encoding="utf-8")
+    ]
     assert not stale, f"rewrite them: python -m refpo_warp.config.option_docs {' '.join(stale)}"
 
 
 def _tabled() -> set[type]:
-    return {resolve_class(m.group("name")) for page in DOCS.rglob("*.md")
-            for m in BLOCK.finditer(page.read_text(encoding="utf-8"))}  # fmt: skip
+    return {
+        resolve_class(m.group("name"))
+        for page in DOCS.rglob("*.md")
+        for m in BLOCK.finditer(page.read_text(encoding="utf-8"))
+    }
 
 
 def _declaring(package) -> set[type]:

@@ -68,8 +68,17 @@ def test_training_counts_env_steps_of_a_chunked_env(tmp_path):
     from refpo_warp.runner.progress import read_rows
     from refpo_warp.training import train
 
-    args = ["task=gridworld", "algo=reinflow", "num_envs=8", "runner.num_steps_per_env=4", "env.action_chunk=3",
-            "device=cpu", "eval.at_end=false", "eval.interval=0", "runner.save_interval=100"]  # fmt: skip
+    args = [
+        "task=gridworld",
+        "algo=reinflow",
+        "num_envs=8",
+        "runner.num_steps_per_env=4",
+        "env.action_chunk=3",
+        "device=cpu",
+        "eval.at_end=false",
+        "eval.interval=0",
+        "runner.save_interval=100",
+    ]
     assert num_iterations(resolve_config(args + ["total_env_steps=200"])) == 3  # ceil(200 / 96)
     train(args + ["max_iterations=2", f"run_dir={tmp_path}"])
     assert [r["env_steps"] for r in read_rows(tmp_path)] == [96, 192]

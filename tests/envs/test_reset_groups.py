@@ -28,11 +28,14 @@ def assert_grouped(states: torch.Tensor) -> None:
             assert not torch.equal(first[i], first[j]), f"groups {i} and {j} start from the same state"
 
 
-@pytest.mark.parametrize("task, family, length", [("gridworld", "gridworld", 6), ("dmc_cartpole_swingup", "dmc", 6),
-                                                   ("humanoid_root", "humanoid", 4)])  # fmt: skip
+@pytest.mark.parametrize(
+    "task, family, length",
+    [("gridworld", "gridworld", 6), ("dmc_cartpole_swingup", "dmc", 6), ("humanoid_root", "humanoid", 4)],
+)
 def test_group_members_share_initial_states_at_resets_and_auto_resets(task, family, length):
-    env = make_env(task, num_envs=GROUP * GROUPS, device="cpu", seed=5, reset_group_size=GROUP,
-                   max_episode_length=length)  # fmt: skip
+    env = make_env(
+        task, num_envs=GROUP * GROUPS, device="cpu", seed=5, reset_group_size=GROUP, max_episode_length=length
+    )
     env.reset()
     first = initial_state(env, family)
     assert_grouped(first)

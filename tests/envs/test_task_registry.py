@@ -35,8 +35,12 @@ def test_families_are_found_not_listed():
 
 
 def test_a_registered_task_without_a_config_file_is_an_error(tmp_path):
-    spec = TaskSpec("test_no_config", "refpo_warp.tasks.gridworld.env:GridWorldEnv", GridWorldCfg,
-                    config_file=tmp_path / "missing.yaml")  # fmt: skip
+    spec = TaskSpec(
+        "test_no_config",
+        "refpo_warp.tasks.gridworld.env:GridWorldEnv",
+        GridWorldCfg,
+        config_file=tmp_path / "missing.yaml",
+    )
     register_task(spec)
     try:
         with pytest.raises(ConfigError, match="test_no_config.*missing.yaml.*does not exist"):

@@ -24,8 +24,9 @@ def test_both_protocols_leave_the_random_numbers_and_the_training_as_they_were(t
     first = [json.loads(line) for line in (tmp_path / "one" / "progress.jsonl").read_text().splitlines()]
     assert all("eval/return_N1_zero" in row and "eval/return_N10_zero" in row for row in rows)  # interval_flow_steps
     for a, b in zip(first, rows):  # training statistics bit for bit
-        assert {k: v for k, v in a.items() if k.startswith(("Loss/", "reward"))} == \
-               {k: v for k, v in b.items() if k.startswith(("Loss/", "reward"))}  # fmt: skip
+        assert {k: v for k, v in a.items() if k.startswith(("Loss/", "reward"))} == {
+            k: v for k, v in b.items() if k.startswith(("Loss/", "reward"))
+        }
     assert both["protocol"]["initial_noise"] == ["random", "zero"]
     assert set(both["health"]["curves"]) == {"N=1", "N=10", "N=1/zero", "N=10/zero"}
     assert both["health"]["curves"]["N=1"]["final_iteration"] == 2
@@ -40,8 +41,14 @@ def test_zero_noise_evaluation_repeats_exactly(tmp_run_dir, quick_run):
     assert set(first) == {"N=1/zero", "N=2/zero"}
 
 
-@pytest.mark.parametrize("value, words", [("[random, random]", "listed twice"), ("[]", "expected random, zero"),
-                                          ("noisy", "expected one of 'random', 'zero'")])  # fmt: skip
+@pytest.mark.parametrize(
+    "value, words",
+    [
+        ("[random, random]", "listed twice"),
+        ("[]", "expected random, zero"),
+        ("noisy", "expected one of 'random', 'zero'"),
+    ],
+)
 def test_bad_protocols_are_refused_by_name(tmp_run_dir, quick_run, value, words):
     with pytest.raises(ConfigError, match=words) as err:
         train([*quick_run, f"run_dir={tmp_run_dir}", f"eval.initial_noise={value}"])
@@ -58,8 +65,9 @@ def test_a_run_with_the_ema_checkpoints_both_and_evaluates_the_ema(tmp_run_dir, 
     # evaluation loads the EMA; the same checkpoint with the EMA switched off gives the live weights
     assert set(evaluate_run(tmp_run_dir)["results"]) == set(out["results"])
     obs = {"policy": torch.randn(5, 2)}
-    ema_actions, live_actions = (inference_policy(tmp_run_dir, overrides)(obs) for overrides in
-                                 ({}, {"algorithm.ema_decay": None}))  # fmt: skip
+    ema_actions, live_actions = (
+        inference_policy(tmp_run_dir, overrides)(obs) for overrides in ({}, {"algorithm.ema_decay": None})
+    )
     assert not torch.allclose(ema_actions, live_actions)
 
 

@@ -42,8 +42,9 @@ def gaussian_marginal_field(m: float, s: float):
 def test_the_marginal_fields_one_step_lands_on_the_mean_action_for_every_noise():
     m, s = 0.4, 0.3
     actor = actor_with_field(gaussian_marginal_field(m, s))
-    probe = sampler_probe(actor, observations(), num_steps=50, transform=None, noises=16,
-                          generator=torch.Generator().manual_seed(1))  # fmt: skip
+    probe = sampler_probe(
+        actor, observations(), num_steps=50, transform=None, noises=16, generator=torch.Generator().manual_seed(1)
+    )
     # at tau = 0 the field is m - x: one Euler step gives exactly m, whatever eps
     assert probe["one_step_spread"] == pytest.approx(0.0, abs=1e-10)
     assert probe["abs_action_1"] == pytest.approx(m, rel=1e-6)

@@ -19,10 +19,18 @@ def rows(**curves):
 
 
 def test_curves_peak_final_and_drop_hand_worked():
-    curves = run_health(rows(**{"eval/return_N10": [None, 400.0, None, 950.0, 900.0],
-                                "eval/return_N1": [None, 700.0, None, 300.0, 75.0]}))["curves"]  # fmt: skip
-    assert curves["N=10"] == {"peak": 950.0, "peak_iteration": 3, "final": 900.0, "final_iteration": 4,
-                              "drop": pytest.approx(50 / 950)}  # fmt: skip
+    curves = run_health(
+        rows(
+            **{"eval/return_N10": [None, 400.0, None, 950.0, 900.0], "eval/return_N1": [None, 700.0, None, 300.0, 75.0]}
+        )
+    )["curves"]
+    assert curves["N=10"] == {
+        "peak": 950.0,
+        "peak_iteration": 3,
+        "final": 900.0,
+        "final_iteration": 4,
+        "drop": pytest.approx(50 / 950),
+    }
     assert curves["N=1"]["peak_iteration"] == 1 and curves["N=1"]["drop"] == pytest.approx(625 / 700)
     negative = run_health(rows(**{"eval/return": [-10.0, -20.0]}))["curves"]["mean_action"]  # peak -10: twice as bad
     assert negative["drop"] == pytest.approx(1.0)
@@ -61,11 +69,15 @@ def test_settings_and_curve_keys_round_trip():
         name = setting_name(n, noise)
         assert setting_of(curve_key(name)) == name
     assert (setting_name(1, "zero"), curve_key("N=1/zero"), curve_key("mean_action")) == (
-        "N=1/zero", "eval/return_N1_zero", "eval/return")  # fmt: skip
+        "N=1/zero",
+        "eval/return_N1_zero",
+        "eval/return",
+    )
     assert run_health([{"iteration": 0, "reward_mean": 3.0}])["curves"] == {}
 
 
 def test_health_line():
     line = health_line(run_health(rows(**{"eval/return_N1_zero": [700.0, 70.0], "reward_mean": [1.0, 2.0]})))
-    assert line == ("cliff: insufficient data (needs 150 iterations, has 2);  "
-                    "N=1/zero peak 700 (it 0), final 70 (-90 %)")  # fmt: skip
+    assert line == (
+        "cliff: insufficient data (needs 150 iterations, has 2);  N=1/zero peak 700 (it 0), final 70 (-90 %)"
+    )

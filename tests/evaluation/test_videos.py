@@ -10,10 +10,24 @@ from refpo_warp.utils.rng import own_random_streams
 
 
 def test_a_run_records_its_final_policy_and_lists_the_video(tmp_run_dir, capsys):
-    results = train(["task=gridworld", "algo=refpo", "device=cpu", "max_iterations=1", "num_envs=8",
-                     "runner.num_steps_per_env=8", "algorithm.num_mc_samples=2", "eval.num_envs=8", "eval.interval=0",
-                     "video.at_end=true", "video.width=64", "video.height=48", "video.length=4",
-                     f"run_dir={tmp_run_dir}"])  # fmt: skip
+    results = train(
+        [
+            "task=gridworld",
+            "algo=refpo",
+            "device=cpu",
+            "max_iterations=1",
+            "num_envs=8",
+            "runner.num_steps_per_env=8",
+            "algorithm.num_mc_samples=2",
+            "eval.num_envs=8",
+            "eval.interval=0",
+            "video.at_end=true",
+            "video.width=64",
+            "video.height=48",
+            "video.length=4",
+            f"run_dir={tmp_run_dir}",
+        ]
+    )
     video = tmp_run_dir / "videos" / "final.mp4"
     assert results["videos"] == [str(video)] and read_video(video).shape[1:] == (48, 64, 3)
     assert f"videos        {video}" in capsys.readouterr().out.replace(f"{video.parent}/{{final.mp4}}", str(video))

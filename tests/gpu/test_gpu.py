@@ -65,15 +65,25 @@ def test_captured_cuda_graph_replays_the_eager_step(task, exact):
         torch.testing.assert_close(captured[1], eager[1], atol=1e-5, rtol=1e-5)
 
 
-@pytest.mark.parametrize("task, extra", [
-    ("gridworld", ["num_envs=1024", "runner.num_steps_per_env=32", "eval.num_envs=256", "eval.flow_steps=[1, 10]"]),
-    ("dmc_cartpole_balance", ["num_envs=1024", "runner.num_steps_per_env=16", "eval.num_envs=64",
-                              "eval.flow_steps=[1]", "eval.max_steps=100"]),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "task, extra",
+    [
+        ("gridworld", ["num_envs=1024", "runner.num_steps_per_env=32", "eval.num_envs=256", "eval.flow_steps=[1, 10]"]),
+        (
+            "dmc_cartpole_balance",
+            [
+                "num_envs=1024",
+                "runner.num_steps_per_env=16",
+                "eval.num_envs=64",
+                "eval.flow_steps=[1]",
+                "eval.max_steps=100",
+            ],
+        ),
+    ],
+)
 def test_one_training_iteration_on_cuda(tmp_path, task, extra):
     run_dir = tmp_path / task
-    results = train([f"task={task}", "algo=refpo", f"device={CUDA}", "max_iterations=1", f"run_dir={run_dir}",
-                     *extra])  # fmt: skip
+    results = train([f"task={task}", "algo=refpo", f"device={CUDA}", "max_iterations=1", f"run_dir={run_dir}", *extra])
     rows = [json.loads(line) for line in (run_dir / "progress.jsonl").read_text().splitlines()]
     assert [r["iteration"] for r in rows] == [0]
     assert all(torch.isfinite(torch.tensor(v)) for k, v in rows[0].items() if k.startswith(("Loss/", "Flow/")))

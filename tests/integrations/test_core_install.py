@@ -13,8 +13,12 @@ import tomllib
 
 from refpo_warp.utils.paths import REPO_ROOT
 
-CORE_MODULES = ["refpo_warp.algorithms", "refpo_warp.models", "refpo_warp.integrations.statistics_logger",
-                "refpo_warp.config.classes"]  # fmt: skip
+CORE_MODULES = [
+    "refpo_warp.algorithms",
+    "refpo_warp.models",
+    "refpo_warp.integrations.statistics_logger",
+    "refpo_warp.config.classes",
+]
 
 
 def name(requirement: str) -> str:
@@ -28,8 +32,11 @@ def sim_extra_imports() -> list[str]:
     brought = {name(req) for dist in core for req in requires(dist) or [] if "extra ==" not in req}
     dists = {name(req) for req in project["optional-dependencies"]["sim"]} - brought
     assert not dists & core
-    return sorted(module for module, owners in packages_distributions().items()
-                  if {name(o) for o in owners} & dists and not module.startswith("_"))  # fmt: skip
+    return sorted(
+        module
+        for module, owners in packages_distributions().items()
+        if {name(o) for o in owners} & dists and not module.startswith("_")
+    )
 
 
 def test_the_core_imports_without_the_sim_extra():
@@ -48,7 +55,8 @@ from refpo_warp.config.classes import class_defaults
 class_defaults("refpo_warp.algorithms:ReFPO"), class_defaults("refpo_warp.models:FlowActor")
 print(json.dumps("ok"))
 """
-    out = subprocess.run([sys.executable, "-c", script], cwd=REPO_ROOT, capture_output=True, text=True, timeout=300,
-                         check=False)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", script], cwd=REPO_ROOT, capture_output=True, text=True, timeout=300, check=False
+    )
     assert out.returncode == 0, out.stderr[-3000:]
     assert json.loads(out.stdout.strip().splitlines()[-1]) == "ok"

@@ -19,20 +19,33 @@ class StatisticsRunner(StatisticsRunnerMixin, OnPolicyRunner):
 def test_statistics_go_above_the_report_footer():
     out = with_statistics(REPORT, {"Flow/ratio_mean": 1.0, "Flow/clip_fraction": 0.25})
     lines = out.splitlines()
-    assert lines[-4:] == [f"{'Flow/ratio_mean:':>40} 1.0000", f"{'Flow/clip_fraction:':>40} 0.2500", "-" * 80,
-                          " ETA: 0s"]  # fmt: skip
+    assert lines[-4:] == [
+        f"{'Flow/ratio_mean:':>40} 1.0000",
+        f"{'Flow/clip_fraction:':>40} 0.2500",
+        "-" * 80,
+        " ETA: 0s",
+    ]
     assert with_statistics("no footer\n", {"Flow/x": 2.0}) == f"no footer\n{'Flow/x:':>40} 2.0000\n"
 
 
 @pytest.mark.rsl_rl
 def test_a_refpo_run_logs_flow_statistics_as_tags_and_report_lines(tmp_path, capsys):
     env = make_env("gridworld", num_envs=8, device="cpu", seed=0)
-    cfg = {"num_steps_per_env": 16, "save_interval": 50, "logger": "tensorboard",
-           "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
-           "actor": {"class_name": "refpo_warp.models:FlowActor", "hidden_dims": [16, 16], "num_flow_steps": 2},
-           "critic": {"class_name": "MLPModel", "hidden_dims": [16, 16]},
-           "algorithm": {"class_name": "refpo_warp.algorithms:ReFPO", "num_mc_samples": 2, "num_learning_epochs": 1,
-                         "rnd_cfg": None, "symmetry_cfg": None}}  # fmt: skip
+    cfg = {
+        "num_steps_per_env": 16,
+        "save_interval": 50,
+        "logger": "tensorboard",
+        "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "actor": {"class_name": "refpo_warp.models:FlowActor", "hidden_dims": [16, 16], "num_flow_steps": 2},
+        "critic": {"class_name": "MLPModel", "hidden_dims": [16, 16]},
+        "algorithm": {
+            "class_name": "refpo_warp.algorithms:ReFPO",
+            "num_mc_samples": 2,
+            "num_learning_epochs": 1,
+            "rnd_cfg": None,
+            "symmetry_cfg": None,
+        },
+    }
     runner = StatisticsRunner(env, cfg, log_dir=str(tmp_path), device="cpu")
     assert isinstance(runner.logger, StatisticsLogger)
     runner.learn(2)

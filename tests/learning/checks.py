@@ -122,16 +122,21 @@ def length_ratios(*settings: str):
     goal band)."""
 
     def statistics(record: dict) -> dict[str, float]:
-        return {f"length_ratio_{s}": record["final"][s]["length_mean"] / record["initial"][s]["length_mean"]
-                for s in settings}  # fmt: skip
+        return {
+            f"length_ratio_{s}": record["final"][s]["length_mean"] / record["initial"][s]["length_mean"]
+            for s in settings
+        }
 
     return statistics
 
 
 def gridworld_properties(record: dict) -> list[str]:
     """The paper's multimodality: both goal bands keep a real share of the successes; no ratio explosions."""
-    failures = [f"{s}: {record['final'][s]}" for s in ("N=1", "N=10")
-                if min(record["final"][s]["top_share"], record["final"][s]["bottom_share"]) < 0.2]  # fmt: skip
+    failures = [
+        f"{s}: {record['final'][s]}"
+        for s in ("N=1", "N=10")
+        if min(record["final"][s]["top_share"], record["final"][s]["bottom_share"]) < 0.2
+    ]
     if record["diagnostics"].get("explosion_rate", 0.0) >= 0.01:
         failures.append(f"explosion_rate {record['diagnostics']['explosion_rate']}")
     return failures
@@ -149,8 +154,11 @@ def finetuning_gains(record: dict) -> dict[str, float]:
 
 def both_bands_kept(record: dict) -> list[str]:
     """Fine-tuning keeps the demonstrations' two modes: each goal band keeps a real share of the successes."""
-    return [f"{s}: {record['final'][s]}" for s in ("N=1", "N=10")
-            if min(record["final"][s]["top_share"], record["final"][s]["bottom_share"]) < 0.2]  # fmt: skip
+    return [
+        f"{s}: {record['final'][s]}"
+        for s in ("N=1", "N=10")
+        if min(record["final"][s]["top_share"], record["final"][s]["bottom_share"]) < 0.2
+    ]
 
 
 def length_trend(record: dict) -> dict[str, float]:
@@ -174,77 +182,133 @@ CHECKS: dict[str, LearningCheck] = {
     check.name: check
     for check in (
         LearningCheck(
-            "gridworld_refpo", ("task=gridworld", "algo=refpo", "eval.flow_steps=[1, 10]"),
+            "gridworld_refpo",
+            ("task=gridworld", "algo=refpo", "eval.flow_steps=[1, 10]"),
             length_ratios("N=1", "N=10"),
             (Bound("length_ratio_N=1", "<=", 0.6), Bound("length_ratio_N=10", "<=", 0.6)),
             minutes=4.5,
             describe="ReFPO on GridWorld (the paper's 260k env steps): episode length at N = 1 and 10 over the "
-                     "initial policy's", properties=gridworld_properties),
+            "initial policy's",
+            properties=gridworld_properties,
+        ),
         LearningCheck(
-            "cartpole_refpo", (*CARTPOLE, "algo=refpo"), return_gains("N=10", "N=1"),
+            "cartpole_refpo",
+            (*CARTPOLE, "algo=refpo"),
+            return_gains("N=10", "N=1"),
             (Bound("gain_N=10", ">=", 1.4), Bound("gain_N=1", ">=", 1.4)),
-            minutes=4.9, in_ci=False,
+            minutes=4.9,
+            in_ci=False,
             describe="ReFPO on dmc_cartpole_balance (450k env steps): N = 10 and N = 1 return over the initial "
-                     "policy's"),
+            "policy's",
+        ),
         LearningCheck(
-            "cartpole_ppo", (*CARTPOLE, "algo=ppo", "eval.interval=0"), return_gains("mean_action"),
+            "cartpole_ppo",
+            (*CARTPOLE, "algo=ppo", "eval.interval=0"),
+            return_gains("mean_action"),
             (Bound("gain_mean_action", ">=", 1.5),),
-            minutes=2.8, in_ci=False,
+            minutes=2.8,
+            in_ci=False,
             describe="Gaussian PPO on dmc_cartpole_balance (450k env steps): mean-action return over the initial "
-                     "policy's"),
+            "policy's",
+        ),
         LearningCheck(
-            "cartpole_refpo_aw", (*CARTPOLE, "algo=refpo_aw"), return_gains("N=10"),
+            "cartpole_refpo_aw",
+            (*CARTPOLE, "algo=refpo_aw"),
+            return_gains("N=10"),
             (Bound("gain_N=10", ">=", 1.5),),
-            minutes=3.9, in_ci=False,
+            minutes=3.9,
+            in_ci=False,
             describe="advantage-weighted ReFPO on dmc_cartpole_balance (450k env steps): N = 10 return over the "
-                     "initial policy's"),
+            "initial policy's",
+        ),
         LearningCheck(
-            "cartpole_fpo_pp", (*CARTPOLE, "algo=fpo_pp"), mean_gain("N=10", "N=1", "N=10/zero", "N=1/zero"),
+            "cartpole_fpo_pp",
+            (*CARTPOLE, "algo=fpo_pp"),
+            mean_gain("N=10", "N=1", "N=10/zero", "N=1/zero"),
             (Bound("mean_gain", ">=", 1.1),),
-            minutes=4.3, in_ci=False,
+            minutes=4.3,
+            in_ci=False,
             describe="FPO++ on dmc_cartpole_balance (450k env steps; the EMA actor): the mean of its N = 10 and N = 1 "
-                     "returns' gains over the initial policy's, from random and from zero initial noise"),
+            "returns' gains over the initial policy's, from random and from zero initial noise",
+        ),
         LearningCheck(
-            "cartpole_flow_grpo", (*CARTPOLE, "algo=flow_grpo"), return_gains("N=10"),
+            "cartpole_flow_grpo",
+            (*CARTPOLE, "algo=flow_grpo"),
+            return_gains("N=10"),
             (Bound("gain_N=10", ">=", 1.2),),
-            minutes=4.0, in_ci=False,
-            describe="Flow-GRPO on dmc_cartpole_balance (1M env steps): N = 10 return over the initial policy's"),
+            minutes=4.0,
+            in_ci=False,
+            describe="Flow-GRPO on dmc_cartpole_balance (1M env steps): N = 10 return over the initial policy's",
+        ),
         LearningCheck(
             "point_mass_refpo_onestep",
-            ("task=dmc_point_mass", "algo=refpo_onestep", "eval.interval=0", "eval.num_envs=64",
-             "eval.initial_noise=[random]"), one_step_holds,
+            (
+                "task=dmc_point_mass",
+                "algo=refpo_onestep",
+                "eval.interval=0",
+                "eval.num_envs=64",
+                "eval.initial_noise=[random]",
+            ),
+            one_step_holds,
             (Bound("rise_N=10", ">=", 250.0), Bound("ratio_N=1/N=10", ">=", 0.9, claim=True)),
             minutes=7.6,
             describe="ReFPO's one-step configuration on dmc_point_mass (the CPU profile's 1M env steps, past the "
-                     "540k-860k where the paper's ReFPO's N = 1 return collapses): N = 10 return's rise over the "
-                     "initial policy's, and N = 1 return over N = 10 return (64 episodes each)"),
+            "540k-860k where the paper's ReFPO's N = 1 return collapses): N = 10 return's rise over the "
+            "initial policy's, and N = 1 return over N = 10 return (64 episodes each)",
+        ),
         LearningCheck(
-            "gridworld_reinflow", ("task=gridworld", "algo=reinflow"), length_ratios("N=4", "N=1"),
+            "gridworld_reinflow",
+            ("task=gridworld", "algo=reinflow"),
+            length_ratios("N=4", "N=1"),
             (Bound("length_ratio_N=4", "<=", 0.6),),
             minutes=2.3,
             describe="ReinFlow on GridWorld (the paper's 260k env steps): deterministic K = 4 chain's episode length "
-                     "over the initial policy's"),
+            "over the initial policy's",
+        ),
         LearningCheck(
             "gridworld_finetune_refpo",
-            ("task=gridworld", "algo=refpo", "max_iterations=24", "critic_warmup_iterations=4",
-             "eval.flow_steps=[1, 10]", "eval.interval=0"), finetuning_gains,
-            (Bound("length_ratio_N=1", "<=", 0.7), Bound("length_ratio_N=10", "<=", 0.9)), runner="finetune",
-            minutes=1.2, properties=both_bands_kept,
+            (
+                "task=gridworld",
+                "algo=refpo",
+                "max_iterations=24",
+                "critic_warmup_iterations=4",
+                "eval.flow_steps=[1, 10]",
+                "eval.interval=0",
+            ),
+            finetuning_gains,
+            (Bound("length_ratio_N=1", "<=", 0.7), Bound("length_ratio_N=10", "<=", 0.9)),
+            runner="finetune",
+            minutes=1.2,
+            properties=both_bands_kept,
             describe="ReFPO fine-tuned from a flow clone of GridWorld's scripted two-mode demonstrator (24 iterations, "
-                     "the first 4 the critic's warm-up): the episode length at N = 1 and 10 against the clone's; both "
-                     "goal bands keep a share"),
+            "the first 4 the critic's warm-up): the episode length at N = 1 and 10 against the clone's; both "
+            "goal bands keep a share",
+        ),
         LearningCheck(
-            "humanoid_refpo", ("task=humanoid_all_residual", "algo=refpo", "max_iterations=40", "eval.at_end=false"),
-            length_trend, (Bound("length_trend_t", ">=", 3.0), Bound("length_rise", ">=", 0.05)), initial_eval=False,
+            "humanoid_refpo",
+            ("task=humanoid_all_residual", "algo=refpo", "max_iterations=40", "eval.at_end=false"),
+            length_trend,
+            (Bound("length_trend_t", ">=", 3.0), Bound("length_rise", ">=", 0.05)),
+            initial_eval=False,
             minutes=6.3,
-            describe="ReFPO on humanoid_all_residual (40 iterations): trend of the training episode length"),
+            describe="ReFPO on humanoid_all_residual (40 iterations): trend of the training episode length",
+        ),
         LearningCheck(
-            "mjlab_cartpole_refpo", ("Mjlab-Cartpole-Balance-ReFPO", "--env.scene.num-envs", "64",
-                                     "--agent.max-iterations", str(MJLAB_ITERATIONS)),
-            rate_gain, (Bound("rate_gain", ">=", 0.05),), runner="mjlab",
+            "mjlab_cartpole_refpo",
+            (
+                "Mjlab-Cartpole-Balance-ReFPO",
+                "--env.scene.num-envs",
+                "64",
+                "--agent.max-iterations",
+                str(MJLAB_ITERATIONS),
+            ),
+            rate_gain,
+            (Bound("rate_gain", ">=", 0.05),),
+            runner="mjlab",
             minutes=3.6,
             describe=f"ReFPO inside mjlab's own train on Mjlab-Cartpole-Balance-ReFPO ({MJLAB_ITERATIONS} "
-                     "iterations, 64 envs): deterministic return rate of the last checkpoint minus the first's"),
+            "iterations, 64 envs): deterministic return rate of the last checkpoint minus the first's",
+        ),
     )
 }
 MJLAB_NULL_CONTROL = ("--agent.algorithm.learning-rate", "1e-12")  # ReFPO's schedule is fixed already
@@ -283,9 +347,20 @@ def run_mjlab_check(check: LearningCheck, seed: int, run_dir: Path, null: bool =
     from refpo_warp.integrations.mjlab.evaluate import evaluate
 
     task, *options = check.overrides
-    cmd = [str(Path(sys.executable).parent / "train"), task, *options, "--agent.seed", str(seed),
-           "--agent.logger", "tensorboard", "--gpu-ids", "None", "--log-root", str(run_dir),
-           *(MJLAB_NULL_CONTROL if null else ())]  # fmt: skip
+    cmd = [
+        str(Path(sys.executable).parent / "train"),
+        task,
+        *options,
+        "--agent.seed",
+        str(seed),
+        "--agent.logger",
+        "tensorboard",
+        "--gpu-ids",
+        "None",
+        "--log-root",
+        str(run_dir),
+        *(MJLAB_NULL_CONTROL if null else ()),
+    ]
     env = {**os.environ, "OMP_NUM_THREADS": str(torch.get_num_threads())}
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=3600, check=False, env=env)
     if out.returncode:
@@ -294,8 +369,16 @@ def run_mjlab_check(check: LearningCheck, seed: int, run_dir: Path, null: bool =
     (run,) = experiment.iterdir()
     last = max(run.glob("model_*.pt"), key=lambda p: int(p.stem.split("_")[1]))
     first, final = (evaluate(task, str(path)) for path in (run / "model_0.pt", last))
-    return {"check": check.name, "overrides": list(check.overrides), "seed": seed, "null": null, "initial": first,
-            "final": final, "diagnostics": {}, "rows": []}
+    return {
+        "check": check.name,
+        "overrides": list(check.overrides),
+        "seed": seed,
+        "null": null,
+        "initial": first,
+        "final": final,
+        "diagnostics": {},
+        "rows": [],
+    }
 
 
 def run_finetune_check(check: LearningCheck, seed: int, run_dir: Path, null: bool = False) -> dict:
@@ -312,15 +395,24 @@ def run_finetune_check(check: LearningCheck, seed: int, run_dir: Path, null: boo
     task = next(o for o in check.overrides if o.startswith("task="))
     protocol = [o for o in check.overrides if o.startswith(("task=", "algo=", "eval.flow_steps="))]
     with contextlib.redirect_stdout(io.StringIO()):
-        collect({**parse_options([task, *FINETUNE_COLLECT]), "demonstrator": "scripted", "seed": seed,
-                 "out": str(data)})  # fmt: skip
-        cloned = pretrain([*protocol, *FINETUNE_PRETRAIN, f"seed={seed}", "device=cpu", f"dataset={data}",
-                           f"run_dir={clone}"])  # fmt: skip
+        collect(
+            {**parse_options([task, *FINETUNE_COLLECT]), "demonstrator": "scripted", "seed": seed, "out": str(data)}
+        )
+        cloned = pretrain(
+            [*protocol, *FINETUNE_PRETRAIN, f"seed={seed}", "device=cpu", f"dataset={data}", f"run_dir={clone}"]
+        )
     out = train([*overrides_of(check, seed, run_dir, null), f"init_from={clone}"])
     rows = [{k: row[k] for k in ROW_KEYS if k in row} for row in read_rows(run_dir)]
-    return {"check": check.name, "overrides": list(check.overrides), "seed": seed, "null": null,
-            "initial": cloned["results"], "final": out.get("results", {}), "diagnostics": out.get("diagnostics", {}),
-            "rows": rows}  # fmt: skip
+    return {
+        "check": check.name,
+        "overrides": list(check.overrides),
+        "seed": seed,
+        "null": null,
+        "initial": cloned["results"],
+        "final": out.get("results", {}),
+        "diagnostics": out.get("diagnostics", {}),
+        "rows": rows,
+    }
 
 
 def parse_options(options) -> dict:
@@ -342,5 +434,13 @@ def run_check(check: LearningCheck, seed: int, run_dir: Path, null: bool = False
     initial = initial_results(overrides) if check.initial_eval else {}
     out = train(overrides)
     rows = [{k: row[k] for k in ROW_KEYS if k in row} for row in read_rows(run_dir)]
-    return {"check": check.name, "overrides": list(check.overrides), "seed": seed, "null": null, "initial": initial,
-            "final": out.get("results", {}), "diagnostics": out.get("diagnostics", {}), "rows": rows}
+    return {
+        "check": check.name,
+        "overrides": list(check.overrides),
+        "seed": seed,
+        "null": null,
+        "initial": initial,
+        "final": out.get("results", {}),
+        "diagnostics": out.get("diagnostics", {}),
+        "rows": rows,
+    }

@@ -47,23 +47,36 @@ class BoundStanding:
         if sign * (b.value - null) <= 0:
             out.append(f"{b}: not beyond the null control's best ({null:.4g})")
         if sign * (b.value - half) > 1e-12:
-            out.append(f"{b}: beyond halfway ({half:.4g}) from the null control's best ({null:.4g}) to the learning "
-                       f"runs' worst ({worst:.4g})")  # fmt: skip
+            out.append(
+                f"{b}: beyond halfway ({half:.4g}) from the null control's best ({null:.4g}) to the learning "
+                f"runs' worst ({worst:.4g})"
+            )
         return out
 
 
 def standings(check: LearningCheck, records: list[dict]) -> tuple[list[BoundStanding], list[str]]:
     """Each bound's standing over the runs the rule asks for, and the runs missing from the records."""
-    learning = {(r["threads"], r["seed"]): check.statistics(r) for r in records
-                if r["check"] == check.name and not r["null"]}  # fmt: skip
-    null = {r["seed"]: check.statistics(r) for r in records if r["check"] == check.name and r["null"]
-            and r["threads"] == 1}  # fmt: skip
-    missing = [f"{check.name} learning, {t} thread(s), seed {s}" for t, seeds in LEARNING_RUNS.items() for s in seeds
-               if (t, s) not in learning]  # fmt: skip
+    learning = {
+        (r["threads"], r["seed"]): check.statistics(r) for r in records if r["check"] == check.name and not r["null"]
+    }
+    null = {
+        r["seed"]: check.statistics(r) for r in records if r["check"] == check.name and r["null"] and r["threads"] == 1
+    }
+    missing = [
+        f"{check.name} learning, {t} thread(s), seed {s}"
+        for t, seeds in LEARNING_RUNS.items()
+        for s in seeds
+        if (t, s) not in learning
+    ]
     missing += [f"{check.name} null control, seed {s}" for s in NULL_RUNS if s not in null]
-    out = [BoundStanding(b, [(t, s, stats[b.statistic]) for (t, s), stats in sorted(learning.items())],
-                         [(s, stats[b.statistic]) for s, stats in sorted(null.items())])
-           for b in check.bounds]  # fmt: skip
+    out = [
+        BoundStanding(
+            b,
+            [(t, s, stats[b.statistic]) for (t, s), stats in sorted(learning.items())],
+            [(s, stats[b.statistic]) for s, stats in sorted(null.items())],
+        )
+        for b in check.bounds
+    ]
     return out, missing
 
 
@@ -79,10 +92,12 @@ def check_rows(check: LearningCheck, records: list[dict]) -> list[str]:
         t, seed, worst = s.worst
         nseed, null = s.null_best
         halfway, to_null = ("claim", "-") if s.bound.claim else (fmt(s.halfway), fmt(abs(s.bound.value - null)))
-        rows.append(f"| {check.name} | `{s.bound}` | {fmt(worst)} (seed {seed}, {t} thr.) | "
-                    f"{fmt(min(v for *_, v in s.learning))}-{fmt(max(v for *_, v in s.learning))} | "
-                    f"{fmt(null)} (seed {nseed}) | {halfway} | {fmt(abs(worst - s.bound.value))} | "
-                    f"{to_null} |")  # fmt: skip
+        rows.append(
+            f"| {check.name} | `{s.bound}` | {fmt(worst)} (seed {seed}, {t} thr.) | "
+            f"{fmt(min(v for *_, v in s.learning))}-{fmt(max(v for *_, v in s.learning))} | "
+            f"{fmt(null)} (seed {nseed}) | {halfway} | {fmt(abs(worst - s.bound.value))} | "
+            f"{to_null} |"
+        )
     return rows
 
 
@@ -93,20 +108,32 @@ def per_seed_rows(check: LearningCheck, records: list[dict]) -> list[str]:
         stats = check.statistics(r)
         passed = all(b.holds(stats) for b in check.bounds)
         values = ", ".join(f"{k} {fmt(v)}" for k, v in stats.items())
-        rows.append(f"| {check.name} | {'null control' if r['null'] else 'learning'} | {r['threads']} | {r['seed']} | "
-                    f"{values} | {'pass' if passed else 'fail'} | {r['cpu']} | {r['wall_s']:.0f} |")  # fmt: skip
+        rows.append(
+            f"| {check.name} | {'null control' if r['null'] else 'learning'} | {r['threads']} | {r['seed']} | "
+            f"{values} | {'pass' if passed else 'fail'} | {r['cpu']} | {r['wall_s']:.0f} |"
+        )
     return rows
 
 
 def table_markdown(records: list[dict]) -> str:
     cpus = sorted({r["cpu"] for r in records})
-    lines = [BEGIN, "", "| check | bound | learning runs' worst | learning range | null control's best | halfway | "
-             "margin to learning | margin to null |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    lines = [
+        BEGIN,
+        "",
+        "| check | bound | learning runs' worst | learning range | null control's best | halfway | "
+        "margin to learning | margin to null |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for check in CHECKS.values():
         lines += check_rows(check, records)
-    lines += ["", "Per run (statistics as the check reads them; wall seconds of the run, the initial evaluation "
-              "included, on a shared 2-core machine):", "", "| check | runs | torch threads | seed | statistics | "
-              "bound | CPU | wall s |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    lines += [
+        "",
+        "Per run (statistics as the check reads them; wall seconds of the run, the initial evaluation "
+        "included, on a shared 2-core machine):",
+        "",
+        "| check | runs | torch threads | seed | statistics | bound | CPU | wall s |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for check in CHECKS.values():
         lines += per_seed_rows(check, records)
     lines += ["", f"CPUs of these runs: {'; '.join(cpus)} (2 cores each).", "", END]

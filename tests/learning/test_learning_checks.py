@@ -30,8 +30,11 @@ def test_learning_check(name, tmp_run_dir, null_control):
     record = run_check(check, seed=1, run_dir=tmp_run_dir, null=null_control)
     passed, stats = check.verdict(record)
     shown = ", ".join(f"{k} {v:.3f}" for k, v in stats.items())
-    print(f"[learning check] {name}{' (null control)' if null_control else ''}: {shown}; bounds "
-          f"{', '.join(map(str, check.bounds))}", flush=True)  # fmt: skip
+    print(
+        f"[learning check] {name}{' (null control)' if null_control else ''}: {shown}; bounds "
+        f"{', '.join(map(str, check.bounds))}",
+        flush=True,
+    )
     if null_control:
         assert not passed, f"{name} passes with learning switched off: {shown}"
         return

@@ -21,8 +21,10 @@ def test_gain_is_the_final_over_the_initial_return():
 
 def test_one_step_statistics_hand_worked():
     def record(n10, n1, initial_n10=20.0):
-        return {"initial": {"N=10": {"return_mean": initial_n10}},
-                "final": {"N=10": {"return_mean": n10}, "N=1": {"return_mean": n1}}}  # fmt: skip
+        return {
+            "initial": {"N=10": {"return_mean": initial_n10}},
+            "final": {"N=10": {"return_mean": n10}, "N=1": {"return_mean": n1}},
+        }
 
     assert one_step_holds(record(700.0, 665.0)) == {"rise_N=10": 680.0, "ratio_N=1/N=10": 0.95}
     assert one_step_holds(record(0.0, 3.0, initial_n10=1.5)) == {"rise_N=10": -1.5, "ratio_N=1/N=10": 0.0}
@@ -31,8 +33,10 @@ def test_one_step_statistics_hand_worked():
 def test_a_claim_bound_holds_in_every_learning_run_and_may_hold_in_the_null_control():
     learning, null = [(1, 1, 1.05), (1, 2, 0.93), (2, 1, 0.97)], [(1, 0.13), (2, 1.4)]
     assert not BoundStanding(Bound("ratio", ">=", 0.9, claim=True), learning, null).problems()
-    assert "claim fails in a learning run (0.93)" in BoundStanding(Bound("ratio", ">=", 0.95, claim=True), learning,
-                                                                   null).problems()[0]  # fmt: skip
+    assert (
+        "claim fails in a learning run (0.93)"
+        in BoundStanding(Bound("ratio", ">=", 0.95, claim=True), learning, null).problems()[0]
+    )
     # the same value as a bound of the first kind breaks the rule: the null control's best (1.4) is beyond it
     assert BoundStanding(Bound("ratio", ">=", 0.9), learning, null).problems()
 

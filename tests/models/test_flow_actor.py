@@ -121,11 +121,12 @@ def test_adaln_starts_time_independent_and_head_gain_scales_the_first_actions():
     torch.manual_seed(0)
     obs = TensorDict({"policy": torch.randn(2000, 30)}, batch_size=[2000])
     kwargs = dict(hidden_dims=[64, 64, 64], activation="swish", time_conditioning="adaln", time_embed_dim=64)
-    actor = FlowActor(obs, {"actor": ["policy"]}, "actor", 12, parameterization="data", head_init_gain=0.01,
-                      **kwargs)  # fmt: skip
+    actor = FlowActor(obs, {"actor": ["policy"]}, "actor", 12, parameterization="data", head_init_gain=0.01, **kwargs)
     feat, x = actor.velocity.project_obs(actor.encode(obs)), torch.randn(2000, 12)
-    torch.testing.assert_close(actor.velocity.predict(feat, x, torch.full((2000,), 0.1)),
-                               actor.velocity.predict(feat, x, torch.full((2000,), 0.9)))  # fmt: skip
+    torch.testing.assert_close(
+        actor.velocity.predict(feat, x, torch.full((2000,), 0.1)),
+        actor.velocity.predict(feat, x, torch.full((2000,), 0.9)),
+    )
     small = actor.sample(obs, 10, "random")
     wide = FlowActor(obs, {"actor": ["policy"]}, "actor", 12, **kwargs).sample(obs, 10, "random")
     assert small.std().item() < 0.06 and small.abs().max().item() < 0.5
@@ -144,12 +145,24 @@ def test_gaussian_ppo_api_is_refused_with_a_clear_message():
         actor.get_output_log_prob(torch.zeros(4, 2))
 
 
-@pytest.fixture(params=[{}, {"parameterization": "data", "time_conditioning": "adaln", "time_embed_dim": 16,
-                              "obs_clip": 1.5, "head_init_gain": 0.5}], ids=["velocity-concat", "data-adaln"])  # fmt: skip
+@pytest.fixture(
+    params=[
+        {},
+        {
+            "parameterization": "data",
+            "time_conditioning": "adaln",
+            "time_embed_dim": 16,
+            "obs_clip": 1.5,
+            "head_init_gain": 0.5,
+        },
+    ],
+    ids=["velocity-concat", "data-adaln"],
+)
 def trained_like_actor(request):
     torch.manual_seed(0)
-    actor, obs = make_actor(obs_dim=5, act_dim=3, hidden_dims=[32, 32], obs_normalization=True, num_flow_steps=4,
-                            **request.param)  # fmt: skip
+    actor, obs = make_actor(
+        obs_dim=5, act_dim=3, hidden_dims=[32, 32], obs_normalization=True, num_flow_steps=4, **request.param
+    )
     actor.update_normalization(TensorDict({"policy": torch.randn(64, 5) * 3 + 1}, batch_size=[64]))
     return actor.eval()
 
@@ -167,9 +180,16 @@ def test_torchscript_export_matches_eager(trained_like_actor):
 
 def export_onnx(module, path):
     names = module.input_names
-    torch.onnx.export(module, module.get_dummy_inputs(), str(path), input_names=names,
-                      output_names=module.output_names, opset_version=18, dynamo=False,
-                      dynamic_axes={name: {0: "batch"} for name in names})  # fmt: skip
+    torch.onnx.export(
+        module,
+        module.get_dummy_inputs(),
+        str(path),
+        input_names=names,
+        output_names=module.output_names,
+        opset_version=18,
+        dynamo=False,
+        dynamic_axes={name: {0: "batch"} for name in names},
+    )
 
 
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")
@@ -190,8 +210,9 @@ def test_onnx_export_runs_on_obs_alone_and_matches_torch(trained_like_actor, tmp
     module = actor.as_onnx(noise_input=True).eval()
     export_onnx(module, tmp_path / "policy_noise.onnx")
     noise = torch.randn(8, 3)
-    (out,) = ort.InferenceSession(str(tmp_path / "policy_noise.onnx")).run(None, {"obs": obs.numpy(),
-                                                                                   "noise": noise.numpy()})  # fmt: skip
+    (out,) = ort.InferenceSession(str(tmp_path / "policy_noise.onnx")).run(
+        None, {"obs": obs.numpy(), "noise": noise.numpy()}
+    )
     torch.testing.assert_close(torch.from_numpy(out), actor.sample(td, noise=noise), atol=1e-5, rtol=1e-5)
 
 

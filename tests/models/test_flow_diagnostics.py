@@ -15,11 +15,14 @@ def linear_field(matrix):
     return lambda obs_feat, x, tau: x @ w.T + obs_feat[..., : w.shape[0]] * tau.unsqueeze(-1)
 
 
-@pytest.mark.parametrize("matrix, spectral, frobenius", [
-    ([[3.0, 0.0], [0.0, 1.0]], 3.0, math.sqrt(10.0)),
-    ([[1.0, 1.0], [0.0, 1.0]], (1 + math.sqrt(5)) / 2, math.sqrt(3.0)),  # the golden ratio
-    ([[0.0, -2.0], [2.0, 0.0]], 2.0, math.sqrt(8.0)),  # a rotation scaled by 2
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "matrix, spectral, frobenius",
+    [
+        ([[3.0, 0.0], [0.0, 1.0]], 3.0, math.sqrt(10.0)),
+        ([[1.0, 1.0], [0.0, 1.0]], (1 + math.sqrt(5)) / 2, math.sqrt(3.0)),  # the golden ratio
+        ([[0.0, -2.0], [2.0, 0.0]], 2.0, math.sqrt(8.0)),  # a rotation scaled by 2
+    ],
+)
 def test_spectral_norm_of_a_known_jacobian(matrix, spectral, frobenius):
     """v = W x + (terms without x): dv/dx = W everywhere, whatever the observation and tau."""
     obs_feat, x, tau = torch.randn(5, 4), torch.randn(5, 2), torch.rand(5)
@@ -31,8 +34,15 @@ def test_spectral_norm_of_a_known_jacobian(matrix, spectral, frobenius):
 def scaled_identity_actor(scale: float, act_dim: int = 3, num_flow_steps: int = 4):
     """A flow whose head outputs scale * x exactly: J = scale * I at every point of the sampler's path."""
     obs = TensorDict({"policy": torch.randn(16, 5)}, batch_size=[16])
-    actor = FlowActor(obs, {"actor": ["policy"]}, "actor", act_dim, hidden_dims=[act_dim], activation="identity",
-                      num_flow_steps=num_flow_steps)  # fmt: skip
+    actor = FlowActor(
+        obs,
+        {"actor": ["policy"]},
+        "actor",
+        act_dim,
+        hidden_dims=[act_dim],
+        activation="identity",
+        num_flow_steps=num_flow_steps,
+    )
     with torch.no_grad():
         for p in actor.velocity.parameters():
             p.zero_()

@@ -83,7 +83,6 @@ def test_sample_kernel_matches_numpy_interpolation(library):
     np.testing.assert_allclose(got["body_pos"][2], library.clip(2)["body_pos"][-1], atol=1e-6)
 
 
-
 def test_masked_sample_writes_only_the_selected_rows(library):
     rng = np.random.default_rng(1)
     ids = wp.array(rng.integers(0, 3, size=8).astype(np.int32), dtype=int)
@@ -97,13 +96,22 @@ def test_masked_sample_writes_only_the_selected_rows(library):
         np.testing.assert_array_equal(got[select], want[select], err_msg=key)
         assert not np.any(got[~select]), key  # untouched (still the zeros of allocate_frames)
 
+
 def test_sample_interpolates_angles_the_short_way_and_is_capturable():
     # A hinge angle stepping from 3.1 to -3.1 rad turns 0.083 rad through +-pi, not 6.2 rad through 0.
     n = 2
     dof = np.zeros((n, 69))
     dof[0, 0], dof[1, 0] = 3.1, -3.1
-    clip = MotionClip("wrap", 10.0, np.zeros((n, 24, 3)), rot.quat_identity((n, 24)), np.zeros((n, 24, 3)),
-                      np.zeros((n, 24, 3)), dof, np.zeros((n, 69)))  # fmt: skip
+    clip = MotionClip(
+        "wrap",
+        10.0,
+        np.zeros((n, 24, 3)),
+        rot.quat_identity((n, 24)),
+        np.zeros((n, 24, 3)),
+        np.zeros((n, 24, 3)),
+        dof,
+        np.zeros((n, 69)),
+    )
     lib = MotionLibrary.from_clips([clip], device="cpu")
     out = lib.allocate_frames(3)
     ids = wp.zeros(3, dtype=int)

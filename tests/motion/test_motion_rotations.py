@@ -39,8 +39,11 @@ def test_against_mujoco_and_round_trips():
     euler = rng.uniform(-np.pi, np.pi, size=(200, 3))
     for candidate in rot.euler_xyz_candidates(rot.quat_from_euler_xyz(euler)):
         # Both Euler solutions describe the same rotation.
-        np.testing.assert_allclose(rot.quat_to_matrix(rot.quat_from_euler_xyz(candidate)),
-                                   rot.quat_to_matrix(rot.quat_from_euler_xyz(euler)), atol=1e-9)  # fmt: skip
+        np.testing.assert_allclose(
+            rot.quat_to_matrix(rot.quat_from_euler_xyz(candidate)),
+            rot.quat_to_matrix(rot.quat_from_euler_xyz(euler)),
+            atol=1e-9,
+        )
 
 
 def test_slerp_and_continuity():

@@ -69,7 +69,7 @@ def test_wave_raises_the_hand_above_the_head():
     wave = next(s for s in DEFAULT_CLIP_SPECS if s.name == "wave_right")
     pos, _, _ = fk(wave)
     hand = pos[:, BODY_NAMES.index("R_Hand"), 2]
-    assert hand[: int(0.1 * wave.fps)].max() < 1.0 and hand[-int(wave.fps):].min() > pos[-1, HEAD, 2]
+    assert hand[: int(0.1 * wave.fps)].max() < 1.0 and hand[-int(wave.fps) :].min() > pos[-1, HEAD, 2]
     other = pos[:, BODY_NAMES.index("L_Hand"), 2]
     assert other.max() < 1.0  # the other arm hangs
 

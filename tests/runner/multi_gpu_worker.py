@@ -25,16 +25,22 @@ def run(cfg: dict, reduce_gradients: bool) -> dict:
     runner.learn(cfg["max_iterations"])
     alg = runner.alg
     return {
-        "parameters": {f"{name}.{k}": v.detach().clone() for name, model in (("actor", alg.actor), ("critic", alg.critic))
-                       for k, v in model.named_parameters()},
-        "buffers": {f"{name}.{k}": v.detach().clone() for name, model in (("actor", alg.actor), ("critic", alg.critic))
-                    for k, v in model.named_buffers()},
+        "parameters": {
+            f"{name}.{k}": v.detach().clone()
+            for name, model in (("actor", alg.actor), ("critic", alg.critic))
+            for k, v in model.named_parameters()
+        },
+        "buffers": {
+            f"{name}.{k}": v.detach().clone()
+            for name, model in (("actor", alg.actor), ("critic", alg.critic))
+            for k, v in model.named_buffers()
+        },
         "learning_rate": alg.learning_rate,
         "device": str(env.device),
         "env_seed": env.seed,
         "multi_gpu": runner.cfg["multi_gpu"],
         "backend": torch.distributed.get_backend(),
-    }  # fmt: skip
+    }
 
 
 def main(out_dir: Path, overrides: list[str]) -> None:

@@ -19,20 +19,41 @@ from refpo_warp.utils.rsl_rl_versions import NORMALIZERS_UPDATE_PER_STEP
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
 
 ROOT = REPO_ROOT
-TINY = ["task=gridworld", "algo=refpo", "device=cpu", "seed=3", "num_envs=8", "runner.num_steps_per_env=16",
-        "max_iterations=3", "algorithm.num_mc_samples=4", "algorithm.num_learning_epochs=2",
-        "algorithm.num_mini_batches=2", "actor.hidden_dims=[32, 32]", "critic.hidden_dims=[32, 32]",
-        "actor.obs_normalization=true", "critic.obs_normalization=true"]  # fmt: skip
+TINY = [
+    "task=gridworld",
+    "algo=refpo",
+    "device=cpu",
+    "seed=3",
+    "num_envs=8",
+    "runner.num_steps_per_env=16",
+    "max_iterations=3",
+    "algorithm.num_mc_samples=4",
+    "algorithm.num_learning_epochs=2",
+    "algorithm.num_mini_batches=2",
+    "actor.hidden_dims=[32, 32]",
+    "critic.hidden_dims=[32, 32]",
+    "actor.obs_normalization=true",
+    "critic.obs_normalization=true",
+]
 
 
 def torchrun(script: Path | str, args: list[str], nproc: int = 2) -> subprocess.CompletedProcess:
     """``torchrun ... <script> args``; a script named ``-m <module>`` is a module, as in torchrun's own command."""
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
-           "OMP_NUM_THREADS": "1"}  # fmt: skip
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+        "OMP_NUM_THREADS": "1",
+    }
     for name in ("WORLD_SIZE", "RANK", "LOCAL_RANK"):
         env.pop(name, None)
-    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", f"--nproc_per_node={nproc}",
-           *str(script).split()]
+    cmd = [
+        sys.executable,
+        "-m",
+        "torch.distributed.run",
+        "--standalone",
+        f"--nproc_per_node={nproc}",
+        *str(script).split(),
+    ]
     proc = subprocess.run(cmd + args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, f"torchrun failed ({proc.returncode}):\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}"
     return proc
@@ -60,8 +81,9 @@ def test_ranks_get_own_seed_and_device_and_use_gloo_on_cpu(two_rank_runs):
 
 def test_gradient_reduction_keeps_ranks_identical_and_can_fail(two_rank_runs):
     reduced = max_abs_difference(two_rank_runs["reduced", 0]["parameters"], two_rank_runs["reduced", 1]["parameters"])
-    unreduced = max_abs_difference(two_rank_runs["unreduced", 0]["parameters"],
-                                   two_rank_runs["unreduced", 1]["parameters"])  # fmt: skip
+    unreduced = max_abs_difference(
+        two_rank_runs["unreduced", 0]["parameters"], two_rank_runs["unreduced", 1]["parameters"]
+    )
     print(f"max |parameter difference| between ranks: {reduced:.3g} with reduction, {unreduced:.3g} without")
     assert reduced == 0.0
     assert unreduced > 1e-4, "without the all-reduce the ranks should drift apart (the check could not fail)"
@@ -79,8 +101,9 @@ def test_observation_normalisers_are_all_reduced(two_rank_runs):
 
 
 def test_train_cli_under_torchrun_writes_run_dir_from_rank_zero(tmp_run_dir):
-    proc = torchrun("-m refpo_warp", ["train"] + TINY + [f"run_dir={tmp_run_dir}", "eval.num_envs=8",
-                                                        "eval.flow_steps=[1]"])  # fmt: skip
+    proc = torchrun(
+        "-m refpo_warp", ["train"] + TINY + [f"run_dir={tmp_run_dir}", "eval.num_envs=8", "eval.flow_steps=[1]"]
+    )
     progress_lines = [line for line in proc.stdout.splitlines() if line.startswith("[it ")]
     # one line per iteration, from rank 0 only, numbered from 0 like the checkpoints
     assert [line.split("]")[0] for line in progress_lines] == ["[it 0/2", "[it 1/2", "[it 2/2"], proc.stdout

@@ -118,8 +118,9 @@ def test_nonfinite_worlds_are_flagged():
 
 
 @wp.kernel
-def _com_velocity(body_qd: wp.array2d(dtype=wp.spatial_vector), body_mass: wp.array2d(dtype=float),
-                  out: wp.array(dtype=wp.vec3)):  # fmt: skip
+def _com_velocity(
+    body_qd: wp.array2d(dtype=wp.spatial_vector), body_mass: wp.array2d(dtype=float), out: wp.array(dtype=wp.vec3)
+):
     w = wp.tid()
     out[w] = world_com_velocity(body_qd, body_mass, w)
 

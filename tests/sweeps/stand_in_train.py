@@ -28,10 +28,18 @@ first = not (run_dir / "train.attempt1.log").exists()
 
 
 def record(event: str) -> None:
-    line = {"event": event, "key": f"{run_dir.parents[1].name}/{label}/{run_dir.name}", "pid": os.getpid(),
-            "ppid": os.getppid(), "start": started, "time": time.time(), "host": socket.gethostname(),
-            "cuda_visible_devices": os.environ.get("CUDA_VISIBLE_DEVICES"),
-            "omp_num_threads": os.environ.get("OMP_NUM_THREADS"), "device": options["device"]}  # fmt: skip
+    line = {
+        "event": event,
+        "key": f"{run_dir.parents[1].name}/{label}/{run_dir.name}",
+        "pid": os.getpid(),
+        "ppid": os.getppid(),
+        "start": started,
+        "time": time.time(),
+        "host": socket.gethostname(),
+        "cuda_visible_devices": os.environ.get("CUDA_VISIBLE_DEVICES"),
+        "omp_num_threads": os.environ.get("OMP_NUM_THREADS"),
+        "device": options["device"],
+    }
     with open(run_dir.parents[2] / "stand_in.jsonl", "a") as f:
         f.write(json.dumps(line) + "\n")
 

@@ -64,9 +64,16 @@ def alive(pid: int) -> bool:
 
 
 def test_runs_get_their_own_gpu_a_crash_is_retried_and_a_lost_worker_rerun(local_ray, tmp_path):
-    spec = write_spec(tmp_path / "grid.yaml", device="cuda", methods=[
-        {"label": "ppo", "algo": "ppo"}, {"label": "refpo", "algo": "refpo"}, {"label": "crash", "algo": "ppo"},
-        {"label": "lost", "algo": "ppo"}])  # fmt: skip
+    spec = write_spec(
+        tmp_path / "grid.yaml",
+        device="cuda",
+        methods=[
+            {"label": "ppo", "algo": "ppo"},
+            {"label": "refpo", "algo": "refpo"},
+            {"label": "crash", "algo": "ppo"},
+            {"label": "lost", "algo": "ppo"},
+        ],
+    )
     out = tmp_path / "out"
     lines: list[str] = []
     summary = run_sweep(load_sweep(str(spec), [f"out={out}"]), launcher=STAND_IN, backend="ray", echo=lines.append)
@@ -116,8 +123,9 @@ def test_status_agrees_with_the_local_backend(local_ray, tmp_path):
     status = {}
     for backend in ("local", "ray"):
         out = tmp_path / backend
-        summary = run_sweep(load_sweep(str(spec), [f"out={out}"]), jobs=2, launcher=STAND_IN, backend=backend,
-                            echo=lambda line: None)  # fmt: skip
+        summary = run_sweep(
+            load_sweep(str(spec), [f"out={out}"]), jobs=2, launcher=STAND_IN, backend=backend, echo=lambda line: None
+        )
         assert summary.ok and len(summary.finished) == 2
         status[backend] = json.loads((out / "status.json").read_text())
         starts = [r for r in records(out) if r["event"] == "start"]
@@ -128,7 +136,8 @@ def test_status_agrees_with_the_local_backend(local_ray, tmp_path):
         other = on_ray[key]
         assert set(other) - set(entry) == {"ray_node_id", "ray_reruns"} and set(entry) <= set(other)
         assert {k: v for k, v in entry.items() if k not in ("seconds", "log")} == {
-            k: v for k, v in other.items() if k in entry and k not in ("seconds", "log")}  # fmt: skip
+            k: v for k, v in other.items() if k in entry and k not in ("seconds", "log")
+        }
         assert Path(entry["log"]).relative_to(tmp_path / "local") == Path(other["log"]).relative_to(tmp_path / "ray")
         assert entry["seconds"] > 0 and other["seconds"] > 0
     assert local["gridworld/crash/seed1"]["exit_codes"] == [3, 0] and local["gridworld/ppo/seed1"]["node"]
@@ -148,8 +157,9 @@ def test_a_node_without_the_working_directory_stops_the_sweep_before_it_starts(l
 
 def test_ray_options_are_checked_and_ray_is_imported_only_when_asked_for(tmp_path):
     cpu = load_sweep(str(write_spec(tmp_path / "cpu.yaml", methods=[{"algo": "ppo"}])), [f"out={tmp_path / 'a'}"])
-    cuda = load_sweep(str(write_spec(tmp_path / "cuda.yaml", device="cuda", methods=[{"algo": "ppo"}])),
-                      [f"out={tmp_path / 'b'}"])  # fmt: skip
+    cuda = load_sweep(
+        str(write_spec(tmp_path / "cuda.yaml", device="cuda", methods=[{"algo": "ppo"}])), [f"out={tmp_path / 'b'}"]
+    )
     quiet = {"echo": lambda line: None}
     for sweep, options, message in [
         (cpu, RayOptions(gpus_per_run=1), r"trains on the CPU \(device: cpu\): --gpus-per-run must be 0"),
@@ -177,13 +187,15 @@ flag = main(["sweep", {str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "-
 ray = main(["sweep", {str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "--backend", "ray"])
 print("RESULT", local, flag, ray)
 """
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=REPO_ROOT, timeout=120,
-                            check=False)  # fmt: skip
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, cwd=REPO_ROOT, timeout=120, check=False
+    )
     assert result.stdout.splitlines()[-1] == "RESULT 0 2 2", result.stdout + result.stderr
     assert "TORCH False" in result.stdout.splitlines()
     assert "Ray options (--ray-address, --gpus-per-run, --cpus-per-run) need --backend ray" in result.stderr
     assert 'error: --backend ray needs Ray, an optional extra of this project: pip install "refpo-warp[ray]"' in (
-        result.stderr)
+        result.stderr
+    )
     # A head that is not there fails at once (ray.init would wait for it forever).
     with pytest.raises(ConfigError, match=r"No Ray cluster at '127.0.0.1:1' \(.*\): `ray start --head` prints"):
         ray_backend.check_reachable("127.0.0.1:1")
@@ -197,11 +209,24 @@ def test_ctrl_c_stops_every_run_and_leaves_no_training_process(tmp_path):
     force-cancelled and its training process killed with it (both are the documented stop)."""
     spec = write_spec(tmp_path / "grid.yaml", seeds=[1, 2, 3], methods=[{"label": "sleepy", "algo": "ppo"}])
     out = tmp_path / "out"
-    cmd = [sys.executable, "-m", "refpo_warp", "sweep", str(spec), f"out={out}", "--backend", "ray",
-           "--jobs", "2", "--launcher", STAND_IN]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "refpo_warp",
+        "sweep",
+        str(spec),
+        f"out={out}",
+        "--backend",
+        "ray",
+        "--jobs",
+        "2",
+        "--launcher",
+        STAND_IN,
+    ]
     env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"} | RAY_ENV  # the sweep starts its own Ray
-    proc = subprocess.Popen(cmd, cwd=REPO_ROOT, env=env, start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)  # fmt: skip
+    proc = subprocess.Popen(
+        cmd, cwd=REPO_ROOT, env=env, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+    )
     try:
         deadline = time.monotonic() + 120
         while len(records(out)) < 2 and time.monotonic() < deadline and proc.poll() is None:
@@ -221,8 +246,9 @@ def test_ctrl_c_stops_every_run_and_leaves_no_training_process(tmp_path):
     assert "interrupted: stopping 2 running run(s)" in text and "interrupted 2" in text
     assert not any(alive(r["pid"]) for r in started) and len(records(out)) == 2  # the queued run never started
     status = json.loads((out / "status.json").read_text())
-    assert sorted(k for k, v in status.items() if v["state"] == "interrupted") == [r["key"] for r in sorted(
-        started, key=lambda r: r["key"])]  # fmt: skip
+    assert sorted(k for k, v in status.items() if v["state"] == "interrupted") == [
+        r["key"] for r in sorted(started, key=lambda r: r["key"])
+    ]
     if took < STOP_GRACE_S:  # the cancel reached the tasks in time: each run got SIGINT, not the SIGKILL
         for r in started:
             assert "KeyboardInterrupt" in (out / r["key"].replace("/", os.sep) / "train.log").read_text()

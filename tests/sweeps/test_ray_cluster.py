@@ -32,8 +32,11 @@ def test_a_run_on_a_lost_node_finishes_on_another(tmp_path, monkeypatch):
     monkeypatch.setenv("RAY_USAGE_STATS_ENABLED", "0")
     monkeypatch.setenv("STAND_IN_SECONDS", "4")  # the nodes' workers inherit it: long enough to lose a node mid-run
     spec = tmp_path / "grid.yaml"
-    spec.write_text(yaml.safe_dump({"device": "cuda", "tasks": ["gridworld"], "seeds": [1],
-                                    "methods": [{"label": "ppo", "algo": "ppo"}]}))  # fmt: skip
+    spec.write_text(
+        yaml.safe_dump(
+            {"device": "cuda", "tasks": ["gridworld"], "seeds": [1], "methods": [{"label": "ppo", "algo": "ppo"}]}
+        )
+    )
     out = tmp_path / "out"
     cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "num_gpus": 0})  # the head trains nothing
     try:
@@ -41,8 +44,13 @@ def test_a_run_on_a_lost_node_finishes_on_another(tmp_path, monkeypatch):
         cluster.connect()
         lines: list[str] = []
         result = {}
-        sweep = threading.Thread(target=lambda: result.update(summary=run_sweep(
-            load_sweep(str(spec), [f"out={out}"]), launcher=STAND_IN, backend="ray", echo=lines.append)))  # fmt: skip
+        sweep = threading.Thread(
+            target=lambda: result.update(
+                summary=run_sweep(
+                    load_sweep(str(spec), [f"out={out}"]), launcher=STAND_IN, backend="ray", echo=lines.append
+                )
+            )
+        )
         sweep.start()
         log = out / "stand_in.jsonl"
         deadline = time.monotonic() + 90

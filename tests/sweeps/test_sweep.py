@@ -18,8 +18,15 @@ from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import REPO_ROOT
 
 ROOT = REPO_ROOT
-TINY = {"max_iterations": 2, "num_envs": 4, "runner.num_steps_per_env": 8, "eval.num_envs": 4,
-        "eval.flow_steps": [10, 1], "eval.interval": 1, "eval.interval_num_envs": 4}  # fmt: skip
+TINY = {
+    "max_iterations": 2,
+    "num_envs": 4,
+    "runner.num_steps_per_env": 8,
+    "eval.num_envs": 4,
+    "eval.flow_steps": [10, 1],
+    "eval.interval": 1,
+    "eval.interval_num_envs": 4,
+}
 
 
 def write_spec(path: Path, **spec) -> Path:
@@ -28,11 +35,21 @@ def write_spec(path: Path, **spec) -> Path:
 
 
 def test_grid_expands_tasks_methods_seeds_and_list_overrides(tmp_path):
-    spec = write_spec(tmp_path / "grid.yaml", tasks=["gridworld", "dmc_point_mass"], seeds=[1, 2], methods=[
-        {"label": "ppo", "algo": "ppo", "name": "PPO"},
-        {"label": "refpo_l{algorithm.reflow_coef}", "algo": "refpo", "name": "ReFPO, λ={algorithm.reflow_coef}",
-         "overrides": {"algorithm": {"reflow_coef": [0.02, 0.08]}, "eval.flow_steps": [10, 1]}},
-        {"label": "fpo", "algo": "fpo", "overrides": {"eval.flow_steps": [[10, 1], [20, 1]]}}])  # fmt: skip
+    spec = write_spec(
+        tmp_path / "grid.yaml",
+        tasks=["gridworld", "dmc_point_mass"],
+        seeds=[1, 2],
+        methods=[
+            {"label": "ppo", "algo": "ppo", "name": "PPO"},
+            {
+                "label": "refpo_l{algorithm.reflow_coef}",
+                "algo": "refpo",
+                "name": "ReFPO, λ={algorithm.reflow_coef}",
+                "overrides": {"algorithm": {"reflow_coef": [0.02, 0.08]}, "eval.flow_steps": [10, 1]},
+            },
+            {"label": "fpo", "algo": "fpo", "overrides": {"eval.flow_steps": [[10, 1], [20, 1]]}},
+        ],
+    )
     sweep = load_sweep(str(spec), [f"out={tmp_path / 'out'}"])
     labels = [m.label for m in sweep.methods]
     # A list expands the grid; eval.flow_steps takes a list, so only a list of lists expands it.
@@ -41,8 +58,13 @@ def test_grid_expands_tasks_methods_seeds_and_list_overrides(tmp_path):
     assert sweep.methods[1].overrides == {"algorithm.reflow_coef": 0.02, "eval.flow_steps": [10, 1]}
     assert len(sweep.runs) == 2 * 5 * 2
     assert [r.key for r in sweep.runs[:6]] == [  # seed-major: a first full table as early as possible
-        "gridworld/ppo/seed1", "gridworld/refpo_l0.02/seed1", "gridworld/refpo_l0.08/seed1",
-        "gridworld/fpo_flow_steps10-1/seed1", "gridworld/fpo_flow_steps20-1/seed1", "dmc_point_mass/ppo/seed1"]
+        "gridworld/ppo/seed1",
+        "gridworld/refpo_l0.02/seed1",
+        "gridworld/refpo_l0.08/seed1",
+        "gridworld/fpo_flow_steps10-1/seed1",
+        "gridworld/fpo_flow_steps20-1/seed1",
+        "dmc_point_mass/ppo/seed1",
+    ]
     run = sweep.runs[2]
     assert run.run_dir == tmp_path / "out" / "gridworld" / "refpo_l0.08" / "seed1"
     assert "algorithm.reflow_coef=0.08" in run.args and "eval.flow_steps=[10, 1]" in run.args
@@ -50,8 +72,12 @@ def test_grid_expands_tasks_methods_seeds_and_list_overrides(tmp_path):
     assert cfg["algorithm"]["reflow_coef"] == 0.08 and cfg["seed"] == 1 and cfg["run_dir"] == str(run.run_dir)
     # Command-line values: run options for every run (a list expands), sweep-level keys narrow the grid.
     sweep = load_sweep(str(spec), ["methods=refpo_l0.02,ppo", "seeds=[3]", "algorithm.learning_rate=[0.001,0.002]"])
-    assert [m.label for m in sweep.methods] == ["ppo_learning_rate0.001", "ppo_learning_rate0.002",
-                                                "refpo_l0.02_learning_rate0.001", "refpo_l0.02_learning_rate0.002"]
+    assert [m.label for m in sweep.methods] == [
+        "ppo_learning_rate0.001",
+        "ppo_learning_rate0.002",
+        "refpo_l0.02_learning_rate0.001",
+        "refpo_l0.02_learning_rate0.002",
+    ]
     assert {r.seed for r in sweep.runs} == {3}
 
 
@@ -84,8 +110,17 @@ def test_a_typo_fails_before_anything_starts(tmp_path):
 def test_named_sweeps_resolve():
     paper = load_sweep("paper_dmc")
     assert len(paper.tasks) == 10 and paper.seeds == [1, 2, 3, 4, 5] and paper.device == "cuda"
-    assert [m.label for m in paper.methods] == ["ppo", "fpo", "refpo", "refpo_l0.02", "refpo_l0.08", "refpo_l0.12",
-                                                "refpo_aw", "flow_grpo", "reinflow"]  # fmt: skip
+    assert [m.label for m in paper.methods] == [
+        "ppo",
+        "fpo",
+        "refpo",
+        "refpo_l0.02",
+        "refpo_l0.08",
+        "refpo_l0.12",
+        "refpo_aw",
+        "flow_grpo",
+        "reinflow",
+    ]
     assert len(validate(paper)) == 450
     cfg = resolve_config(parse_overrides([*paper.runs[2].args, "device=cuda"]), device_type="cuda")
     assert (cfg["num_envs"], cfg["total_env_steps"], cfg["algorithm"]["reflow_coef"]) == (2048, 100_000_000, 0.04)
@@ -104,15 +139,33 @@ def test_fingerprint_ignores_options_that_do_not_change_the_run():
 
 
 def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
-    spec = write_spec(tmp_path / "tiny.yaml", overrides=TINY, methods=[
-        {"label": "ppo", "algo": "ppo"}, {"label": "refpo", "algo": "refpo"},
-        # Resolves (every value is within its option's range), then really fails at run time: a 1e6 output scale and
-        # a unit learning rate send the log-ratio to its clip of 100, whose exp overflows float32 (exit 3).
-        {"label": "broken", "algo": "fpo", "overrides": {"algorithm.learning_rate": 1.0, "actor.output_scale": 1.0e6,
-                                                         "algorithm.log_ratio_clip": 100.0}}])  # fmt: skip
+    spec = write_spec(
+        tmp_path / "tiny.yaml",
+        overrides=TINY,
+        methods=[
+            {"label": "ppo", "algo": "ppo"},
+            {"label": "refpo", "algo": "refpo"},
+            # Resolves (every value is within its option's range), then really fails at run time: a 1e6 output scale and
+            # a unit learning rate send the log-ratio to its clip of 100, whose exp overflows float32 (exit 3).
+            {
+                "label": "broken",
+                "algo": "fpo",
+                "overrides": {
+                    "algorithm.learning_rate": 1.0,
+                    "actor.output_scale": 1.0e6,
+                    "algorithm.log_ratio_clip": 100.0,
+                },
+            },
+        ],
+    )
     out = tmp_path / "out"
-    result = subprocess.run([sys.executable, str(ROOT / "tools" / "sweep.py"), str(spec), f"out={out}", "--jobs", "2"],
-                            capture_output=True, text=True, cwd=ROOT, timeout=300)  # fmt: skip
+    result = subprocess.run(
+        [sys.executable, str(ROOT / "tools" / "sweep.py"), str(spec), f"out={out}", "--jobs", "2"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=300,
+    )
     text = result.stdout
     assert result.returncode == 1, text + result.stderr
     broken = out / "gridworld" / "broken" / "seed1"
@@ -147,16 +200,18 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     # A changed config makes a finished run stale; a run without its eval.json is unfinished (both rerun).
     evals["refpo"].unlink()
     lines.clear()
-    run_sweep(load_sweep(str(spec), [f"out={out}", "methods=ppo,refpo", "eval.num_envs=3"]), dry_run=True,
-              echo=lines.append)  # fmt: skip
+    run_sweep(
+        load_sweep(str(spec), [f"out={out}", "methods=ppo,refpo", "eval.num_envs=3"]), dry_run=True, echo=lines.append
+    )
     assert "2 stale: config changed (rerun from scratch)" in lines[1]
     lines.clear()
     run_sweep(load_sweep(str(spec), [f"out={out}", "methods=ppo,refpo"]), dry_run=True, echo=lines.append)
     assert "1 done (skipped), 1 unfinished (rerun from scratch)" in lines[1]
 
     # The report lists the crashed run as missing, with its log.
-    result = subprocess.run([sys.executable, str(ROOT / "tools" / "report.py"), str(out)], capture_output=True,
-                            text=True, cwd=ROOT)  # fmt: skip
+    result = subprocess.run(
+        [sys.executable, str(ROOT / "tools" / "report.py"), str(out)], capture_output=True, text=True, cwd=ROOT
+    )
     assert result.returncode == 0, result.stderr
     report = (out / "report" / "report.md").read_text()
     assert "| ppo | 1/1 |" in report and "| broken | 0/1 | -- | -- | -- | -- |" in report

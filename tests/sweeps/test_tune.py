@@ -24,15 +24,28 @@ from refpo_warp.sweeps.tune import (
 from refpo_warp.sweeps.tune_spec import Objective, load_tuning
 from refpo_warp.utils.errors import ConfigError
 
-TINY = {"max_iterations": 2, "num_envs": 4, "runner.num_steps_per_env": 8, "eval.num_envs": 4,
-        "eval.flow_steps": [10, 1], "eval.interval": 1, "eval.interval_num_envs": 4}  # fmt: skip
+TINY = {
+    "max_iterations": 2,
+    "num_envs": 4,
+    "runner.num_steps_per_env": 8,
+    "eval.num_envs": 4,
+    "eval.flow_steps": [10, 1],
+    "eval.interval": 1,
+    "eval.interval_num_envs": 4,
+}
 LR = {"algorithm.learning_rate": {"low": 1.0e-4, "high": 3.0e-3, "log": True}}
 
 
 def write_tuning(path, **spec):
-    base = {"device": "cpu", "tasks": ["gridworld"], "seed": 101, "trials": 1, "overrides": TINY,
-            "objective": {"metric": "return_multi", "reference": {"gridworld": 20.0}},
-            "methods": [{"label": "ppo", "algo": "ppo", "space": LR}]}  # fmt: skip
+    base = {
+        "device": "cpu",
+        "tasks": ["gridworld"],
+        "seed": 101,
+        "trials": 1,
+        "overrides": TINY,
+        "objective": {"metric": "return_multi", "reference": {"gridworld": 20.0}},
+        "methods": [{"label": "ppo", "algo": "ppo", "space": LR}],
+    }
     path.write_text(yaml.safe_dump({**base, **spec}))
     return path
 
@@ -48,19 +61,27 @@ def test_a_bad_tuning_file_fails_before_anything_starts(tmp_path):
         "Did you mean 'trials'": {"trails": 3},
         "one positive number for each of": {"objective": {"metric": "return_multi", "reference": {"dmc_x": 1.0}}},
         "set by the tuner": {"methods": [{"algo": "ppo", "space": {"seed": {"choices": [1, 2]}}}]},
-        "needs finite low < high": {"methods": [{"algo": "ppo", "space": {"algorithm.learning_rate": {"low": 1, "high": 0}}}]},
-        "both fixes and searches": {"methods": [{"algo": "ppo", "overrides": {"algorithm.learning_rate": 1e-3}, "space": LR}]},
-    }  # fmt: skip
+        "needs finite low < high": {
+            "methods": [{"algo": "ppo", "space": {"algorithm.learning_rate": {"low": 1, "high": 0}}}]
+        },
+        "both fixes and searches": {
+            "methods": [{"algo": "ppo", "overrides": {"algorithm.learning_rate": 1e-3}, "space": LR}]
+        },
+    }
     for message, spec in cases.items():
         with pytest.raises(ConfigError, match=message):
             load_tuning(str(write_tuning(tmp_path / "t.yaml", **spec)), [f"out={out}"])
     # Resolving every method's runs: a typo in a key, or an enqueued value outside its space.
-    typo = write_tuning(tmp_path / "typo.yaml", methods=[{"algo": "ppo", "space": {"algorithm.learning_rat": LR[
-        "algorithm.learning_rate"]}}])  # fmt: skip
+    typo = write_tuning(
+        tmp_path / "typo.yaml",
+        methods=[{"algo": "ppo", "space": {"algorithm.learning_rat": LR["algorithm.learning_rate"]}}],
+    )
     with pytest.raises(ConfigError, match="Did you mean 'algorithm.learning_rate'"):
         Tuner(load_tuning(str(typo), [f"out={out}"])).run()
-    outside = write_tuning(tmp_path / "outside.yaml", methods=[{"algo": "refpo", "space": {
-        "algorithm.num_mc_samples": {"choices": [4, 8]}}}])  # fmt: skip
+    outside = write_tuning(
+        tmp_path / "outside.yaml",
+        methods=[{"algo": "refpo", "space": {"algorithm.num_mc_samples": {"choices": [4, 8]}}}],
+    )
     with pytest.raises(ConfigError, match=r"enqueued algorithm.num_mc_samples = 50 lies outside its space \{4, 8\}"):
         Tuner(load_tuning(str(outside), [f"out={out}"])).run()
     assert not out.exists()
@@ -70,16 +91,23 @@ def test_the_first_trial_is_the_methods_own_config():
     tuning = load_tuning("cpu_dmc")
     values = {m.label: config_values(tuning, m) for m in tuning.methods}
     # PPO at the paper's values (entropy and the initial std: the classes' defaults), FPO++ at its authors' values.
-    assert values["ppo"] == {"algorithm.learning_rate": 3e-4, "algorithm.clip_param": 0.1,
-                             "algorithm.num_learning_epochs": 8, "algorithm.entropy_coef": 0.01,
-                             "actor.distribution_cfg.init_std": 1.0}  # fmt: skip
+    assert values["ppo"] == {
+        "algorithm.learning_rate": 3e-4,
+        "algorithm.clip_param": 0.1,
+        "algorithm.num_learning_epochs": 8,
+        "algorithm.entropy_coef": 0.01,
+        "actor.distribution_cfg.init_std": 1.0,
+    }
     assert values["refpo"]["algorithm.reflow_coef"] == 0.04 and values["refpo"]["actor.output_scale"] == 0.25
     assert values["fpo_pp"]["algorithm.learning_rate"] == 1e-4 and values["fpo_pp"]["algorithm.num_mc_samples"] == 16
 
 
 def test_periodic_returns_skip_a_line_being_written(tmp_path):
-    rows = [{"iteration": 0, "eval/return_N10": 3.0, "eval/return_N1": 1.0}, {"iteration": 1},
-            {"iteration": 2, "eval/return": 5.0}]  # fmt: skip
+    rows = [
+        {"iteration": 0, "eval/return_N10": 3.0, "eval/return_N1": 1.0},
+        {"iteration": 1},
+        {"iteration": 2, "eval/return": 5.0},
+    ]
     (tmp_path / "progress.jsonl").write_text("\n".join(json.dumps(r) for r in rows) + '\n{"iteration": 3, "eval/ret')
     assert periodic_returns(tmp_path) == [3.0, 5.0]
     assert periodic_returns(tmp_path / "none") == []
@@ -88,11 +116,19 @@ def test_periodic_returns_skip_a_line_being_written(tmp_path):
 @pytest.mark.slow(minutes=0.6)
 def test_a_tiny_study_resumes_a_cut_off_trial_and_writes_its_records(tmp_path):
     out = tmp_path / "out"
-    spec = write_tuning(tmp_path / "tiny.yaml", pruner=None, methods=[
-        {"label": "ppo", "algo": "ppo", "space": LR},
-        {"label": "refpo", "algo": "refpo", "space": {**LR, "algorithm.num_mc_samples": {"choices": [8, 50]}}}],
-        evaluate={"tasks": ["gridworld"], "seeds": [11], "variants": [{"label": "onestep", "of": "refpo",
-                                                                       "algo": "refpo_onestep"}]})  # fmt: skip
+    spec = write_tuning(
+        tmp_path / "tiny.yaml",
+        pruner=None,
+        methods=[
+            {"label": "ppo", "algo": "ppo", "space": LR},
+            {"label": "refpo", "algo": "refpo", "space": {**LR, "algorithm.num_mc_samples": {"choices": [8, 50]}}},
+        ],
+        evaluate={
+            "tasks": ["gridworld"],
+            "seeds": [11],
+            "variants": [{"label": "onestep", "of": "refpo", "algo": "refpo_onestep"}],
+        },
+    )
     lines: list[str] = []
     assert Tuner(load_tuning(str(spec), [f"out={out}"]), echo=lines.append).run()
     assert (out / JOURNAL_FILE).exists() and (out / EVALUATION_FILE).exists()
@@ -107,14 +143,19 @@ def test_a_tiny_study_resumes_a_cut_off_trial_and_writes_its_records(tmp_path):
     studies = {m.label: optuna.load_study(study_name=m.label, storage=storage) for m in more.methods}
     assert evaluation_sweep(more, studies) is None  # not before every method has spent its trials
     lines.clear()
-    spec.write_text(spec.read_text().replace("\n  num_envs: 4", "\n  num_envs: 6"))  # the trials' env count changed since
+    spec.write_text(
+        spec.read_text().replace("\n  num_envs: 4", "\n  num_envs: 6")
+    )  # the trials' env count changed since
     assert Tuner(load_tuning(str(spec), [f"out={out}", "trials=2"]), echo=lines.append).run()
     assert sum("[tune] note: " in line and "num_envs: 4 -> 6" in line for line in lines) == 2, lines
     assert any(line.startswith("[tune ppo 2/2] trial 01: learning_rate=" + f"{lr:.3g}") for line in lines), lines
     rows = list(csv.DictReader((out / TRIALS_FILE).open()))
     assert [(r["method"], r["trial"], r["state"], r["enqueued"]) for r in rows] == [
-        ("ppo", "0", "complete", "True"), ("ppo", "1", "complete", "False"),
-        ("refpo", "0", "complete", "True"), ("refpo", "1", "complete", "False")]  # fmt: skip
+        ("ppo", "0", "complete", "True"),
+        ("ppo", "1", "complete", "False"),
+        ("refpo", "0", "complete", "True"),
+        ("refpo", "1", "complete", "False"),
+    ]
     assert float(rows[1]["algorithm.learning_rate"]) == lr and (out / "ppo" / "trial01" / "gridworld").is_dir()
     for row in rows:  # the score: the final N = 10 return (PPO: its mean action) over the reference
         assert float(row["score"]) == pytest.approx(float(row["gridworld/return_multi"]) / 20.0)

@@ -20,9 +20,20 @@ from refpo_warp.utils.paths import REPO_ROOT
 
 REPO = REPO_ROOT
 # A run that takes seconds: GridWorld, 4 envs x 8 steps, tiny networks.
-TINY = ["task=gridworld", "device=cpu", "num_envs=4", "runner.num_steps_per_env=8", "actor.hidden_dims=[16]",
-        "critic.hidden_dims=[16]", "algorithm.num_mc_samples=2", "algorithm.num_learning_epochs=1",
-        "algorithm.num_mini_batches=1", "eval.num_envs=4", "eval.flow_steps=[1]", "runner.save_interval=1"]  # fmt: skip
+TINY = [
+    "task=gridworld",
+    "device=cpu",
+    "num_envs=4",
+    "runner.num_steps_per_env=8",
+    "actor.hidden_dims=[16]",
+    "critic.hidden_dims=[16]",
+    "algorithm.num_mc_samples=2",
+    "algorithm.num_learning_epochs=1",
+    "algorithm.num_mini_batches=1",
+    "eval.num_envs=4",
+    "eval.flow_steps=[1]",
+    "runner.save_interval=1",
+]
 
 
 def tiny(*overrides: str) -> list[str]:
@@ -41,8 +52,14 @@ def tool_env() -> dict:
 
 def run_tool(tool: str, *args: str, timeout: float = 180) -> subprocess.CompletedProcess:
     """``python tools/<tool>.py args...`` from the repository root; output captured as text."""
-    return subprocess.run([sys.executable, str(REPO / "tools" / f"{tool}.py"), *map(str, args)], cwd=REPO,
-                          env=tool_env(), capture_output=True, text=True, timeout=timeout)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, str(REPO / "tools" / f"{tool}.py"), *map(str, args)],
+        cwd=REPO,
+        env=tool_env(),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
 def call_tool(tool: str, *args: str) -> subprocess.CompletedProcess:
@@ -65,13 +82,20 @@ def call_tool(tool: str, *args: str) -> subprocess.CompletedProcess:
 
 def run_python(code: str, timeout: float = 180) -> subprocess.CompletedProcess:
     """``python -c code`` with the project importable (for runs with a fault patched in)."""
-    return subprocess.run([sys.executable, "-c", code], cwd=REPO, env=tool_env(), capture_output=True, text=True,
-                          timeout=timeout)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-c", code], cwd=REPO, env=tool_env(), capture_output=True, text=True, timeout=timeout
+    )
 
 
 def start_tool(tool: str, *args: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, str(REPO / "tools" / f"{tool}.py"), *map(str, args)], cwd=REPO,
-                            env=tool_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    return subprocess.Popen(
+        [sys.executable, str(REPO / "tools" / f"{tool}.py"), *map(str, args)],
+        cwd=REPO,
+        env=tool_env(),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def kill_when(proc: subprocess.Popen, condition, timeout: float = 120, poll_s: float = 0.0005) -> bool:
@@ -105,8 +129,11 @@ def tree_hash(root: Path) -> dict[str, str]:
         return {}
     if root.is_file():
         return {root.name: hashlib.sha256(root.read_bytes()).hexdigest()}
-    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in sorted(root.rglob("*")) if p.is_file()}  # fmt: skip
+    return {
+        str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
 
 
 def copy_run(src: Path, dst: Path) -> Path:
@@ -127,8 +154,13 @@ class Payload:
 def write_malicious(path: Path, marker: Path, kind: str) -> Path:
     """A checkpoint-looking file whose unpickling would create ``marker``: ``zip`` (torch.save), ``legacy``
     (torch's pre-1.6 format) or ``pickle`` (a bare pickle)."""
-    data = {"actor_state_dict": {}, "critic_state_dict": {}, "optimizer_state_dict": {}, "iter": 9,
-            "infos": Payload(marker)}  # fmt: skip
+    data = {
+        "actor_state_dict": {},
+        "critic_state_dict": {},
+        "optimizer_state_dict": {},
+        "iter": 9,
+        "infos": Payload(marker),
+    }
     if kind == "zip":
         torch.save(data, path)
     elif kind == "legacy":

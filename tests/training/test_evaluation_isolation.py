@@ -13,10 +13,22 @@ from refpo_warp.training import train
 
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
 
-RUN = ["task=gridworld", "num_envs=8", "runner.num_steps_per_env=16", "max_iterations=6", "runner.save_interval=100",
-       "algorithm.num_learning_epochs=1", "eval.num_envs=8", "eval.interval_num_envs=8", "eval.flow_steps=[1, 2]",
-       "eval.at_end=false", "device=cpu", "seed=3", "actor.obs_normalization=true",
-       "critic.obs_normalization=true"]  # fmt: skip (GridWorld normalises nothing by default)
+RUN = [
+    "task=gridworld",
+    "num_envs=8",
+    "runner.num_steps_per_env=16",
+    "max_iterations=6",
+    "runner.save_interval=100",
+    "algorithm.num_learning_epochs=1",
+    "eval.num_envs=8",
+    "eval.interval_num_envs=8",
+    "eval.flow_steps=[1, 2]",
+    "eval.at_end=false",
+    "device=cpu",
+    "seed=3",
+    "actor.obs_normalization=true",
+    "critic.obs_normalization=true",
+]  # GridWorld normalises nothing by default
 
 
 def tensors(tree, prefix=""):
@@ -30,8 +42,10 @@ def tensors(tree, prefix=""):
 
 def training_rows(run_dir):
     rows = [json.loads(line) for line in (run_dir / "progress.jsonl").read_text().splitlines()]
-    return [{k: v for k, v in row.items() if not k.startswith(("eval/", "Flow/jacobian", "time_s", "steps_per_s"))}
-            for row in rows]  # fmt: skip
+    return [
+        {k: v for k, v in row.items() if not k.startswith(("eval/", "Flow/jacobian", "time_s", "steps_per_s"))}
+        for row in rows
+    ]
 
 
 @pytest.mark.parametrize("algo", ["refpo", "ppo", "reinflow", "fpo_pp"])

@@ -30,15 +30,25 @@ from refpo_warp.motion.amass import write_amass
 
 USAGE, NONFINITE, BAD_FILE, UNEXPECTED = 2, 3, 4, 1
 SLOW = pytest.mark.slow
-QUICK = {"num_envs=0", "eval.flow_steps=[0]", "algorithm.tau_sampling=gaussian", "device=cuda:99", "algo=ppo",
-         "truncated", "zip", "one-frame"}  # fmt: skip
+QUICK = {
+    "num_envs=0",
+    "eval.flow_steps=[0]",
+    "algorithm.tau_sampling=gaussian",
+    "device=cuda:99",
+    "algo=ppo",
+    "truncated",
+    "zip",
+    "one-frame",
+}
 
 
 def cases(rows, ids=None):
     """pytest params of ``rows``, marked slow unless their id is in QUICK."""
     ids = ids or [str(row[0] if isinstance(row, tuple) else row) for row in rows]
-    return [pytest.param(*(row if isinstance(row, tuple) else (row,)), id=i, marks=() if i in QUICK else SLOW)
-            for row, i in zip(rows, ids)]  # fmt: skip
+    return [
+        pytest.param(*(row if isinstance(row, tuple) else (row,)), id=i, marks=() if i in QUICK else SLOW)
+        for row, i in zip(rows, ids)
+    ]
 
 
 @pytest.fixture(scope="module")
@@ -93,9 +103,13 @@ def test_bad_option_is_refused_before_anything_is_created(arg, culprits, tmp_pat
     assert not run_dir.exists()
 
 
-@pytest.mark.parametrize("args,culprit", cases([(["seed=1", "seed=2"], "'seed' is given twice"),
-                                                (["env.size=9", "size=11"], "'size' and 'env.size'")],
-                                               ["same-key", "alias-key"]))  # fmt: skip
+@pytest.mark.parametrize(
+    "args,culprit",
+    cases(
+        [(["seed=1", "seed=2"], "'seed' is given twice"), (["env.size=9", "size=11"], "'size' and 'env.size'")],
+        ["same-key", "alias-key"],
+    ),
+)
 @SLOW
 def test_key_given_twice_is_refused(args, culprit, tmp_path):
     proc = call_tool("train", *tiny(f"run_dir={tmp_path / 'never'}"), *args)
@@ -120,8 +134,12 @@ def test_new_run_into_a_foreign_directory_is_refused(tmp_path):
     (folder / "config.yaml").write_text("my own config: keep me\n")
     (folder / "eval.json").write_text("{}")
     before = tree_hash(folder)
-    assert_refused(call_tool("train", *tiny("max_iterations=2", f"run_dir={folder}")), USAGE, str(folder),
-                   "not a refpo_warp run directory")  # fmt: skip
+    assert_refused(
+        call_tool("train", *tiny("max_iterations=2", f"run_dir={folder}")),
+        USAGE,
+        str(folder),
+        "not a refpo_warp run directory",
+    )
     assert tree_hash(folder) == before
 
 
@@ -164,11 +182,18 @@ def test_new_run_into_a_run_dir_with_checkpoints_is_refused(run):
     assert tree_hash(run) == before
 
 
-@pytest.mark.parametrize("content,culprit", cases([(b"\x80\x81\xfe\xff" * 64, "cannot be read"),
-                                                   (b"task: gridworld\ntask: gridworld\n", "given twice"),
-                                                   (b"- just\n- a list\n", "mapping"),
-                                                   (None, "num_envs=0")],
-                                                  ["binary", "duplicate-key", "not-a-mapping", "bad-value"]))  # fmt: skip
+@pytest.mark.parametrize(
+    "content,culprit",
+    cases(
+        [
+            (b"\x80\x81\xfe\xff" * 64, "cannot be read"),
+            (b"task: gridworld\ntask: gridworld\n", "given twice"),
+            (b"- just\n- a list\n", "mapping"),
+            (None, "num_envs=0"),
+        ],
+        ["binary", "duplicate-key", "not-a-mapping", "bad-value"],
+    ),
+)
 @SLOW
 def test_damaged_saved_config_is_named(run, content, culprit):
     config = run / "config.yaml"
@@ -206,8 +231,14 @@ def test_run_dir_in_use_is_refused(run):
 
 @SLOW
 def test_resume_continues_progress_and_honours_learning_rate(run):
-    proc = call_tool("train", f"run_dir={run}", "resume=true", "max_iterations=5", "algorithm.learning_rate=1e-4",
-                    "eval.at_end=false")  # fmt: skip
+    proc = call_tool(
+        "train",
+        f"run_dir={run}",
+        "resume=true",
+        "max_iterations=5",
+        "algorithm.learning_rate=1e-4",
+        "eval.at_end=false",
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     rows = [json.loads(line) for line in (run / "progress.jsonl").read_text().splitlines()]
     assert [r["iteration"] for r in rows] == [0, 1, 2, 3, 4]
@@ -405,8 +436,15 @@ def test_bad_motion_library_given_to_train_is_named(damage, tmp_path):
         with open(lib, "wb") as f:
             np.savez(f, **arrays)
         culprit = "has 1 frame(s)"
-    proc = call_tool("train", "task=humanoid_root", "device=cpu", "num_envs=2", "max_iterations=1",
-                    f"run_dir={tmp_path / 'never'}", f"motion_file={lib}")  # fmt: skip
+    proc = call_tool(
+        "train",
+        "task=humanoid_root",
+        "device=cpu",
+        "num_envs=2",
+        "max_iterations=1",
+        f"run_dir={tmp_path / 'never'}",
+        f"motion_file={lib}",
+    )
     assert_refused(proc, BAD_FILE, str(lib), culprit)
     assert not (tmp_path / "never").exists()
 

@@ -49,8 +49,9 @@ def last_logged(run_dir: Path) -> int:
 
 
 def resume(run_dir: Path, max_iterations: int) -> tuple[int, str]:
-    proc = run_tool("train", f"run_dir={run_dir}", "resume=true", f"max_iterations={max_iterations}",
-                    "eval.at_end=false")  # fmt: skip
+    proc = run_tool(
+        "train", f"run_dir={run_dir}", "resume=true", f"max_iterations={max_iterations}", "eval.at_end=false"
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "Traceback" not in proc.stderr
     found = re.search(r"from model_(\d+)\.pt: iteration (\d+)", proc.stdout)
@@ -68,14 +69,22 @@ def assert_continuous(run_dir: Path) -> None:
 def test_kill_during_training(tmp_path):
     run_dir = tmp_path / "run"
     numbers = []
-    proc = start_tool("train", *tiny("max_iterations=400", "runner.save_interval=3", "eval.at_end=false",
-                                     f"run_dir={run_dir}"))  # fmt: skip
+    proc = start_tool(
+        "train", *tiny("max_iterations=400", "runner.save_interval=3", "eval.at_end=false", f"run_dir={run_dir}")
+    )
     for round_, at in enumerate((4, 11)):
         assert kill_when(proc, lambda: last_logged(run_dir) >= at), proc.stderr.read() if proc.stderr else ""
         logged, bad = last_logged(run_dir), corrupt_files(run_dir)
         resumed_from, _ = resume(run_dir, logged + 2)
-        numbers.append({"round": round_, "last_logged_iteration": logged, "resumed_from": resumed_from,
-                        "iterations_lost": logged - resumed_from, "corrupt_files": len(bad)})  # fmt: skip
+        numbers.append(
+            {
+                "round": round_,
+                "last_logged_iteration": logged,
+                "resumed_from": resumed_from,
+                "iterations_lost": logged - resumed_from,
+                "corrupt_files": len(bad),
+            }
+        )
         assert not bad, bad
         assert logged - resumed_from <= 3  # save_interval
         assert_continuous(run_dir)
@@ -87,12 +96,20 @@ def test_kill_during_training(tmp_path):
 def test_kill_during_checkpoint_write(tmp_path):
     run_dir = tmp_path / "run"
     big = "[768, 768, 768]"  # ~30 MB checkpoints: a write takes long enough to be hit
-    args = tiny("max_iterations=50", "eval.at_end=false", f"run_dir={run_dir}", f"actor.hidden_dims={big}",
-                f"critic.hidden_dims={big}")  # fmt: skip
+    args = tiny(
+        "max_iterations=50",
+        "eval.at_end=false",
+        f"run_dir={run_dir}",
+        f"actor.hidden_dims={big}",
+        f"critic.hidden_dims={big}",
+    )
     hit = False
     for _attempt in range(5):  # each attempt kills the first checkpoint write after model_0.pt exists
-        proc = start_tool("train", *args) if not run_dir.exists() else start_tool(
-            "train", f"run_dir={run_dir}", "resume=true", "max_iterations=50", "eval.at_end=false")
+        proc = (
+            start_tool("train", *args)
+            if not run_dir.exists()
+            else start_tool("train", f"run_dir={run_dir}", "resume=true", "max_iterations=50", "eval.at_end=false")
+        )
         kill_when(proc, lambda: (run_dir / "model_0.pt").exists() and any(run_dir.glob(".model_*.pt.*.tmp")))
         if any(run_dir.glob(".model_*.pt.*.tmp")):
             hit = True
@@ -102,9 +119,18 @@ def test_kill_during_checkpoint_write(tmp_path):
     bad = corrupt_files(run_dir)
     logged = last_logged(run_dir)
     resumed_from, _ = resume(run_dir, logged + 2)
-    print("\n[reliability] kill -9 during a checkpoint write:", json.dumps({
-        "checkpoints_before_kill": sorted(before), "last_logged_iteration": logged, "resumed_from": resumed_from,
-        "iterations_lost": logged - resumed_from, "corrupt_files": len(bad)}))  # fmt: skip
+    print(
+        "\n[reliability] kill -9 during a checkpoint write:",
+        json.dumps(
+            {
+                "checkpoints_before_kill": sorted(before),
+                "last_logged_iteration": logged,
+                "resumed_from": resumed_from,
+                "iterations_lost": logged - resumed_from,
+                "corrupt_files": len(bad),
+            }
+        ),
+    )
     assert not bad, bad
     assert not list(run_dir.glob(".*.tmp")), "the resume removes the interrupted write's temp file"
     assert_continuous(run_dir)
@@ -113,10 +139,16 @@ def test_kill_during_checkpoint_write(tmp_path):
 def test_kill_during_motion_library_write(tmp_path):
     rng = np.random.default_rng(1)
     frames = 20_000  # about 11 minutes of motion at 30 fps: a library of ~40 MB, compressed for a second or two
-    src = write_amass(tmp_path / "long_poses.npz", rng.normal(0, 0.2, (frames, 3)), rng.normal(0, 0.2, (frames, 63)),
-                      np.cumsum(rng.normal(0, 0.001, (frames, 3)), axis=0), 30.0)  # fmt: skip
-    small = write_amass(tmp_path / "small" / "s_poses.npz", np.zeros((40, 3)), np.zeros((40, 63)),
-                        np.zeros((40, 3)), 30.0)  # fmt: skip
+    src = write_amass(
+        tmp_path / "long_poses.npz",
+        rng.normal(0, 0.2, (frames, 3)),
+        rng.normal(0, 0.2, (frames, 63)),
+        np.cumsum(rng.normal(0, 0.001, (frames, 3)), axis=0),
+        30.0,
+    )
+    small = write_amass(
+        tmp_path / "small" / "s_poses.npz", np.zeros((40, 3)), np.zeros((40, 63)), np.zeros((40, 3)), 30.0
+    )
     out = tmp_path / "lib.motionlib.npz"
     assert run_tool("convert_amass", small, out).returncode == 0
     good = tree_hash(out)
@@ -127,6 +159,10 @@ def test_kill_during_motion_library_write(tmp_path):
             hits += 1
         assert tree_hash(out) == good, "the previous library was damaged"
     library = MotionLibrary.load(out)
-    print("\n[reliability] kill -9 during a motion-library write:", json.dumps(
-        {"kills_during_write": hits, "previous_file_intact": tree_hash(out) == good, "clips": library.num_clips}))
+    print(
+        "\n[reliability] kill -9 during a motion-library write:",
+        json.dumps(
+            {"kills_during_write": hits, "previous_file_intact": tree_hash(out) == good, "clips": library.num_clips}
+        ),
+    )
     assert hits >= 1 and library.num_clips == 1

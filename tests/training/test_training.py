@@ -14,9 +14,19 @@ from refpo_warp.utils.errors import ConfigError, NonFiniteLossError
 
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
 
-QUICK = ["task=gridworld", "algo=refpo", "num_envs=8", "runner.num_steps_per_env=32", "max_iterations=3",
-         "algorithm.num_mc_samples=4", "algorithm.num_learning_epochs=2", "runner.save_interval=1",
-         "eval.num_envs=16", "eval.flow_steps=[1, 2]", "device=cpu"]  # fmt: skip
+QUICK = [
+    "task=gridworld",
+    "algo=refpo",
+    "num_envs=8",
+    "runner.num_steps_per_env=32",
+    "max_iterations=3",
+    "algorithm.num_mc_samples=4",
+    "algorithm.num_learning_epochs=2",
+    "runner.save_interval=1",
+    "eval.num_envs=16",
+    "eval.flow_steps=[1, 2]",
+    "device=cpu",
+]
 
 
 def test_rsl_rl_runner_trains_flow_policy_from_plain_dict():
@@ -27,19 +37,42 @@ def test_rsl_rl_runner_trains_flow_policy_from_plain_dict():
     torch.manual_seed(0)
     env = make_env("gridworld", num_envs=16, device="cpu", seed=1)
     cfg = {
-        "num_steps_per_env": 64, "save_interval": 100, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
-        "actor": {"class_name": "refpo_warp.models:FlowActor", "hidden_dims": [64, 64], "activation": "relu",
-                  "obs_normalization": False, "distribution_cfg": None, "num_flow_steps": 10},
-        "critic": {"class_name": "MLPModel", "hidden_dims": [64, 64], "activation": "relu",
-                   "obs_normalization": False},
-        "algorithm": {"class_name": "refpo_warp.algorithms:ReFPO", "reflow_coef": 0.1, "num_mc_samples": 8,
-                      "num_learning_epochs": 5, "num_mini_batches": 4, "clip_param": 0.2, "gamma": 0.99,
-                      "lam": 0.98, "learning_rate": 1e-3, "entropy_coef": 0.0, "desired_kl": 0.01,
-                      "schedule": "fixed", "max_grad_norm": 0.5, "value_loss_coef": 1.0,
-                      "use_clipped_value_loss": False, "normalize_advantage_per_mini_batch": False,
-                      "optimizer": "adam", "use_mixed_precision": False, "share_cnn_encoders": False,
-                      "rnd_cfg": None, "symmetry_cfg": None},
-    }  # fmt: skip
+        "num_steps_per_env": 64,
+        "save_interval": 100,
+        "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "actor": {
+            "class_name": "refpo_warp.models:FlowActor",
+            "hidden_dims": [64, 64],
+            "activation": "relu",
+            "obs_normalization": False,
+            "distribution_cfg": None,
+            "num_flow_steps": 10,
+        },
+        "critic": {"class_name": "MLPModel", "hidden_dims": [64, 64], "activation": "relu", "obs_normalization": False},
+        "algorithm": {
+            "class_name": "refpo_warp.algorithms:ReFPO",
+            "reflow_coef": 0.1,
+            "num_mc_samples": 8,
+            "num_learning_epochs": 5,
+            "num_mini_batches": 4,
+            "clip_param": 0.2,
+            "gamma": 0.99,
+            "lam": 0.98,
+            "learning_rate": 1e-3,
+            "entropy_coef": 0.0,
+            "desired_kl": 0.01,
+            "schedule": "fixed",
+            "max_grad_norm": 0.5,
+            "value_loss_coef": 1.0,
+            "use_clipped_value_loss": False,
+            "normalize_advantage_per_mini_batch": False,
+            "optimizer": "adam",
+            "use_mixed_precision": False,
+            "share_cnn_encoders": False,
+            "rnd_cfg": None,
+            "symmetry_cfg": None,
+        },
+    }
     runner = OnPolicyRunner(env, cfg, log_dir=None, device="cpu")
     eval_env = make_env("gridworld", num_envs=64, device="cpu", seed=2)
 
@@ -109,7 +142,9 @@ def test_nan_loss_stops_training_and_keeps_last_good_checkpoint(tmp_run_dir, mon
 
     monkeypatch.setattr(ReFPO, "update", update_with_nan_on_third_call)
     with pytest.raises(NonFiniteLossError, match="iteration 2"):
-        train([a for a in QUICK if not a.startswith("max_iterations=")] + [f"run_dir={tmp_run_dir}", "max_iterations=6"])
+        train(
+            [a for a in QUICK if not a.startswith("max_iterations=")] + [f"run_dir={tmp_run_dir}", "max_iterations=6"]
+        )
     assert latest_checkpoint(tmp_run_dir).name == "model_1.pt"
     good = torch.load(tmp_run_dir / "model_1.pt", weights_only=False)
     assert all(torch.isfinite(v).all() for v in good["actor_state_dict"].values())
@@ -122,8 +157,9 @@ def test_dmc_learner_stores_the_pre_tanh_action_the_env_squashes():
     from refpo_warp.runner.build import build_runner
     from refpo_warp.utils.warp_setup import wp
 
-    cfg = resolve_config(["task=dmc_cartpole_balance", "algo=refpo", "device=cpu", "num_envs=64",
-                          "runner.num_steps_per_env=4"])  # fmt: skip
+    cfg = resolve_config(
+        ["task=dmc_cartpole_balance", "algo=refpo", "device=cpu", "num_envs=64", "runner.num_steps_per_env=4"]
+    )
     env, runner = build_runner(cfg, None)
     alg = runner.alg
     obs = env.get_observations()

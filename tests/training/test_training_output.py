@@ -10,8 +10,14 @@ from refpo_warp.training import train
 
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
 
-RSL_RL_CHATTER = ("Actor Model:", "Critic Model:", "Resolved observation sets", "Storing git diff",
-                  "Could not find git repository")  # fmt: skip
+RSL_RL_CHATTER = (
+    "Actor Model:",
+    "Critic Model:",
+    "Resolved observation sets",
+    "Storing git diff",
+    "Could not find git repository",
+)
+
 
 def test_rsl_rl_messages_only_with_verbose(tmp_path, capsys, quick_run):
     train(quick_run + [f"run_dir={tmp_path / 'quiet'}", "eval.at_end=false"])
@@ -31,11 +37,14 @@ def test_iterations_count_from_zero_everywhere_and_the_run_ends_with_its_summary
     assert shown == [r["iteration"] for r in rows] == [0, 1, 2]
     assert sorted(p.name for p in tmp_run_dir.glob("model_*.pt")) == ["model_0.pt", "model_2.pt"]
     assert results["checkpoint_iteration"] == 2
-    block = out[out.index("Trained gridworld / refpo"):]
-    for name, where in [("checkpoint", tmp_run_dir / "model_2.pt"), ("config", tmp_run_dir / "config.yaml"),
-                        ("eval.json", tmp_run_dir / "eval.json"), ("TensorBoard", tmp_run_dir)]:  # fmt: skip
+    block = out[out.index("Trained gridworld / refpo") :]
+    for name, where in [
+        ("checkpoint", tmp_run_dir / "model_2.pt"),
+        ("config", tmp_run_dir / "config.yaml"),
+        ("eval.json", tmp_run_dir / "eval.json"),
+        ("TensorBoard", tmp_run_dir),
+    ]:
         assert re.search(rf"^  {name} +{re.escape(str(where))}", block, flags=re.M), (name, block)
     assert "curves.png" in block and "gridworld_field_N1.png" in block
     n1 = results["results"]["N=1"]
     assert f"return {n1['return_mean']:.2f}" in block and f"success_rate {n1['success_rate']:.4g}" in block
-

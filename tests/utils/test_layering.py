@@ -44,6 +44,7 @@ def test_imports_go_one_way_without_circles():
 def test_each_module_imports_alone_in_a_fresh_interpreter():
     """One fresh process per module (forked from a parent that loaded only third-party packages): a module that
     works only after another first-party module was imported fails here."""
+
     def importable(module: str) -> bool:
         framework = framework_needed(module)
         return framework is None or importlib.util.find_spec(framework) is not None

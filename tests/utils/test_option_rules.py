@@ -162,7 +162,15 @@ def test_custom_rule_gets_the_key():
 
 def test_resume_fixes_the_networks_but_frees_sampling_and_training_options():
     saved = resolve_config(["task=gridworld"])
-    changed = resolve_config(["task=gridworld", "actor.num_flow_steps=3", "algorithm.learning_rate=1e-4",
-                              "num_envs=8", "actor.hidden_dims=[8]", "critic.activation=tanh"])  # fmt: skip
+    changed = resolve_config(
+        [
+            "task=gridworld",
+            "actor.num_flow_steps=3",
+            "algorithm.learning_rate=1e-4",
+            "num_envs=8",
+            "actor.hidden_dims=[8]",
+            "critic.activation=tanh",
+        ]
+    )
     assert [c.split(":")[0] for c in fixed_changes(saved, changed)] == ["actor.hidden_dims", "critic.activation"]
     assert fixed_changes(saved, resolve_config(["task=gridworld"])) == []

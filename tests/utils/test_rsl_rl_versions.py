@@ -19,17 +19,23 @@ NUM_ENVS, STEPS = 8, 16
 def train_cfg(algorithm: dict, actor: dict) -> dict:
     algorithm, actor = copy.deepcopy(algorithm), copy.deepcopy(actor)  # rsl_rl < 5.5 pops class_name from them
     return {
-        "num_steps_per_env": STEPS, "save_interval": 100, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "num_steps_per_env": STEPS,
+        "save_interval": 100,
+        "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
         "actor": {"hidden_dims": [16], "obs_normalization": True, **actor},
         "critic": {"class_name": "MLPModel", "hidden_dims": [16], "obs_normalization": True},
         "algorithm": {"num_learning_epochs": 1, "num_mini_batches": 2, "schedule": "fixed", **algorithm},
-    }  # fmt: skip
+    }
 
 
-FLOW = ({"class_name": "refpo_warp.algorithms:ReFPO", "num_mc_samples": 2},
-        {"class_name": "refpo_warp.models:FlowActor"})
-GAUSSIAN = ({"class_name": "refpo_warp.algorithms:PPO"},
-            {"class_name": "MLPModel", "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 1.0}})
+FLOW = (
+    {"class_name": "refpo_warp.algorithms:ReFPO", "num_mc_samples": 2},
+    {"class_name": "refpo_warp.models:FlowActor"},
+)
+GAUSSIAN = (
+    {"class_name": "refpo_warp.algorithms:PPO"},
+    {"class_name": "MLPModel", "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 1.0}},
+)
 
 
 def test_version_flags_agree_with_the_installed_package():
@@ -78,8 +84,10 @@ def test_unsupported_newer_argument_values_warn_on_older_versions():
 def test_fixed_gaussian_std_on_every_version():
     """``learn_std: false`` (rsl-rl-lib >= 5.2) also fixes the std of a PhcMLPModel on older versions."""
     env = make_env("gridworld", num_envs=NUM_ENVS, device="cpu", seed=0)
-    actor = {"class_name": "refpo_warp.models:PhcMLPModel",
-             "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 0.3, "learn_std": False}}
+    actor = {
+        "class_name": "refpo_warp.models:PhcMLPModel",
+        "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 0.3, "learn_std": False},
+    }
     cfg = train_cfg({"class_name": "refpo_warp.algorithms:PPO", "learning_rate": 1e-2}, actor)
     runner = OnPolicyRunner(env, cfg, log_dir=None, device="cpu")
     runner.learn(2)

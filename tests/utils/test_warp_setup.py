@@ -24,14 +24,20 @@ def imports_warp(tree: ast.AST) -> bool:
 
 
 def test_only_the_setup_module_imports_warp():
-    direct = [name for name, path in first_party_modules().items()
-              if name != SETUP and imports_warp(ast.parse(path.read_text(encoding="utf-8")))]  # fmt: skip
+    direct = [
+        name
+        for name, path in first_party_modules().items()
+        if name != SETUP and imports_warp(ast.parse(path.read_text(encoding="utf-8")))
+    ]
     assert not direct, f"modules that import warp themselves instead of `from {SETUP} import wp`: {direct}"
 
 
 def test_each_warp_module_imported_alone_defines_its_kernels_with_the_options_set():
-    modules = [name for name, path in first_party_modules().items()
-               if any(d in path.read_text(encoding="utf-8") for d in DEFINES) and name != SETUP]  # fmt: skip
+    modules = [
+        name
+        for name, path in first_party_modules().items()
+        if any(d in path.read_text(encoding="utf-8") for d in DEFINES) and name != SETUP
+    ]
     assert "refpo_warp.tasks.dmc.suite.cartpole_balance" in modules and "refpo_warp.tasks.dmc.rewards" in modules
     check = """
 options = warp.get_module(name).options

@@ -19,12 +19,21 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 KEPT = HERE / "gridworld"
-BEGIN, END = "<!-- gridworld table: begin (python docs/results/finetuning/tables.py) -->", "<!-- gridworld table: end -->"
-DMC_BEGIN, DMC_END = "<!-- dmc table: begin (python docs/results/finetuning/tables.py --dmc) -->", "<!-- dmc table: end -->"
+BEGIN, END = (
+    "<!-- gridworld table: begin (python docs/results/finetuning/tables.py) -->",
+    "<!-- gridworld table: end -->",
+)
+DMC_BEGIN, DMC_END = (
+    "<!-- dmc table: begin (python docs/results/finetuning/tables.py --dmc) -->",
+    "<!-- dmc table: end -->",
+)
 DMC_KEPT = HERE / "dmc"
 DMC_TASKS = ("dmc_point_mass", "dmc_reacher_easy")
-DMC_METHODS = (("refpo", "ReFPO from the flow clone"), ("refpo_onestep", "refpo_onestep from the flow clone"),
-               ("ppo", "PPO from the Gaussian clone"))  # fmt: skip
+DMC_METHODS = (
+    ("refpo", "ReFPO from the flow clone"),
+    ("refpo_onestep", "refpo_onestep from the flow clone"),
+    ("ppo", "PPO from the Gaussian clone"),
+)
 FROM_SCRATCH = HERE.parent / "cpu_dmc" / "per_task.csv"  # the committed from-scratch runs (1M env steps)
 ROWS = [  # (run folder, what it is)
     ("clone_flow", "flow clone (refpo pretrain algo=refpo)"),
@@ -79,8 +88,10 @@ def table(source: Path, runs: Path) -> str:
     lines = ["| policy | N | success | top share | bottom share | episode length |", "|---|---|---|---|---|---|"]
     clone = json.loads((source / "clone_flow" / "eval.json").read_text())
     d = clone["dataset"]
-    lines.append(f"| demonstrations (scripted, {d['episodes']} episodes) | - | {d['success_rate']:.3f} | "
-                 f"{d['top_share']:.3f} | {d['bottom_share']:.3f} | {d['length_mean']:.2f} |")  # fmt: skip
+    lines.append(
+        f"| demonstrations (scripted, {d['episodes']} episodes) | - | {d['success_rate']:.3f} | "
+        f"{d['top_share']:.3f} | {d['bottom_share']:.3f} | {d['length_mean']:.2f} |"
+    )
     notes = []
     for name, what in ROWS:
         path = source / name / "eval.json"
@@ -92,13 +103,17 @@ def table(source: Path, runs: Path) -> str:
             if setting in results:
                 r = results[setting]
                 n = setting[2:] if setting.startswith("N=") else "mean action"
-                lines.append(f"| {what} | {n} | {r['success_rate']:.3f} | {r['top_share']:.3f} | "
-                             f"{r['bottom_share']:.3f} | {r['length_mean']:.1f} |")  # fmt: skip
+                lines.append(
+                    f"| {what} | {n} | {r['success_rate']:.3f} | {r['top_share']:.3f} | "
+                    f"{r['bottom_share']:.3f} | {r['length_mean']:.1f} |"
+                )
     if (runs / "clone_gauss" / "model_0.pt").exists():
         rows = timeout_rows(runs / "clone_gauss")
         shown = ", ".join(f"row {y}: {k}" for y, k in sorted(rows.items()))
-        notes.append(f"\nThe Gaussian clone's time-outs (200 episodes from fresh starts, mean action), by the row they "
-                     f"end in (12 is the middle; the demonstrator's two-mode band is rows 9-15): {shown or 'none'}.")
+        notes.append(
+            f"\nThe Gaussian clone's time-outs (200 episodes from fresh starts, mean action), by the row they "
+            f"end in (12 is the middle; the demonstrator's two-mode band is rows 9-15): {shown or 'none'}."
+        )
     return "\n".join(lines) + "\n" + "\n".join(notes)
 
 
@@ -123,8 +138,10 @@ def keep_dmc(runs: Path, sweeps: Path) -> None:
     """The DMC study's small files: each stage's and each finished fine-tuning run's config, eval.json, progress."""
     for task in DMC_TASKS:
         stages = [(runs / task / name, DMC_KEPT / task / name) for name in ("demonstrator", "clone_refpo", "clone_ppo")]
-        stages += [(run, DMC_KEPT / task / run.parent.name / run.name)
-                   for run in sorted((sweeps / f"finetune_{task[4:]}" / task).glob("*/seed*"))]  # fmt: skip
+        stages += [
+            (run, DMC_KEPT / task / run.parent.name / run.name)
+            for run in sorted((sweeps / f"finetune_{task[4:]}" / task).glob("*/seed*"))
+        ]
         for src, dst in stages:
             if (src / "eval.json").exists():
                 dst.mkdir(parents=True, exist_ok=True)
@@ -148,12 +165,17 @@ def dmc_table() -> str:
             lines.append(f"| {task} | not run yet | | | |")
             continue
         meta = json.loads((root / "data" / "metadata.json").read_text())["refpo"]
-        data = json.loads((root / "clone_refpo" / "eval.json").read_text())["dataset"] if (
-            root / "clone_refpo" / "eval.json").exists() else None
+        data = (
+            json.loads((root / "clone_refpo" / "eval.json").read_text())["dataset"]
+            if (root / "clone_refpo" / "eval.json").exists()
+            else None
+        )
         demo = Path(meta["policy"]["checkpoint"]).stem
         shown = f"{data['return_mean']:.0f} over {data['episodes']} episodes" if data else "-"
-        lines.append(f"| {task} | demonstrations: PPO's {demo} (mean action + noise {meta['policy']['action_noise_std']:g}) "
-                     f"| - | {shown} | |")  # fmt: skip
+        lines.append(
+            f"| {task} | demonstrations: PPO's {demo} (mean action + noise {meta['policy']['action_noise_std']:g}) "
+            f"| - | {shown} | |"
+        )
         ppo_final = float(scratch[(task, "ppo")]["return_multi_mean"]) if (task, "ppo") in scratch else float("inf")
         for name, what in (("clone_refpo", "flow clone"), ("clone_ppo", "Gaussian clone")):
             if (root / name / "eval.json").exists():
@@ -161,15 +183,19 @@ def dmc_table() -> str:
         for label, what in DMC_METHODS:
             for run in sorted((root / label).glob("seed*")):
                 out = json.loads((run / "eval.json").read_text())
-                reach = (f"{first_reaching(run, data['return_mean']) if data else '-'} / "
-                         f"{first_reaching(run, ppo_final)}")
-                lines.append(f"| {task} | {what}, {run.name} | {out['env_steps']:,} | {_returns(run / 'eval.json')} | "
-                             f"{reach} |")  # fmt: skip
+                reach = (
+                    f"{first_reaching(run, data['return_mean']) if data else '-'} / {first_reaching(run, ppo_final)}"
+                )
+                lines.append(
+                    f"| {task} | {what}, {run.name} | {out['env_steps']:,} | {_returns(run / 'eval.json')} | {reach} |"
+                )
             ref = scratch.get((task, label))
             if ref is not None:
                 one = f" / {float(ref['return_1_mean']):.0f}" if ref["return_1_mean"] else ""
-                lines.append(f"| {task} | {label} from scratch (cpu_dmc, mean of 3 seeds) | 1,013,760 | "
-                             f"{float(ref['return_multi_mean']):.0f}{one} | |")  # fmt: skip
+                lines.append(
+                    f"| {task} | {label} from scratch (cpu_dmc, mean of 3 seeds) | 1,013,760 | "
+                    f"{float(ref['return_multi_mean']):.0f}{one} | |"
+                )
     return "\n".join(lines) + "\n"
 
 

@@ -23,8 +23,9 @@ CLIPS = {"standing": str(SHIPPED_MOTIONS / "stand_sway_poses.npz"), "default": "
 
 
 def probe(motion_file: str, residual: bool, action_std: float, num_envs: int, steps: int, seed: int = 0) -> dict:
-    env = make_env("humanoid_all", num_envs=num_envs, device="cpu", seed=seed, motion_file=motion_file,
-                   residual_actions=residual)  # fmt: skip
+    env = make_env(
+        "humanoid_all", num_envs=num_envs, device="cpu", seed=seed, motion_file=motion_file, residual_actions=residual
+    )
     generator = torch.Generator().manual_seed(seed)
     lengths, time_outs = [], 0
     for _ in range(steps):
@@ -34,15 +35,17 @@ def probe(motion_file: str, residual: bool, action_std: float, num_envs: int, st
             time_outs += int(extras["time_outs"][dones].sum())
     running = env.episode_length_buf.tolist()
     return {
-        "episodes": len(lengths), "time_outs": time_outs,
+        "episodes": len(lengths),
+        "time_outs": time_outs,
         "mean_length": float(np.mean(lengths)) if lengths else None,
         "mean_length_incl_running": float(np.mean(lengths + running)),
-    }  # fmt: skip
+    }
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="python docs/results/humanoid/humanoid_episode_lengths.py",
-                                     description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python docs/results/humanoid/humanoid_episode_lengths.py", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--num-envs", type=int, default=32)
     parser.add_argument("--steps", type=int, default=120)
     args = parser.parse_args()
@@ -51,8 +54,10 @@ def main() -> None:
         for residual in (False, True):
             for action_std in (0.0, 0.05):
                 result = probe(motion_file, residual, action_std, args.num_envs, args.steps)
-                print(json.dumps({"clips": clips, "residual_actions": residual, "action_std": action_std, **result}),
-                      flush=True)  # fmt: skip
+                print(
+                    json.dumps({"clips": clips, "residual_actions": residual, "action_std": action_std, **result}),
+                    flush=True,
+                )
 
 
 if __name__ == "__main__":

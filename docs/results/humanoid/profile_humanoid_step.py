@@ -88,8 +88,9 @@ def kernel_profile(env, steps: int) -> dict[str, list]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(prog="python docs/results/humanoid/profile_humanoid_step.py",
-                                     description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python docs/results/humanoid/profile_humanoid_step.py", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--num-envs", type=int, default=64)
     parser.add_argument("--steps", type=int, default=30, help="timed graph steps")
     parser.add_argument("--profile-steps", type=int, default=8, help="profiled eager steps")
@@ -102,22 +103,33 @@ def main() -> None:
         _patch_solver(dict(key_value_option(item) for item in args.solver))
     from refpo_warp.envs.registry import make_env
 
-    env = make_env("humanoid_all", num_envs=args.num_envs, device="cpu", seed=0,
-                   **dict(key_value_option(item) for item in args.env))  # fmt: skip
+    env = make_env(
+        "humanoid_all",
+        num_envs=args.num_envs,
+        device="cpu",
+        seed=0,
+        **dict(key_value_option(item) for item in args.env),
+    )
     cpu_rate(env, 3)  # compile and capture
     rate = cpu_rate(env, args.steps)
     niter = env.sim.solver.mjw_data.solver_niter.numpy()
-    print(f"{args.num_envs} envs, solver options {args.solver or 'default'}, env options {args.env or 'default'}: "
-          f"{rate:,.0f} env steps/s (process CPU time, graph replay); solver iterations at the last substep: "
-          f"mean {niter.mean():.2f}, max {niter.max()}")  # fmt: skip
+    print(
+        f"{args.num_envs} envs, solver options {args.solver or 'default'}, env options {args.env or 'default'}: "
+        f"{rate:,.0f} env steps/s (process CPU time, graph replay); solver iterations at the last substep: "
+        f"mean {niter.mean():.2f}, max {niter.max()}"
+    )
     stats = kernel_profile(env, args.profile_steps)
     total = sum(v[1] for v in stats.values())
     n = args.profile_steps
-    print(f"kernel time {1e3 * total / n:.1f} ms per step, {sum(v[0] for v in stats.values()) / n:.0f} launches, "
-          f"{sum(v[2] for v in stats.values()) / n:,.0f} threads")  # fmt: skip
+    print(
+        f"kernel time {1e3 * total / n:.1f} ms per step, {sum(v[0] for v in stats.values()) / n:.0f} launches, "
+        f"{sum(v[2] for v in stats.values()) / n:,.0f} threads"
+    )
     for name, (launches, seconds, threads) in sorted(stats.items(), key=lambda kv: -kv[1][1])[: args.top]:
-        print(f"{1e3 * seconds / n:8.2f} ms {100 * seconds / total:5.1f} %  {launches / n:6.1f} launches "
-              f"{threads / n:10,.0f} threads  {name}")  # fmt: skip
+        print(
+            f"{1e3 * seconds / n:8.2f} ms {100 * seconds / total:5.1f} %  {launches / n:6.1f} launches "
+            f"{threads / n:10,.0f} threads  {name}"
+        )
 
 
 if __name__ == "__main__":

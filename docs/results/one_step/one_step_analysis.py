@@ -42,11 +42,26 @@ from refpo_warp.cli.guard import EXIT_USAGE, run_guarded
 from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.utils.errors import ConfigError, DataFileError, unknown
 
-OPTIONS = {"out": None, "task": "dmc_point_mass", "seed": 1, "states": 256, "noises": 16, "every": 1, "device": "cpu",
-           "intervene": None, "intervene_iterations": 5, "curves_only": False, "screen": None}  # fmt: skip
-PANELS = [("eval/return_N10", "N = 10 return", False), ("eval/return_N1", "N = 1 return", False),
-          ("Flow/one_step_error", "one-step error", True), ("Flow/one_step_ratio", "one-step ratio", True),
-          ("Flow/reflow_coef", "Reflow coefficient λ", False)]  # fmt: skip
+OPTIONS = {
+    "out": None,
+    "task": "dmc_point_mass",
+    "seed": 1,
+    "states": 256,
+    "noises": 16,
+    "every": 1,
+    "device": "cpu",
+    "intervene": None,
+    "intervene_iterations": 5,
+    "curves_only": False,
+    "screen": None,
+}
+PANELS = [
+    ("eval/return_N10", "N = 10 return", False),
+    ("eval/return_N1", "N = 1 return", False),
+    ("Flow/one_step_error", "one-step error", True),
+    ("Flow/one_step_ratio", "one-step ratio", True),
+    ("Flow/reflow_coef", "Reflow coefficient λ", False),
+]
 TAUS = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9]
 PROBE_KEYS = ["one_step_error", "policy_spread", "mean_gap", "one_step_spread"]
 PATH_ENVS, PATH_STEPS = 8, 300
@@ -167,13 +182,17 @@ def point_mass_paths(loaded: CheckpointPolicy, actor) -> dict:
 
     out = {}
     for n in (1, actor.num_flow_steps):
-        env = make_env("dmc_point_mass", num_envs=PATH_ENVS, device=loaded.env.device, seed=loaded.seed,
-                       **loaded.env_options)  # fmt: skip
+        env = make_env(
+            "dmc_point_mass", num_envs=PATH_ENVS, device=loaded.env.device, seed=loaded.seed, **loaded.env_options
+        )
         rolled = drive(actor, env, n, PATH_STEPS, seed=0)
         position = rolled["obs"][..., :2]
-        out[f"N={n}"] = {"position": position.tolist(), "distance": position.norm(dim=-1).tolist(),
-                         "abs_action": rolled["actions"].clamp(-1, 1).abs().mean(dim=-1).tolist(),
-                         "return": float(rolled["rewards"].sum(dim=0).mean())}  # fmt: skip
+        out[f"N={n}"] = {
+            "position": position.tolist(),
+            "distance": position.norm(dim=-1).tolist(),
+            "abs_action": rolled["actions"].clamp(-1, 1).abs().mean(dim=-1).tolist(),
+            "return": float(rolled["rewards"].sum(dim=0).mean()),
+        }
     return out
 
 
@@ -214,18 +233,26 @@ def screen(seeds: dict[str, dict[int, Path]], task: str, options: dict, out: Pat
     candidates = {"ReFPO (the paper's rule)": {}}
     candidates.update({m.name: dict(m.overrides) for m in sweep.methods})
     iteration, iterations = int(options["intervene"]), int(options["intervene_iterations"])
-    results = {seed: intervene(run, iteration, iterations, {**options, "seed": seed}, candidates, light=True)
-               for seed, run in sorted(runs.items())}  # fmt: skip
+    results = {
+        seed: intervene(run, iteration, iterations, {**options, "seed": seed}, candidates, light=True)
+        for seed, run in sorted(runs.items())
+    }
     write_numbers({"iteration": iteration, "iterations": iterations, "seeds": results}, out / "screen.json")
-    lines = [f"# Screen on {task}: {iterations} iterations from the iteration-{iteration} checkpoint of ReFPO",
-             "", "One-step error (on the checkpoint's N-step states) and N = 10 / N = 1 returns (32 episodes) per seed "
-             f"{', '.join(map(str, sorted(runs)))}; the checkpoint itself first.", "",
-             "| candidate | " + " | ".join(f"seed {s}: error, N=10 / N=1" for s in sorted(runs)) + " |",
-             "|---|" + "---|" * len(runs)]  # fmt: skip
+    lines = [
+        f"# Screen on {task}: {iterations} iterations from the iteration-{iteration} checkpoint of ReFPO",
+        "",
+        "One-step error (on the checkpoint's N-step states) and N = 10 / N = 1 returns (32 episodes) per seed "
+        f"{', '.join(map(str, sorted(runs)))}; the checkpoint itself first.",
+        "",
+        "| candidate | " + " | ".join(f"seed {s}: error, N=10 / N=1" for s in sorted(runs)) + " |",
+        "|---|" + "---|" * len(runs),
+    ]
 
     def cells(get) -> str:
-        return " | ".join(f"{r['states_N']['one_step_error']:.3f}, {r['returns']['N=10']:.0f} / "
-                          f"{r['returns']['N=1']:.0f}" for r in (get(results[s]) for s in sorted(runs)))  # fmt: skip
+        return " | ".join(
+            f"{r['states_N']['one_step_error']:.3f}, {r['returns']['N=10']:.0f} / {r['returns']['N=1']:.0f}"
+            for r in (get(results[s]) for s in sorted(runs))
+        )
 
     lines.append(f"| checkpoint (iteration {iteration}) | " + cells(lambda r: r["checkpoint"]) + " |")
     for name in candidates:
@@ -245,15 +272,21 @@ def evaluate_returns(actor, cfg: dict, device: str) -> dict[str, float]:
 
     out = {}
     for n in (actor.num_flow_steps, 1):
-        env = make_env(cfg["task"], num_envs=32, device=device, seed=cfg["seed"] + EVAL_SEED_OFFSET,
-                       **{**cfg["env"], **cfg["eval"]["env"]})  # fmt: skip
+        env = make_env(
+            cfg["task"],
+            num_envs=32,
+            device=device,
+            seed=cfg["seed"] + EVAL_SEED_OFFSET,
+            **{**cfg["env"], **cfg["eval"]["env"]},
+        )
         policy = make_policy(actor, n, cfg["eval"]["initial_noise"][0], cfg["eval"]["perturbation"])
         out[f"N={n}"] = float(run_episodes(policy, env)["return"].mean())
     return out
 
 
-def intervene(run: Path, iteration: int, iterations: int, options: dict, variants: dict = VARIANTS,
-              light: bool = False) -> dict:  # fmt: skip
+def intervene(
+    run: Path, iteration: int, iterations: int, options: dict, variants: dict = VARIANTS, light: bool = False
+) -> dict:
     """From checkpoint ``iteration`` of ``run``: ``iterations`` training iterations under each of ``variants``, then
     the sampler probe on fixed states (those the checkpoint's N-step and 1-step policies visit), the velocity error
     by tau on its own paths (not if ``light``), and the evaluation returns."""
@@ -281,8 +314,9 @@ def intervene(run: Path, iteration: int, iterations: int, options: dict, variant
             out[where] = sampler_probe(actor, obs, actor.num_flow_steps, base.transform, options["noises"], gen)
         if not light:
             gen = torch.Generator().manual_seed(options["seed"])
-            out["own_path_by_tau"] = velocity_error_by_tau(actor, fixed["states_N"], actor.num_flow_steps, TAUS, 8,
-                                                           gen)["own_path"]  # fmt: skip
+            out["own_path_by_tau"] = velocity_error_by_tau(
+                actor, fixed["states_N"], actor.num_flow_steps, TAUS, 8, gen
+            )["own_path"]
         out["returns"] = evaluate_returns(actor, base.cfg, device)
         return out
 
@@ -341,22 +375,35 @@ def probe_figures(task: str, seed: int, probes: dict[str, dict], out: Path) -> l
     from refpo_warp.utils.atomic_files import save_figure
 
     colors = dict(zip(sorted(probes), plt.rcParams["axes.prop_cycle"].by_key()["color"]))
-    titles = {"one_step_error": "|a_1(ε) − a_N(ε)|²", "policy_spread": "spread of a_N over ε",
-              "mean_gap": "|a_1(ε) − mean_ε a_N|²", "one_step_spread": "spread of a_1 over ε"}  # fmt: skip
+    titles = {
+        "one_step_error": "|a_1(ε) − a_N(ε)|²",
+        "policy_spread": "spread of a_N over ε",
+        "mean_gap": "|a_1(ε) − mean_ε a_N|²",
+        "one_step_spread": "spread of a_1 over ε",
+    }
     paths = []
     fig, axes = plt.subplots(1, len(PROBE_KEYS), figsize=(3.4 * len(PROBE_KEYS), 2.8))
     for label, probe in sorted(probes.items()):
         for ax, key in zip(axes, PROBE_KEYS):
             for where, style in (("states_N", "-"), ("states_1", "--")):
-                ax.plot(probe["iterations"], np.maximum(probe[where][key], 1e-6), style, color=colors[label], lw=1.3,
-                        label=label if where == "states_N" else None)  # fmt: skip
+                ax.plot(
+                    probe["iterations"],
+                    np.maximum(probe[where][key], 1e-6),
+                    style,
+                    color=colors[label],
+                    lw=1.3,
+                    label=label if where == "states_N" else None,
+                )
     for ax, key in zip(axes, PROBE_KEYS):
         readable_log_axis(ax)
         ax.set_title(titles[key], fontsize=9)
         ax.set_xlabel("iteration", fontsize=8)
     axes[0].legend(fontsize=7)
-    fig.suptitle(f"{task}, seed {seed}: the sampler at every checkpoint, on the states its N-step policy (solid) and "
-                 "its 1-step policy (dashed) visit", fontsize=10)  # fmt: skip
+    fig.suptitle(
+        f"{task}, seed {seed}: the sampler at every checkpoint, on the states its N-step policy (solid) and "
+        "its 1-step policy (dashed) visit",
+        fontsize=10,
+    )
     fig.tight_layout()
     paths.append(save_figure(fig, out / f"{task}_probe_seed{seed}.png"))
     plt.close(fig)

@@ -21,8 +21,9 @@ def _noise(rows: int, dim: int, generator: torch.Generator | None, device) -> to
 
 
 @torch.no_grad()
-def sampler_probe(actor, obs, num_steps: int, transform: str | None, noises: int = 16,
-                  generator: torch.Generator | None = None) -> dict[str, float]:  # fmt: skip
+def sampler_probe(
+    actor, obs, num_steps: int, transform: str | None, noises: int = 16, generator: torch.Generator | None = None
+) -> dict[str, float]:
     """Means over observations, ``noises`` shared noises each and action dimensions, in the env's action space:
 
     - ``one_step_error``: |a_1(eps) - a_N(eps)|^2; ``policy_spread``: the variance over noises of a_N;
@@ -53,8 +54,9 @@ def sampler_probe(actor, obs, num_steps: int, transform: str | None, noises: int
 
 
 @torch.no_grad()
-def velocity_error_by_tau(actor, obs, num_steps: int, taus: list[float], noises: int = 8,
-                          generator: torch.Generator | None = None) -> dict[str, list[float]]:  # fmt: skip
+def velocity_error_by_tau(
+    actor, obs, num_steps: int, taus: list[float], noises: int = 8, generator: torch.Generator | None = None
+) -> dict[str, list[float]]:
     """|v(x_tau, tau) - (a - eps)|^2 per flow time (mean over observations, noises and action dimensions), for the
     policy's own N-step samples a = a_N(eps_0):
 

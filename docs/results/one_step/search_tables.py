@@ -27,8 +27,11 @@ TASKS = ("dmc_cartpole_balance", "dmc_point_mass", "dmc_reacher_easy")
 def returns(path: Path, label: str, task: str) -> dict[int, tuple[float, float]]:
     """seed -> (10-step, 1-step) final returns of a method's finished runs on a task."""
     rows = csv.DictReader(path.open(encoding="utf-8"))
-    return {int(r["seed"]): (float(r["return_multi"]), float(r["return_1"])) for r in rows
-            if r["label"] == label and r["task"] == task and r["status"] == "ok"}  # fmt: skip
+    return {
+        int(r["seed"]): (float(r["return_multi"]), float(r["return_1"]))
+        for r in rows
+        if r["label"] == label and r["task"] == task and r["status"] == "ok"
+    }
 
 
 def ten_step_means(task: str) -> tuple[float, float]:
@@ -43,8 +46,10 @@ def gap(task: str) -> float:
 
 
 def full_runs() -> str:
-    lines = ["| task | seed 1: 10-step / 1-step | seed 2 | seed 3 | 1-step ≥ 0.9 × 10-step "
-             "| 10-step mean against ReFPO's |", "|---|---|---|---|---|---|"]
+    lines = [
+        "| task | seed 1: 10-step / 1-step | seed 2 | seed 3 | 1-step ≥ 0.9 × 10-step | 10-step mean against ReFPO's |",
+        "|---|---|---|---|---|---|",
+    ]
     for task in TASKS:
         runs = returns(SEARCH_RUNS, "onestep_c03", task)
         mean, refpo = ten_step_means(task)
@@ -52,7 +57,9 @@ def full_runs() -> str:
         cells = [f"{runs[s][0]:.0f} / {runs[s][1]:.0f}" if s in runs else "--" for s in (1, 2, 3)]
         change = mean / refpo - 1.0
         against = f"{mean:.0f} against {refpo:.0f}: {100 * abs(change):.1f} % {'higher' if change > 0 else 'lower'}"
-        lines.append(f"| {task.removeprefix('dmc_')} | " + " | ".join(cells) + f" | {held} of {len(runs)} | {against} |")
+        lines.append(
+            f"| {task.removeprefix('dmc_')} | " + " | ".join(cells) + f" | {held} of {len(runs)} | {against} |"
+        )
     return "\n".join(lines)
 
 

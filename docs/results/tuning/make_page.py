@@ -53,8 +53,17 @@ def _eval_rows(src: Path) -> str:
         except ValueError:
             continue
         if any(k.startswith("eval/return") for k in row):
-            keep.append(json.dumps({k: v for k, v in row.items() if k in ("iteration", "env_steps", "time_s")
-                                    or k.startswith("eval/return") or k == "reward_mean"}))  # fmt: skip
+            keep.append(
+                json.dumps(
+                    {
+                        k: v
+                        for k, v in row.items()
+                        if k in ("iteration", "env_steps", "time_s")
+                        or k.startswith("eval/return")
+                        or k == "reward_mean"
+                    }
+                )
+            )
     return "\n".join(keep) + ("\n" if keep else "")
 
 
@@ -126,8 +135,11 @@ def spaces_table() -> str:
     lines = ["| method | option | searched | first trial (its own config) |", "|---|---|---|---|"]
     for m in spec["methods"]:
         for key, dim in m["space"].items():
-            space = ("{" + ", ".join(str(c) for c in dim["choices"]) + "}" if "choices" in dim
-                     else f"[{dim['low']:g}, {dim['high']:g}]" + (" log" if dim.get("log") else ""))  # fmt: skip
+            space = (
+                "{" + ", ".join(str(c) for c in dim["choices"]) + "}"
+                if "choices" in dim
+                else f"[{dim['low']:g}, {dim['high']:g}]" + (" log" if dim.get("log") else "")
+            )
             lines.append(f"| {m['name']} | `{key}` | {space} | {_fmt(first.get((m['label'], key)))} |")
     return "\n".join(lines)
 
@@ -141,11 +153,18 @@ def trials_table() -> str:
         keys = list(m["space"])
         head = ["trial", "state", "score", "point_mass N=10 (N=1)", "reacher N=10 (N=1)", "min"]
         head += [k.rsplit(".", 1)[-1] for k in keys]
-        lines = [f"**{m['name']}** ({len(mine)} of {spec['trials']} trials)", "",
-                 "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]  # fmt: skip
+        lines = [
+            f"**{m['name']}** ({len(mine)} of {spec['trials']} trials)",
+            "",
+            "| " + " | ".join(head) + " |",
+            "|" + "---|" * len(head),
+        ]
         for r in sorted(mine, key=lambda r: int(r["trial"])):
-            cells = [r["trial"] + (" (own)" if r["enqueued"] == "True" else ""), r["state"] + _why(r),
-                     _fmt(_num(r["score"]))]  # fmt: skip
+            cells = [
+                r["trial"] + (" (own)" if r["enqueued"] == "True" else ""),
+                r["state"] + _why(r),
+                _fmt(_num(r["score"])),
+            ]
             for task in ("dmc_point_mass", "dmc_reacher_easy"):
                 multi, one = _num(r.get(f"{task}/return_multi")), _num(r.get(f"{task}/return_1"))
                 cells.append("--" if multi is None else f"{multi:.0f}" + (f" ({one:.0f})" if one is not None else ""))
@@ -175,8 +194,10 @@ def budget_table() -> str:
         minutes = sum(float(r["seconds"]) for r in mine if r.get("seconds")) / 60
         best_cell = f"{float(best['score']):.3f} ({best['trial']})" if best else "--"
         own_cell = f"{float(own['score']):.3f}" if own else "--"
-        lines.append(f"| {m['name']} | {len(mine)} of {spec['trials']} | {' / '.join(map(str, states))} | "
-                     f"{minutes:.0f} | {best_cell} | {own_cell} |")  # fmt: skip
+        lines.append(
+            f"| {m['name']} | {len(mine)} of {spec['trials']} | {' / '.join(map(str, states))} | "
+            f"{minutes:.0f} | {best_cell} | {own_cell} |"
+        )
     return "\n".join(lines)
 
 
@@ -209,7 +230,7 @@ def fresh_table() -> str:
 
     fresh_csv = FRESH / "runs.csv"
     if not fresh_csv.exists():
-        return "Not run yet: the study has to finish first (see \"Resuming\")."
+        return 'Not run yet: the study has to finish first (see "Resuming").'
     reference = yaml.safe_load(TUNING_FILE.read_text())["objective"]["reference"]
     ppo_committed = run_returns(COMMITTED["ppo"][0], "ppo")
     scale = {t: reference.get(t) or statistics.mean(v[0] for v in ppo_committed[t].values()) for t in TASKS}
@@ -234,17 +255,22 @@ def fresh_table() -> str:
         cells = [f"{e.point:.0f} [{e.low:.0f}, {e.high:.0f}]" for e in per_task]
         iqm = agg[key]["iqm"]
         values = ("paper's" if label != "fpo_pp" else "authors'") if kind == "paper" else "tuned"
-        lines.append(f"| {NAMES[label]} | {values}, seeds {seeds[0]}-{seeds[-1]} | " + " | ".join(cells)
-                     + f" | {iqm.point:.2f} [{iqm.low:.2f}, {iqm.high:.2f}] |")  # fmt: skip
+        lines.append(
+            f"| {NAMES[label]} | {values}, seeds {seeds[0]}-{seeds[-1]} | "
+            + " | ".join(cells)
+            + f" | {iqm.point:.2f} [{iqm.low:.2f}, {iqm.high:.2f}] |"
+        )
     lines.append("")
     ppo = next(((k, p) for k, _, p in rows if k == "ppo/tuned"), None)
     for key, runs, per_task in rows:
         if key.endswith("/tuned") and ppo is not None and key != ppo[0]:
             reach = sum(e.overlaps_or_above(q) for e, q in zip(per_task, ppo[1]))
             poi = improvement(scores[key], scores[ppo[0]])
-            lines.append(f"- {NAMES[key.split('/')[0]]} (tuned) against PPO (tuned): its interval reaches PPO's on "
-                         f"{reach} of {len(TASKS)} tasks; P(improvement) {poi.point:.2f} [{poi.low:.2f}, "
-                         f"{poi.high:.2f}]")  # fmt: skip
+            lines.append(
+                f"- {NAMES[key.split('/')[0]]} (tuned) against PPO (tuned): its interval reaches PPO's on "
+                f"{reach} of {len(TASKS)} tasks; P(improvement) {poi.point:.2f} [{poi.low:.2f}, "
+                f"{poi.high:.2f}]"
+            )
     onestep = run_returns(fresh_csv, "refpo_onestep")
     pairs = [(t, s, v) for t in TASKS for s, v in sorted(onestep.get(t, {}).items())]
     held = sum(v[1] is not None and v[1] >= 0.9 * v[0] for _, _, v in pairs)
@@ -292,8 +318,14 @@ def budget_curves() -> str:
 
 
 # ------------------------------------------------------------------------------------------------ page
-SECTIONS = {"spaces": spaces_table, "trials": trials_table, "budget": budget_table, "chosen": chosen_table,
-            "fresh": fresh_table, "curves": budget_curves}  # fmt: skip
+SECTIONS = {
+    "spaces": spaces_table,
+    "trials": trials_table,
+    "budget": budget_table,
+    "chosen": chosen_table,
+    "fresh": fresh_table,
+    "curves": budget_curves,
+}
 
 
 def write_page() -> None:

@@ -11,7 +11,15 @@ from refpo_warp.integrations.mjlab.cfg import FlowActorCfg, ReFPOAlgorithmCfg, r
 from refpo_warp.integrations.mjlab.runner import refpo_runner_cls
 from refpo_warp.integrations.mjlab.tasks import REFPO_SUFFIX, VARIANT_BASES, register_refpo_variant, register_variants
 
-__all__ = ["REFPO_SUFFIX", "VARIANT_BASES", "FlowActorCfg", "ReFPOAlgorithmCfg", "refpo_runner_cfg",
-           "refpo_runner_cls", "register_refpo_variant", "register_variants"]  # fmt: skip
+__all__ = [
+    "REFPO_SUFFIX",
+    "VARIANT_BASES",
+    "FlowActorCfg",
+    "ReFPOAlgorithmCfg",
+    "refpo_runner_cfg",
+    "refpo_runner_cls",
+    "register_refpo_variant",
+    "register_variants",
+]
 
 register_variants()

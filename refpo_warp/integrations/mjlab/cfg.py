@@ -60,14 +60,20 @@ _ACTOR_OPTIONS = _own_options(ACTOR_CLASS, "actor", RslRlModelCfg)
 _ALGORITHM_OPTIONS = _own_options(ALGORITHM_CLASS, "algorithm", RslRlPpoAlgorithmCfg)
 
 FlowActorCfg = _config_class(
-    "FlowActorCfg", RslRlModelCfg, ACTOR_CLASS, _ACTOR_OPTIONS,
+    "FlowActorCfg",
+    RslRlModelCfg,
+    ACTOR_CLASS,
+    _ACTOR_OPTIONS,
     "mjlab's model config for refpo_warp.models:FlowActor: its constructor's options and defaults.",
-)  # fmt: skip
+)
 ReFPOAlgorithmCfg = _config_class(
-    "ReFPOAlgorithmCfg", RslRlPpoAlgorithmCfg, ALGORITHM_CLASS, _ALGORITHM_OPTIONS,
+    "ReFPOAlgorithmCfg",
+    RslRlPpoAlgorithmCfg,
+    ALGORITHM_CLASS,
+    _ALGORITHM_OPTIONS,
     "mjlab's algorithm config for refpo_warp.algorithms:ReFPO: its constructor's options and defaults (a fixed "
     "learning rate, no entropy term, ReFPO's clip); rsl_rl's other PPO keys as mjlab's.",
-)  # fmt: skip
+)
 
 # The PPO keys whose values ReFPO declares itself (clip_param, learning_rate, schedule, entropy_coef,
 # use_clipped_value_loss): a variant takes ReFPO's. Why: they are tuned to the CFM proxy ratio, and PPO's adaptive
@@ -84,8 +90,9 @@ def algo_deltas(algo: str) -> dict:
 
     chain = algo_files(algo, config_path())
     if chain[0][0] != "refpo":
-        raise ValueError(f"algo '{algo}' does not derive from refpo: an mjlab ReFPO variant takes a configuration "
-                         f"of ReFPO's")
+        raise ValueError(
+            f"algo '{algo}' does not derive from refpo: an mjlab ReFPO variant takes a configuration of ReFPO's"
+        )
     deltas: dict = {}
     for _, _, data in chain[1:]:
         deltas.update({k: v for k, v in (data.get("algorithm") or {}).items() if k != "class_name"})
@@ -105,10 +112,18 @@ def refpo_runner_cfg(ppo_cfg: RslRlOnPolicyRunnerCfg, algo: str = "refpo") -> Rs
             "FlowActor is an MLP over flat observations; the task's actor sets "
             f"cnn_cfg={actor.cnn_cfg!r}, rnn_type={actor.rnn_type!r} (valid for a ReFPO variant: both None)"
         )
-    flow_actor = FlowActorCfg(hidden_dims=tuple(actor.hidden_dims), activation=actor.activation,
-                              obs_normalization=actor.obs_normalization)  # fmt: skip
-    task_keys = {f.name: getattr(ppo_cfg.algorithm, f.name) for f in fields(RslRlPpoAlgorithmCfg)
-                 if f.name != "class_name" and f.name not in REFPO_PPO_KEYS}  # fmt: skip
+    flow_actor = FlowActorCfg(
+        hidden_dims=tuple(actor.hidden_dims), activation=actor.activation, obs_normalization=actor.obs_normalization
+    )
+    task_keys = {
+        f.name: getattr(ppo_cfg.algorithm, f.name)
+        for f in fields(RslRlPpoAlgorithmCfg)
+        if f.name != "class_name" and f.name not in REFPO_PPO_KEYS
+    }
     suffix = EXPERIMENT_SUFFIX + ("" if algo == "refpo" else algo.removeprefix("refpo"))
-    return replace(ppo_cfg, actor=flow_actor, algorithm=ReFPOAlgorithmCfg(**task_keys, **algo_deltas(algo)),
-                   experiment_name=ppo_cfg.experiment_name + suffix)  # fmt: skip
+    return replace(
+        ppo_cfg,
+        actor=flow_actor,
+        algorithm=ReFPOAlgorithmCfg(**task_keys, **algo_deltas(algo)),
+        experiment_name=ppo_cfg.experiment_name + suffix,
+    )

@@ -36,8 +36,16 @@ OPTIONS = {"num_envs": 64, "num_steps": 200, "seed": 0, "flow_steps": 0}  # flow
 PROTOCOLS = ["zero"]  # the deterministic policy mjlab's play runs
 
 
-def evaluate(task_id: str, checkpoint: str, num_envs: int = 64, num_steps: int = 200, seed: int = 0,
-             device: str = "cpu", initial_noise: str = "zero", flow_steps: int = 0) -> dict[str, float]:  # fmt: skip
+def evaluate(
+    task_id: str,
+    checkpoint: str,
+    num_envs: int = 64,
+    num_steps: int = 200,
+    seed: int = 0,
+    device: str = "cpu",
+    initial_noise: str = "zero",
+    flow_steps: int = 0,
+) -> dict[str, float]:
     """``{"reward_rate": mean reward per simulated second, "num_envs", "num_steps"}`` of ``checkpoint``'s policy
     (a flow's initial noise ``zero`` or ``random`` and its Euler steps, ``flow_steps`` or 0 for its own; a Gaussian
     acts by its mean either way)."""
@@ -69,8 +77,9 @@ def rates(task_id: str, checkpoint: str, protocols: list[str], **options) -> dic
     """``{"reward_rate": ...}`` for one protocol, ``{"reward_rate/random": ..., "reward_rate/zero": ...}`` for more."""
     if len(protocols) == 1:
         return {"reward_rate": evaluate(task_id, checkpoint, initial_noise=protocols[0], **options)["reward_rate"]}
-    return {f"reward_rate/{p}": evaluate(task_id, checkpoint, initial_noise=p, **options)["reward_rate"]
-            for p in protocols}  # fmt: skip
+    return {
+        f"reward_rate/{p}": evaluate(task_id, checkpoint, initial_noise=p, **options)["reward_rate"] for p in protocols
+    }
 
 
 def summarize_run(task_id: str, run_dir: str | Path, protocols: list[str] = PROTOCOLS, **options) -> dict:
@@ -111,8 +120,9 @@ def main(argv: list[str]) -> int:
             else:
                 options[key] = int(value)
     except ConfigError as err:
-        print(f"error: {err} (initial_noise takes {', '.join(INITIAL_NOISE)} or both, comma-separated)",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"error: {err} (initial_noise takes {', '.join(INITIAL_NOISE)} or both, comma-separated)", file=sys.stderr
+        )
         return 2
     task_id, target = positional
     run = Path(target).is_dir()

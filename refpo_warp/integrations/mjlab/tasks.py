@@ -50,6 +50,9 @@ def register_variants() -> list[str]:
     """Register the variants of ``VARIANT_BASES`` that this mjlab has and that are not registered yet (mjlab may
     load the entry point twice); returns the ids registered now."""
     registered = set(list_tasks())
-    return [register_refpo_variant(base, base + suffix, algo) for base in VARIANT_BASES
-            for suffix, algo in CONFIGURATIONS.items()
-            if base in registered and base + suffix not in registered]  # fmt: skip
+    return [
+        register_refpo_variant(base, base + suffix, algo)
+        for base in VARIANT_BASES
+        for suffix, algo in CONFIGURATIONS.items()
+        if base in registered and base + suffix not in registered
+    ]

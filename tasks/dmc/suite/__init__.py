@@ -31,8 +31,11 @@ def task_class(name: str) -> type:
     from refpo_warp.tasks.dmc.task import DmcTask
 
     module = importlib.import_module(f"{__name__}.{name}")
-    found = [c for c in vars(module).values()
-             if isinstance(c, type) and issubclass(c, DmcTask) and c.__module__ == module.__name__]  # fmt: skip
+    found = [
+        c
+        for c in vars(module).values()
+        if isinstance(c, type) and issubclass(c, DmcTask) and c.__module__ == module.__name__
+    ]
     if len(found) != 1:
         raise TypeError(f"{module.__file__} must define exactly one DmcTask subclass, found {len(found)}")
     return found[0]

@@ -25,8 +25,7 @@ def ball_in_cup_reward(body_q: wp.array2d(dtype=wp.transform), cup: int, ball: i
 
 
 @wp.kernel
-def ball_in_cup_obs(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float),
-                    obs: wp.array2d(dtype=float)):  # fmt: skip
+def ball_in_cup_obs(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float), obs: wp.array2d(dtype=float)):
     i = wp.tid()
     for j in range(4):
         obs[i, j] = joint_q[i, j]

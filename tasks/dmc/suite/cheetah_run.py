@@ -46,8 +46,9 @@ reset_from_bank = reset_kernel(draw_from_bank, Bank)
 
 
 @wp.kernel
-def cheetah_reward(body_qd: wp.array2d(dtype=wp.spatial_vector), body_mass: wp.array2d(dtype=float),
-                   rewards: wp.array(dtype=float)):  # fmt: skip
+def cheetah_reward(
+    body_qd: wp.array2d(dtype=wp.spatial_vector), body_mass: wp.array2d(dtype=float), rewards: wp.array(dtype=float)
+):
     i = wp.tid()
     speed = world_com_velocity(body_qd, body_mass, i)[0]
     rewards[i] = tolerance(speed, RUN_SPEED, wp.inf, RUN_SPEED, LINEAR, 0.0)

@@ -144,15 +144,33 @@ class FingerSpin(DmcTask):
         d, m = self.sim.solver.mjw_data, self.sim.solver.mjw_model
         wp.launch(clear_touch, dim=self.touch.shape, inputs=[self.touch], device=self.device)
         con = d.contact
-        wp.launch(accumulate_touch, dim=con.pos.shape[0],
-                  inputs=[d.nacon, con.pos, con.frame, con.dim, con.geom, con.efc_address, con.worldid,
-                          d.efc.force, m.geom_bodyid, d.xpos, d.xmat, self.pyramidal, self.mj_distal, self.touch],
-                  device=self.device)  # fmt: skip
+        wp.launch(
+            accumulate_touch,
+            dim=con.pos.shape[0],
+            inputs=[
+                d.nacon,
+                con.pos,
+                con.frame,
+                con.dim,
+                con.geom,
+                con.efc_address,
+                con.worldid,
+                d.efc.force,
+                m.geom_bodyid,
+                d.xpos,
+                d.xmat,
+                self.pyramidal,
+                self.mj_distal,
+                self.touch,
+            ],
+            device=self.device,
+        )
 
     def reward(self, rewards) -> None:
         self.launch(finger_reward, [self.views.joint_qd, rewards])
 
     def observe(self, obs, reset_mask) -> None:
         v = self.views
-        self.launch(finger_obs, [v.joint_q, v.joint_qd, v.coord_ref, v.body_q, self.spinner, self.touch, reset_mask,
-                                 obs])  # fmt: skip
+        self.launch(
+            finger_obs, [v.joint_q, v.joint_qd, v.coord_ref, v.body_q, self.spinner, self.touch, reset_mask, obs]
+        )

@@ -26,9 +26,11 @@ def pendulum_reward(body_q: wp.array2d(dtype=wp.transform), pole: int, rewards: 
 
 @wp.kernel
 def pendulum_obs(
-    joint_qd: wp.array2d(dtype=float), body_q: wp.array2d(dtype=wp.transform), pole: int,
+    joint_qd: wp.array2d(dtype=float),
+    body_q: wp.array2d(dtype=wp.transform),
+    pole: int,
     obs: wp.array2d(dtype=float),
-):  # fmt: skip
+):
     i = wp.tid()
     r = wp.quat_to_matrix(wp.transform_get_rotation(body_q[i, pole]))
     obs[i, 0] = r[2, 2]

@@ -101,8 +101,9 @@ class ReacherEasy(DmcTask):
         self.launch_reset(reset_reacher, mask, self.reset_params)
 
     def reward(self, rewards) -> None:
-        self.launch(reacher_reward, [self.views.body_q, self.target, self.finger, TARGET_RADIUS + FINGER_RADIUS,
-                                     rewards])  # fmt: skip
+        self.launch(
+            reacher_reward, [self.views.body_q, self.target, self.finger, TARGET_RADIUS + FINGER_RADIUS, rewards]
+        )
 
     def observe(self, obs, reset_mask) -> None:
         v = self.views

@@ -22,8 +22,21 @@ TRAIN = str(Path(sys.executable).parent / "train")
 
 
 def train(task: str, log_root: Path, *extra: str) -> tuple[str, Path]:
-    cmd = [TRAIN, task, "--env.scene.num-envs", "4", "--agent.max-iterations", "1", "--agent.logger", "tensorboard",
-           "--gpu-ids", "None", "--log-root", str(log_root), *extra]  # fmt: skip
+    cmd = [
+        TRAIN,
+        task,
+        "--env.scene.num-envs",
+        "4",
+        "--agent.max-iterations",
+        "1",
+        "--agent.logger",
+        "tensorboard",
+        "--gpu-ids",
+        "None",
+        "--log-root",
+        str(log_root),
+        *extra,
+    ]
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=3000, check=False)
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
     (experiment,) = log_root.iterdir()
@@ -71,8 +84,9 @@ def test_g1_tracking_variant_trains_on_a_motion_file_and_exports(tmp_path):
 
     motion = tmp_path / "standing.npz"
     standing_motion(motion)
-    printed, run_dir = train("Mjlab-Tracking-Flat-Unitree-G1-ReFPO", tmp_path / "logs",
-                             "--env.commands.motion.motion-file", str(motion))  # fmt: skip
+    printed, run_dir = train(
+        "Mjlab-Tracking-Flat-Unitree-G1-ReFPO", tmp_path / "logs", "--env.commands.motion.motion-file", str(motion)
+    )
     assert (run_dir / "model_0.pt").is_file() and "Flow/ratio_mean:" in printed
     assert "ONNX export failed" not in printed, printed[-2000:]
     model = onnx.load(run_dir / f"{run_dir.name}.onnx")

@@ -33,8 +33,22 @@ def script(name: str) -> str:
 def trained(tmp_path_factory):
     """``train`` for 2 iterations on 16 envs: (its output, its run directory)."""
     root = tmp_path_factory.mktemp("logs")
-    cmd = [script("train"), TASK, "--env.scene.num-envs", "16", "--agent.max-iterations", "2", "--agent.logger",
-           "tensorboard", "--gpu-ids", "None", "--agent.run-name", "ci", "--log-root", str(root)]  # fmt: skip
+    cmd = [
+        script("train"),
+        TASK,
+        "--env.scene.num-envs",
+        "16",
+        "--agent.max-iterations",
+        "2",
+        "--agent.logger",
+        "tensorboard",
+        "--gpu-ids",
+        "None",
+        "--agent.run-name",
+        "ci",
+        "--log-root",
+        str(root),
+    ]
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=600, check=False)
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
     (run_dir,) = (root / "cartpole_refpo").iterdir()
@@ -67,8 +81,20 @@ def test_play_records_a_video_of_the_checkpoint(trained):
 
     _, run_dir = trained
     video = run_dir / "videos" / "play" / "rl-video-step-0.mp4"
-    cmd = [script("play"), TASK, "--agent", "trained", "--checkpoint-file", str(run_dir / "model_1.pt"),
-           "--video", "True", "--video-length", str(VIDEO_FRAMES), "--num-envs", "1"]  # fmt: skip
+    cmd = [
+        script("play"),
+        TASK,
+        "--agent",
+        "trained",
+        "--checkpoint-file",
+        str(run_dir / "model_1.pt"),
+        "--video",
+        "True",
+        "--video-length",
+        str(VIDEO_FRAMES),
+        "--num-envs",
+        "1",
+    ]
     env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
     with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env) as play:
         deadline = time.monotonic() + 300
@@ -115,8 +141,9 @@ def test_evaluate_reports_both_initial_noise_protocols(trained):
     _, run_dir = trained
     base = [TASK, str(run_dir / "model_1.pt"), "num_envs=4", "num_steps=20"]
     module = [sys.executable, "-m", "refpo_warp.integrations.mjlab.evaluate"]
-    rates = printed_json(subprocess.run([*module, *base, "initial_noise=random,zero"], capture_output=True, text=True,
-                                        timeout=600))  # fmt: skip
+    rates = printed_json(
+        subprocess.run([*module, *base, "initial_noise=random,zero"], capture_output=True, text=True, timeout=600)
+    )
     zero = printed_json(evaluate_here(*base))
     assert set(rates) == {"reward_rate/random", "reward_rate/zero"} and rates["reward_rate/zero"] == zero["reward_rate"]
     assert rates["reward_rate/random"] != rates["reward_rate/zero"]  # random x_0 is not the deterministic policy

@@ -18,8 +18,13 @@ from refpo_warp.integrations.mjlab import REFPO_SUFFIX, VARIANT_BASES, refpo_run
 from refpo_warp.integrations.mjlab.cfg import ACTOR_CLASS, ALGORITHM_CLASS, REFPO_PPO_KEYS, refpo_runner_cfg
 from refpo_warp.integrations.statistics_logger import StatisticsRunnerMixin
 
-REQUIRED = ["Mjlab-Cartpole-Balance", "Mjlab-Cartpole-Swingup", "Mjlab-Velocity-Flat-Unitree-G1",
-            "Mjlab-Velocity-Flat-Unitree-Go1", "Mjlab-Tracking-Flat-Unitree-G1"]  # fmt: skip
+REQUIRED = [
+    "Mjlab-Cartpole-Balance",
+    "Mjlab-Cartpole-Swingup",
+    "Mjlab-Velocity-Flat-Unitree-G1",
+    "Mjlab-Velocity-Flat-Unitree-Go1",
+    "Mjlab-Tracking-Flat-Unitree-G1",
+]
 
 
 def test_the_entry_point_registers_the_variants():
@@ -46,7 +51,10 @@ def test_a_variant_is_the_task_with_a_flow_actor_and_refpo(base):
     ppo, refpo = load_rl_cfg(base), load_rl_cfg(base + REFPO_SUFFIX)
     assert refpo.actor.class_name == ACTOR_CLASS and refpo.algorithm.class_name == ALGORITHM_CLASS
     assert (refpo.actor.hidden_dims, refpo.actor.activation, refpo.actor.obs_normalization) == (
-        tuple(ppo.actor.hidden_dims), ppo.actor.activation, ppo.actor.obs_normalization)  # fmt: skip
+        tuple(ppo.actor.hidden_dims),
+        ppo.actor.activation,
+        ppo.actor.obs_normalization,
+    )
     assert refpo.actor.distribution_cfg is None and refpo.critic == ppo.critic
     defaults = class_defaults(ALGORITHM_CLASS)
     assert set(REFPO_PPO_KEYS) == {"clip_param", "learning_rate", "schedule", "entropy_coef", "use_clipped_value_loss"}
@@ -60,7 +68,10 @@ def test_a_variant_is_the_task_with_a_flow_actor_and_refpo(base):
     assert refpo.algorithm.num_mc_samples == defaults["num_mc_samples"][0]
     assert refpo.actor.num_flow_steps == class_defaults(ACTOR_CLASS)["num_flow_steps"][0]
     assert (refpo.num_steps_per_env, refpo.max_iterations, refpo.obs_groups) == (
-        ppo.num_steps_per_env, ppo.max_iterations, ppo.obs_groups)  # fmt: skip
+        ppo.num_steps_per_env,
+        ppo.max_iterations,
+        ppo.obs_groups,
+    )
     assert refpo.experiment_name == ppo.experiment_name + "_refpo"
     runner, base_runner = load_runner_cls(base + REFPO_SUFFIX), load_runner_cls(base) or MjlabOnPolicyRunner
     assert issubclass(runner, StatisticsRunnerMixin) and issubclass(runner, base_runner)
@@ -79,18 +90,31 @@ def test_train_flags_reach_refpo_and_the_flow_actor():
     from mjlab.scripts.train import TrainConfig
 
     task = "Mjlab-Cartpole-Balance" + REFPO_SUFFIX
-    args = tyro.cli(TrainConfig, default=TrainConfig.from_task(task), config=__import__("mjlab").TYRO_FLAGS,
-                    args=["--agent.algorithm.reflow-coef", "0.1", "--agent.actor.num-flow-steps", "3",
-                          "--agent.algorithm.tau-sampling", "discrete"])  # fmt: skip
+    args = tyro.cli(
+        TrainConfig,
+        default=TrainConfig.from_task(task),
+        config=__import__("mjlab").TYRO_FLAGS,
+        args=[
+            "--agent.algorithm.reflow-coef",
+            "0.1",
+            "--agent.actor.num-flow-steps",
+            "3",
+            "--agent.algorithm.tau-sampling",
+            "discrete",
+        ],
+    )
     agent = asdict(args.agent)
     assert agent["algorithm"]["reflow_coef"] == 0.1 and agent["algorithm"]["tau_sampling"] == "discrete"
     assert agent["actor"]["num_flow_steps"] == 3 and agent["algorithm"]["schedule"] == "fixed"
 
 
 def test_a_users_task_gets_a_variant_and_bad_ones_are_named():
-    register_mjlab_task("Test-User-Cartpole", env_cfg=load_env_cfg("Mjlab-Cartpole-Balance"),
-                        play_env_cfg=load_env_cfg("Mjlab-Cartpole-Balance", play=True),
-                        rl_cfg=load_rl_cfg("Mjlab-Cartpole-Balance"))  # fmt: skip
+    register_mjlab_task(
+        "Test-User-Cartpole",
+        env_cfg=load_env_cfg("Mjlab-Cartpole-Balance"),
+        play_env_cfg=load_env_cfg("Mjlab-Cartpole-Balance", play=True),
+        rl_cfg=load_rl_cfg("Mjlab-Cartpole-Balance"),
+    )
     assert register_refpo_variant("Test-User-Cartpole") == "Test-User-Cartpole-ReFPO"
     assert load_rl_cfg("Test-User-Cartpole-ReFPO").algorithm.class_name == ALGORITHM_CLASS
     assert load_runner_cls("Test-User-Cartpole-ReFPO") is refpo_runner_cls(None)

@@ -43,8 +43,14 @@ def _xmat(m, d, body):
 def cartpole(m, d, ctrl, extra):
     r = _xmat(m, d, "pole_1")
     obs = [d.qpos[0], r[2, 2], r[0, 2], d.qvel[0], d.qvel[1]]
-    reward = ((r[2, 2] + 1) / 2) * (1 + tol(d.qpos[0], 0, 0, 2.0)) / 2 * small_control(ctrl) * (
-        1 + tol(d.qvel[1], 0, 0, 5.0)) / 2  # fmt: skip
+    reward = (
+        ((r[2, 2] + 1) / 2)
+        * (1 + tol(d.qpos[0], 0, 0, 2.0))
+        / 2
+        * small_control(ctrl)
+        * (1 + tol(d.qvel[1], 0, 0, 5.0))
+        / 2
+    )
     return obs, reward
 
 
@@ -103,7 +109,14 @@ def walker(m, d, ctrl, extra):
 
 
 REFERENCES = {
-    "cartpole_balance": cartpole, "cartpole_swingup": cartpole, "pendulum_swingup": pendulum,
-    "point_mass": point_mass, "ball_in_cup": ball_in_cup, "finger_spin": finger_spin, "reacher_easy": reacher_easy,
-    "acrobot_swingup": acrobot, "cheetah_run": cheetah, "walker_walk": walker,
-}  # fmt: skip
+    "cartpole_balance": cartpole,
+    "cartpole_swingup": cartpole,
+    "pendulum_swingup": pendulum,
+    "point_mass": point_mass,
+    "ball_in_cup": ball_in_cup,
+    "finger_spin": finger_spin,
+    "reacher_easy": reacher_easy,
+    "acrobot_swingup": acrobot,
+    "cheetah_run": cheetah,
+    "walker_walk": walker,
+}

@@ -14,11 +14,17 @@ N = 4
 TASKS = tuple(suite.task_names())  # every module of tasks/dmc/suite/: a new task must be added below too
 # Playground observation size, action size and control period (ctrl_dt) of every task.
 SPACES = {
-    "cartpole_balance": (5, 1, 0.01), "cartpole_swingup": (5, 1, 0.01), "pendulum_swingup": (3, 1, 0.02),
-    "point_mass": (4, 2, 0.02), "ball_in_cup": (8, 2, 0.02), "finger_spin": (9, 2, 0.02),
-    "reacher_easy": (6, 2, 0.02), "acrobot_swingup": (6, 1, 0.01), "cheetah_run": (17, 6, 0.01),
+    "cartpole_balance": (5, 1, 0.01),
+    "cartpole_swingup": (5, 1, 0.01),
+    "pendulum_swingup": (3, 1, 0.02),
+    "point_mass": (4, 2, 0.02),
+    "ball_in_cup": (8, 2, 0.02),
+    "finger_spin": (9, 2, 0.02),
+    "reacher_easy": (6, 2, 0.02),
+    "acrobot_swingup": (6, 1, 0.01),
+    "cheetah_run": (17, 6, 0.01),
     "walker_walk": (24, 6, 0.025),
-}  # fmt: skip
+}
 _ENVS = {}
 
 
@@ -66,7 +72,9 @@ HAND_WORKED = {
         ((0.0, math.pi), (0.0, 0.0), (0.0,), 0.0),  # hanging down: upright 0
     ],
     "pendulum_swingup": [  # 1 within 8 degrees of upright
-        ((0.1,), (0.0,), (0.0,), 1.0), ((-0.13,), (3.0,), (1.0,), 1.0), ((0.15,), (0.0,), (0.0,), 0.0),
+        ((0.1,), (0.0,), (0.0,), 1.0),
+        ((-0.13,), (3.0,), (1.0,), 1.0),
+        ((0.15,), (0.0,), (0.0,), 0.0),
         ((math.pi,), (0.0,), (0.0,), 0.0),
     ],
     "point_mass": [
@@ -146,9 +154,16 @@ RESET_RANGES = {
     "finger_spin": {0: (-110 * DEG, 110 * DEG), 1: (-110 * DEG, 110 * DEG), 2: (-math.pi, math.pi)},
     "reacher_easy": {0: (-math.pi, math.pi), 1: (-160 * DEG, 160 * DEG)},
     "acrobot_swingup": {0: (-math.pi, math.pi), 1: (-math.pi, math.pi)},
-    "walker_walk": {2: (-math.pi, math.pi), 3: (-20 * DEG, 100 * DEG), 4: (-150 * DEG, 0.0), 5: (-45 * DEG, 45 * DEG),
-                    6: (-20 * DEG, 100 * DEG), 7: (-150 * DEG, 0.0), 8: (-45 * DEG, 45 * DEG)},
-}  # fmt: skip
+    "walker_walk": {
+        2: (-math.pi, math.pi),
+        3: (-20 * DEG, 100 * DEG),
+        4: (-150 * DEG, 0.0),
+        5: (-45 * DEG, 45 * DEG),
+        6: (-20 * DEG, 100 * DEG),
+        7: (-150 * DEG, 0.0),
+        8: (-45 * DEG, 45 * DEG),
+    },
+}
 
 
 @pytest.mark.parametrize("task", sorted(RESET_RANGES))
@@ -243,5 +258,6 @@ def test_tanh_squashing_sends_tanh_of_the_stored_action_to_the_env():
     qpos, qvel = torch.zeros(N, 2), torch.zeros(N, 2)
     for env in (squashed, clipped):
         env.set_state(qpos, qvel)
-    np.testing.assert_allclose(squashed.compute_rewards(actions).numpy(),
-                               clipped.compute_rewards(torch.tanh(actions)).numpy(), rtol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        squashed.compute_rewards(actions).numpy(), clipped.compute_rewards(torch.tanh(actions)).numpy(), rtol=1e-6
+    )

@@ -25,8 +25,14 @@ from refpo_warp.tasks.dmc import suite
 
 N = 4
 TASKS = tuple(suite.task_names())  # every module of tasks/dmc/suite/: a new task must be added below too
-UNCONSTRAINED = ("cartpole_balance", "cartpole_swingup", "pendulum_swingup", "point_mass", "reacher_easy",
-                 "acrobot_swingup")  # fmt: skip
+UNCONSTRAINED = (
+    "cartpole_balance",
+    "cartpole_swingup",
+    "pendulum_swingup",
+    "point_mass",
+    "reacher_easy",
+    "acrobot_swingup",
+)
 CONVERGED = {"iterations": 100, "ls_iterations": 50}
 
 
@@ -102,8 +108,9 @@ def test_finger_touch_sensors_match_mujoco():
     """Fingertip pressed into the spinner: the touch observations equal log(1 + MuJoCo's touch sensor data)."""
     env, model = _pair("finger_spin", converged=True)
     # States (MuJoCo qpos) where a full push of both motors drives the fingertip into the spinner.
-    qpos = np.array([[0.4385, -0.442, 3.1241], [-0.2841, 0.4568, 3.1108], [-0.3243, 0.891, 1.3266],
-                     [0.148, -0.2175, 2.7082]])  # fmt: skip
+    qpos = np.array(
+        [[0.4385, -0.442, 3.1241], [-0.2841, 0.4568, 3.1108], [-0.3243, 0.891, 1.3266], [0.148, -0.2175, 2.7082]]
+    )
     env.set_state(torch.tensor(qpos, dtype=torch.float32), torch.zeros(N, 3))
     obs, _, _, _ = env.step(torch.ones(N, 2))
     touch = []

@@ -48,20 +48,33 @@ def numpy_observation(pos, rot, vel, omega, rpos, rrot, rvel, romega):
     """The reference implementation's self + task observation for one env (arrays (24, .))."""
     h = np.broadcast_to(heading_inverse(rot[0]), (24, 4))
     hq = quat_conjugate(h)
-    self_obs = [pos[0, 2:3], quat_rotate(h[1:], pos[1:] - pos[0]).ravel(), tan_norm(quat_mul(h, rot)).ravel(),
-                quat_rotate(h, vel).ravel(), quat_rotate(h, omega).ravel()]  # fmt: skip
+    self_obs = [
+        pos[0, 2:3],
+        quat_rotate(h[1:], pos[1:] - pos[0]).ravel(),
+        tan_norm(quat_mul(h, rot)).ravel(),
+        quat_rotate(h, vel).ravel(),
+        quat_rotate(h, omega).ravel(),
+    ]
     diff_rot = quat_mul(quat_mul(h, quat_mul(rrot, quat_conjugate(rot))), hq)
-    task = [quat_rotate(h, rpos - pos).ravel(), tan_norm(diff_rot).ravel(), quat_rotate(h, rvel - vel).ravel(),
-            quat_rotate(h, romega - omega).ravel(), quat_rotate(h, rpos - pos[0]).ravel(),
-            tan_norm(quat_mul(h, rrot)).ravel()]  # fmt: skip
+    task = [
+        quat_rotate(h, rpos - pos).ravel(),
+        tan_norm(diff_rot).ravel(),
+        quat_rotate(h, rvel - vel).ravel(),
+        quat_rotate(h, romega - omega).ravel(),
+        quat_rotate(h, rpos - pos[0]).ravel(),
+        tan_norm(quat_mul(h, rrot)).ravel(),
+    ]
     return np.concatenate(self_obs + task)
 
 
 def numpy_imitation_reward(pos, rot, vel, omega, rpos, rrot, rvel, romega):
     angle = np.linalg.norm(quat_to_axis_angle(quat_mul(rrot, quat_conjugate(rot))), axis=-1)
-    return (0.5 * np.exp(-100 * np.mean((rpos - pos) ** 2)) + 0.3 * np.exp(-10 * np.mean(angle**2))
-            + 0.1 * np.exp(-0.1 * np.mean((rvel - vel) ** 2))
-            + 0.1 * np.exp(-0.1 * np.mean((romega - omega) ** 2)))
+    return (
+        0.5 * np.exp(-100 * np.mean((rpos - pos) ** 2))
+        + 0.3 * np.exp(-10 * np.mean(angle**2))
+        + 0.1 * np.exp(-0.1 * np.mean((rvel - vel) ** 2))
+        + 0.1 * np.exp(-0.1 * np.mean((romega - omega) ** 2))
+    )
 
 
 def set_sim_to_reference(env, ref):
@@ -72,9 +85,13 @@ def set_sim_to_reference(env, ref):
 
     s = env.sim
     all_envs = wp.array(np.ones(env.num_envs, bool), dtype=wp.bool, device="cpu")
-    wp.launch(write_reference_state_kernel, dim=env.num_envs,
-              inputs=[all_envs, ref, s.root_com],
-              outputs=[s.joint_q, s.joint_qd], device="cpu")  # fmt: skip
+    wp.launch(
+        write_reference_state_kernel,
+        dim=env.num_envs,
+        inputs=[all_envs, ref, s.root_com],
+        outputs=[s.joint_q, s.joint_qd],
+        device="cpu",
+    )
     newton.eval_fk(s.model, s.state.joint_q, s.state.joint_qd, s.state)
 
 
@@ -110,14 +127,43 @@ def test_kinematic_replay_gives_zero_error_and_maximal_reward(env):
         b, s, c = env.buffers, env.sim, env.cfg
         env._episode_length.fill_(5)  # past the power-free steps
         s.joint_target.assign(s.joint_q.numpy())  # targets at the current pose; the power term uses them
-        wp.launch(reward_and_termination_kernel, dim=env.num_envs,
-                  inputs=[s.body_q, s.body_qd, s.body_com, s.joint_q, s.joint_qd, s.joint_target, env.kp, env.kd,
-                          500.0, ref, env.eval_body, env.clip_id, env.ref_time, env.motion.clip_duration_device,
-                          b.episode_length, 0, c.termination_distance, c.eval_termination_distance,
-                          c.max_joint_speed, no_power, env.mpjpe_sum],
-                  outputs=[b.rewards, b.terminated, b.truncated, b.metrics["success"], b.metrics["mpjpe_mm"],
-                           b.metrics["alive_steps"], b.reward_terms],
-                  device="cpu")  # fmt: skip
+        wp.launch(
+            reward_and_termination_kernel,
+            dim=env.num_envs,
+            inputs=[
+                s.body_q,
+                s.body_qd,
+                s.body_com,
+                s.joint_q,
+                s.joint_qd,
+                s.joint_target,
+                env.kp,
+                env.kd,
+                500.0,
+                ref,
+                env.eval_body,
+                env.clip_id,
+                env.ref_time,
+                env.motion.clip_duration_device,
+                b.episode_length,
+                0,
+                c.termination_distance,
+                c.eval_termination_distance,
+                c.max_joint_speed,
+                no_power,
+                env.mpjpe_sum,
+            ],
+            outputs=[
+                b.rewards,
+                b.terminated,
+                b.truncated,
+                b.metrics["success"],
+                b.metrics["mpjpe_mm"],
+                b.metrics["alive_steps"],
+                b.reward_terms,
+            ],
+            device="cpu",
+        )
         rewards.append(env._rewards.clone())
         assert not env._terminated.any()
         assert float(env._metrics["mpjpe_mm"].max()) < 1e-2  # micrometres
@@ -151,8 +197,9 @@ def test_reward_matches_numpy_reference(env):
         keep = ~done.numpy()  # a finished env was re-initialised; its state no longer matches its reward
         pos, rot, vel, omega = sim_bodies(env)
         ref = frames(env.reference_at())
-        imitation = np.array([numpy_imitation_reward(pos[i], rot[i], vel[i], omega[i], *[a[i] for a in ref])
-                              for i in range(3)])  # fmt: skip
+        imitation = np.array(
+            [numpy_imitation_reward(pos[i], rot[i], vel[i], omega[i], *[a[i] for a in ref]) for i in range(3)]
+        )
         q, qd = env.sim.joint_q.numpy()[:, 7:], env.sim.joint_qd.numpy()[:, 6:]
         target = env.sim.joint_target.numpy()[:, 7:]
         tau = np.clip(gains[:, 0] * (target - q) - gains[:, 1] * qd, -500, 500)
@@ -202,8 +249,13 @@ def test_observation_is_heading_invariant(env):
     ref2.body_rot = wp.array(quat_mul(turn, rrot).astype(np.float32), dtype=wp.quat)
     ref2.body_vel = wp.array(quat_rotate(turn, rvel).astype(np.float32), dtype=wp.vec3)
     ref2.body_angvel = wp.array(quat_rotate(turn, romega).astype(np.float32), dtype=wp.vec3)
-    arrays = [wp.array(bq2.astype(np.float32), dtype=wp.transform), wp.array(bqd2.astype(np.float32),
-              dtype=wp.spatial_vector), s.body_com, ref2, env.mask]  # fmt: skip
+    arrays = [
+        wp.array(bq2.astype(np.float32), dtype=wp.transform),
+        wp.array(bqd2.astype(np.float32), dtype=wp.spatial_vector),
+        s.body_com,
+        ref2,
+        env.mask,
+    ]
     critic, policy = wp.zeros((3, 934), dtype=float), wp.zeros((3, 934), dtype=float)
     wp.launch(observation_kernel, dim=(3, 24), inputs=arrays, outputs=[critic, policy])
     np.testing.assert_allclose(critic.numpy(), env._obs["critic"].numpy(), atol=2e-4)

@@ -12,8 +12,20 @@ from refpo_warp.tasks.humanoid.obs_layout import OBS_DIM, SELF_DIM, block_slice,
 # difference), 718 (reference position, 24*3), 790 (reference rotation, 24*6). Pelvis = body 0, L_Wrist = 17,
 # R_Wrist = 22.
 PELVIS = [358, 359, 360, 718, 719, 720]
-WRISTS = [358 + 51, 358 + 52, 358 + 53, 358 + 66, 358 + 67, 358 + 68,
-          718 + 51, 718 + 52, 718 + 53, 718 + 66, 718 + 67, 718 + 68]  # fmt: skip
+WRISTS = [
+    358 + 51,
+    358 + 52,
+    358 + 53,
+    358 + 66,
+    358 + 67,
+    358 + 68,
+    718 + 51,
+    718 + 52,
+    718 + 53,
+    718 + 66,
+    718 + 67,
+    718 + 68,
+]
 
 
 def test_layout_sizes():
@@ -39,8 +51,9 @@ def test_unknown_regime_is_a_clear_error():
         conditioning_mask("hands")
 
 
-@pytest.mark.parametrize("task, kept", [("humanoid_all", 934), ("humanoid_root_hands", 358 + 18),
-                                        ("humanoid_root", 358 + 6)])  # fmt: skip
+@pytest.mark.parametrize(
+    "task, kept", [("humanoid_all", 934), ("humanoid_root_hands", 358 + 18), ("humanoid_root", 358 + 6)]
+)
 def test_env_policy_obs_hides_exactly_the_masked_entries(task, kept):
     env = make_env(task, num_envs=2, device="cpu", seed=1)
     obs, _, _, _ = env.step(0.1 * torch.ones(2, 69))

@@ -16,8 +16,15 @@ def _mjcf_bodies():
     out = []
 
     def visit(body, parent):
-        out.append((body.get("name"), parent, np.array(body.get("pos").split(), float), body.find("geom").attrib,
-                    body.findall("joint")))  # fmt: skip
+        out.append(
+            (
+                body.get("name"),
+                parent,
+                np.array(body.get("pos").split(), float),
+                body.find("geom").attrib,
+                body.findall("joint"),
+            )
+        )
         for child in body.findall("body"):
             visit(child, body.get("name"))
 
@@ -68,7 +75,7 @@ def test_model_pd_gains_are_target_gains_not_springs(sim):
     np.testing.assert_allclose(kd[6:], np.repeat(sk.PD_GAINS[1:, 1], 3))
     assert ke[6 + 3 * (sk.body_index("L_Knee") - 1)] == 800.0 and ke[6 + 3 * (sk.body_index("Chest") - 1)] == 1000.0
     assert (mode[6:] == int(newton.JointTargetMode.POSITION)).all()
-    np.testing.assert_array_equal(m.joint_target_ke.numpy()[per_world:2 * per_world], ke)  # every world alike
+    np.testing.assert_array_equal(m.joint_target_ke.numpy()[per_world : 2 * per_world], ke)  # every world alike
     assert not m.joint_stiffness.numpy().any()  # no passive springs
     np.testing.assert_allclose(m.joint_armature.numpy()[6:per_world], 0.02)
     masses = m.body_mass.numpy()[:24]

@@ -22,8 +22,11 @@ def test_a_path_is_taken_from_the_working_directory(tmp_path, monkeypatch):
 
 
 def test_an_unknown_shipped_name_lists_the_shipped_clips():
-    with pytest.raises(ConfigError, match=r"motion_file=shipped:<file> 'stand_sway_pose\.npz'.*Did you mean "
-                                          r"'stand_sway_poses\.npz'.*wave_right_poses\.npz"):  # fmt: skip
+    with pytest.raises(
+        ConfigError,
+        match=r"motion_file=shipped:<file> 'stand_sway_pose\.npz'.*Did you mean "
+        r"'stand_sway_poses\.npz'.*wave_right_poses\.npz",
+    ):
         resolve_motion_file("shipped:stand_sway_pose.npz")
 
 

@@ -45,12 +45,30 @@ def _launch(params, episode_length=5):
     rewards, step_terms = wp.zeros(n, dtype=float), wp.zeros((n, len(TERMS)), dtype=float)
     flags = [wp.zeros(n, dtype=wp.bool) for _ in range(2)]  # terminated, clip end
     metrics = [wp.zeros(n, dtype=float) for _ in range(3)]
-    wp.launch(reward_and_termination_kernel, dim=n,
-              inputs=[*arrays.values(), wp.full(NDOF, 100.0, dtype=float), wp.full(NDOF, 10.0, dtype=float), 500.0,
-                      ref, wp.ones(NB, dtype=float), wp.zeros(n, dtype=int), wp.zeros(n, dtype=float),
-                      wp.array([10.0], dtype=float), wp.full(n, episode_length - 1, dtype=wp.int32), 0, 0.25, 0.5,
-                      100.0, params, wp.zeros(n, dtype=float)],
-              outputs=[rewards, *flags, *metrics, step_terms], device="cpu")  # fmt: skip
+    wp.launch(
+        reward_and_termination_kernel,
+        dim=n,
+        inputs=[
+            *arrays.values(),
+            wp.full(NDOF, 100.0, dtype=float),
+            wp.full(NDOF, 10.0, dtype=float),
+            500.0,
+            ref,
+            wp.ones(NB, dtype=float),
+            wp.zeros(n, dtype=int),
+            wp.zeros(n, dtype=float),
+            wp.array([10.0], dtype=float),
+            wp.full(n, episode_length - 1, dtype=wp.int32),
+            0,
+            0.25,
+            0.5,
+            100.0,
+            params,
+            wp.zeros(n, dtype=float),
+        ],
+        outputs=[rewards, *flags, *metrics, step_terms],
+        device="cpu",
+    )
     assert not flags[0].numpy().any()  # 0.1 m off the reference: no termination
     return rewards.numpy()[0], step_terms.numpy()[0]
 
@@ -59,18 +77,31 @@ def test_terms_on_a_hand_made_state_sum_to_the_reward():
     reward, terms = _launch(reward_params(HumanoidTrackingCfg()))
     # Mean squared errors: position 0.1^2 / 3 (x only, averaged over x/y/z), angle 0.2^2, velocity 1 / 3,
     # angular velocity 4 / 3; power: |(100 * 0.01 - 10 * 1) * 1| = 9 N m rad/s on each of 69 hinges.
-    expected = [0.5 * math.exp(-100 * 0.01 / 3), 0.3 * math.exp(-10 * 0.04), 0.1 * math.exp(-0.1 / 3),
-                0.1 * math.exp(-0.1 * 4 / 3), -0.0005 * 9 * 69]  # fmt: skip
+    expected = [
+        0.5 * math.exp(-100 * 0.01 / 3),
+        0.3 * math.exp(-10 * 0.04),
+        0.1 * math.exp(-0.1 / 3),
+        0.1 * math.exp(-0.1 * 4 / 3),
+        -0.0005 * 9 * 69,
+    ]
     np.testing.assert_allclose(terms, expected, rtol=1e-5)
     assert reward == pytest.approx(sum(expected), rel=1e-5)  # 0.433105
     assert reward == pytest.approx(terms.sum(), abs=1e-6)
 
 
 def test_weights_and_scales_come_from_the_cfg_and_power_is_off_at_the_start():
-    cfg = dataclasses.replace(HumanoidTrackingCfg(), reward_pos_weight=1.0, reward_rot_weight=2.0,
-                              reward_vel_weight=3.0, reward_angvel_weight=4.0, reward_pos_scale=1.0,
-                              reward_rot_scale=1.0, reward_vel_scale=1.0, reward_angvel_scale=1.0,
-                              power_coef=0.001)  # fmt: skip
+    cfg = dataclasses.replace(
+        HumanoidTrackingCfg(),
+        reward_pos_weight=1.0,
+        reward_rot_weight=2.0,
+        reward_vel_weight=3.0,
+        reward_angvel_weight=4.0,
+        reward_pos_scale=1.0,
+        reward_rot_scale=1.0,
+        reward_vel_scale=1.0,
+        reward_angvel_scale=1.0,
+        power_coef=0.001,
+    )
     first_reward, first = _launch(reward_params(cfg))
     expected = [math.exp(-0.01 / 3), 2 * math.exp(-0.04), 3 * math.exp(-1 / 3), 4 * math.exp(-4 / 3), -0.001 * 621]
     np.testing.assert_allclose(first, expected, rtol=1e-5)

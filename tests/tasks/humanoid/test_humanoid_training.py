@@ -31,7 +31,9 @@ def test_cuda_profile_carries_the_reference_hyperparameters(algo, reflow):
     assert actor["num_flow_steps"] == 10 and actor["action_noise_std"] == 0.05
     assert cfg["total_env_steps"] == 100_000_000
     assert cfg["runner"]["obs_groups"] == {"actor": ["policy"], "critic": ["critic"]}
-    assert resolve_config(["task=humanoid_all", f"algo={algo}"], device_type="cuda")["algorithm"]["max_grad_norm"] == 1.0
+    assert (
+        resolve_config(["task=humanoid_all", f"algo={algo}"], device_type="cuda")["algorithm"]["max_grad_norm"] == 1.0
+    )
 
 
 def test_gaussian_baseline_is_the_references():
@@ -71,16 +73,31 @@ def test_cpu_profile_is_small_and_evaluates_every_clip_with_the_reference_protoc
 
 @pytest.mark.slow
 def test_train_and_evaluate_humanoid_root(tmp_run_dir, capsys):
-    results = train(["task=humanoid_root", "device=cpu", "num_envs=4", "runner.num_steps_per_env=8",
-                     "max_iterations=2", f"run_dir={tmp_run_dir}"])  # fmt: skip
+    results = train(
+        [
+            "task=humanoid_root",
+            "device=cpu",
+            "num_envs=4",
+            "runner.num_steps_per_env=8",
+            "max_iterations=2",
+            f"run_dir={tmp_run_dir}",
+        ]
+    )
     saved = json.loads((tmp_run_dir / "eval.json").read_text())
     assert saved["eval_envs"] == 12 and saved["protocol"] == {"initial_noise": ["random"], "perturbation": False}
     for n in ("N=10", "N=1"):
         summary = saved["results"][n]
         assert summary["episodes"] == 12 and summary["unfinished"] == 0
         # one name per metric, the paper's: no success_mean, mpjpe_mm_mean, alive_steps_mean or length_mean
-        assert set(summary) == {"episodes", "unfinished", "return_mean", "return_std", "success_rate_pct",
-                                "alive_duration", "mpjpe_mm"}  # fmt: skip
+        assert set(summary) == {
+            "episodes",
+            "unfinished",
+            "return_mean",
+            "return_std",
+            "success_rate_pct",
+            "alive_duration",
+            "mpjpe_mm",
+        }
         assert 0.0 <= summary["success_rate_pct"] <= 100.0
         assert 1.0 <= summary["alive_duration"] <= 151.0
         assert summary["mpjpe_mm"] > 0.0
