@@ -4,7 +4,7 @@
 Rewrites the table between the markers in README.md ("Measured: learning") from
 - docs/results/learning_checks/records/gridworld_refpo.jsonl: ReFPO on GridWorld, the learning check's runs;
 - docs/results/*/per_task.csv of the DMC sweeps below (`refpo report`'s output): the CPU profiles' returns per task,
-  mean ± population std over seeds 1-3;
+  mean ± population std over seeds 1-3 (the tuning study's chosen values: fresh seeds 11-13);
 - docs/results/finetuning/: the GridWorld clones and fine-tuned runs (eval.json each) and the DMC fine-tuning runs
   from a weaker demonstrator (dmc/<task>/<method>/seed<k>/eval.json).
 Each row names its data file; nothing here is typed in by hand.
@@ -20,10 +20,12 @@ from pathlib import Path
 RESULTS = Path(__file__).resolve().parent
 README = RESULTS.parents[1] / "README.md"
 BEGIN, END = "<!-- measured: begin (python docs/results/measured.py) -->", "<!-- measured: end -->"
-SWEEPS = [  # (per-task CSV, methods in the order shown)
-    ("cpu_dmc/per_task.csv", ["ppo", "fpo", "refpo"]),
-    ("fpo_pp/report/per_task.csv", ["fpo_pp", "refpo_pp"]),
-    ("one_step/search/report/per_task.csv", ["onestep_c03"]),
+SWEEPS = [  # (per-task CSV, methods in the order shown, seeds)
+    ("cpu_dmc/per_task.csv", ["ppo", "fpo", "refpo"], "1-3"),
+    ("fpo_pp/report/per_task.csv", ["fpo_pp", "refpo_pp"], "1-3"),
+    ("one_step/search/report/per_task.csv", ["onestep_c03"], "1-3"),
+    # each method at its values chosen by the equal-budget tuning study (tuning/README.md: intervals, IQM)
+    ("tuning/fresh/per_task.csv", ["ppo", "refpo", "refpo_onestep", "fpo_pp"], "11-13"),
 ]
 TASKS = {
     "dmc_cartpole_balance": "cartpole_balance (450k env steps)",
@@ -60,7 +62,7 @@ def gridworld_row() -> str | None:
     )
 
 
-def sweep_rows(relative: str, labels: list[str] | None) -> list[str]:
+def sweep_rows(relative: str, labels: list[str] | None, seeds: str) -> list[str]:
     path = RESULTS / relative
     if not path.exists():
         return []
@@ -86,7 +88,7 @@ def sweep_rows(relative: str, labels: list[str] | None) -> list[str]:
             )
         if cells:
             out.append(
-                f"| {title}, 10-step / 1-step return, seeds 1-3 (`{path.relative_to(README.parent)}`) | "
+                f"| {title}, 10-step / 1-step return, seeds {seeds} (`{path.relative_to(README.parent)}`) | "
                 + "; ".join(cells)
                 + " |"
             )
@@ -146,8 +148,8 @@ def finetuning_dmc_rows() -> list[str]:
 
 def table() -> str:
     rows = [r for r in [gridworld_row()] if r]
-    for relative, labels in SWEEPS:
-        rows += sweep_rows(relative, labels)
+    for relative, labels, seeds in SWEEPS:
+        rows += sweep_rows(relative, labels, seeds)
     rows += [r for r in [finetuning_gridworld_row()] if r] + finetuning_dmc_rows()
     return "\n".join([BEGIN, "| Learning result (data file) | Measured |", "|---|---|", *rows, END])
 

@@ -94,8 +94,9 @@ def sync_study(src: Path) -> None:
 
 def sync_fresh(src: Path) -> None:
     FRESH.mkdir(exist_ok=True)
-    shutil.copy2(src / "report" / "runs.csv", FRESH / "runs.csv")
-    print(f"copied {src / 'report' / 'runs.csv'} and {copy_runs(src, FRESH / 'runs')} run(s)")
+    for name in ("runs.csv", "per_task.csv"):
+        shutil.copy2(src / "report" / name, FRESH / name)
+    print(f"copied {src / 'report'}'s runs.csv and per_task.csv and {copy_runs(src, FRESH / 'runs')} run(s)")
 
 
 def sync_budget(src: Path) -> None:
