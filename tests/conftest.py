@@ -10,8 +10,8 @@ import os
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering; MuJoCo reads it once, when first imported
 
-import pytest  # noqa: E402
-import torch  # noqa: E402
+import pytest
+import torch
 
 torch.set_num_threads(1)  # tiny ops: intra-op threads only add overhead (and CI has 2 cores)
 

@@ -4,12 +4,13 @@
     python docs/results/compare.py OUT.md REPORT_DIR[:label,label,...][#note] [REPORT_DIR[:labels][#note] ...]
 
 Each REPORT_DIR is a ``refpo report`` output folder (its ``per_task.csv`` and ``runs.csv``); the labels pick and order
-its methods (default: all); a ``#note`` is added to the names of its methods (to tell two grids of one method apart). Writes the Markdown table between the markers ``<!-- compare: begin -->`` and
+its methods (default: all); a ``#note`` is added to the names of its methods (to tell two grids of one method
+apart). Writes the Markdown table between the markers ``<!-- compare: begin -->`` and
 ``<!-- compare: end -->`` of OUT.md: per task and method, mean ± population std over seeds of the 10-step and 1-step
 returns under random and zero initial noise, each method's own headline return (its first protocol at its largest
 N: FPO++'s N = 64 from zero noise), Straightness, Explosion, the one-step error, the runs whose training
-reward falls off a cliff by FPO++'s rule, the training minutes, and how many (task, seed) pairs keep the 1-step return at 0.9 × the 10-step one
-or better. Nothing in the table is typed in by hand.
+reward falls off a cliff by FPO++'s rule, the training minutes, and how many (task, seed) pairs keep the 1-step
+return at 0.9 × the 10-step one or better. Nothing in the table is typed in by hand.
 """
 
 from __future__ import annotations

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime
+import functools
 import io
 import platform
 from pathlib import Path
@@ -54,7 +55,7 @@ def policy_latency(
         for batch in batches:
             part = obs[:batch]
             with torch.inference_mode():
-                seconds = time_call(lambda: policy(part), device=device, repeats=repeats, warmup=5)
+                seconds = time_call(functools.partial(policy, part), device=device, repeats=repeats, warmup=5)
             rows.append({"task": task, "algo": algo, "flow_steps": n, "batch": batch, "latency_ms": seconds * 1e3})
     return rows
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import contextlib
 from pathlib import Path
 
-from refpo_warp.utils.command_line import Arguments
 from refpo_warp.cli.explain import EXPLAIN, explain_or_run
+from refpo_warp.utils.command_line import Arguments
 from refpo_warp.utils.errors import ConfigError
 
 SUMMARY = "evaluate a trained run: eval.json with the returns at each flow-step count and the flow diagnostics"

@@ -47,7 +47,7 @@ def run_guarded(fn: Callable[[], int | None]) -> int:
     except OSError as err:
         where = f"{err.filename}: " if err.filename else ""
         return _fail(f"error: {where}{err.strerror or err}", EXIT_SYSTEM)
-    except Exception as err:  # noqa: BLE001  (the last resort: a message and the traceback in a file)
+    except Exception as err:  # (the last resort: a message and the traceback in a file)
         if type(err).__name__ == "OutOfMemoryError":  # torch's CUDA out-of-memory error
             return _fail(
                 f"error: out of GPU memory ({str(err).splitlines()[0]}); lower num_envs or the network sizes",

@@ -13,9 +13,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from refpo_warp.utils.command_line import Arguments
 from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.render.options import VideoOptions
+from refpo_warp.utils.command_line import Arguments
 from refpo_warp.utils.errors import ConfigError, unknown
 
 SUMMARY = "a video of a trained policy (one flow step beside ten) or of a zero / random agent"

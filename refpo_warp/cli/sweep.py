@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import signal
 
-from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.cli.guard import EXIT_INTERRUPTED, EXIT_UNEXPECTED
+from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
 
 SUMMARY = "a grid of tasks x methods x seeds, each run a training process (local or on a Ray cluster)"

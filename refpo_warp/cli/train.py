@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-
-from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.cli.explain import EXPLAIN, explain_or_run
+from refpo_warp.utils.command_line import Arguments, Flag
 
 SUMMARY = "train a policy and evaluate it; --tasks lists the task ids, --explain KEY says who set an option"
 USAGE = """Train a policy: refpo train task=<task id> [algo=<algo: refpo, fpo, ppo, ...>] [key=value ...]
@@ -49,9 +48,8 @@ def train(options: list[str]) -> None:
 def list_tasks(options: list[str]) -> None:
     """Every task id with its description, those of the config folders the options name included."""
     from refpo_warp.config.dotted import parse_overrides
-    from refpo_warp.config.resolve import run_config_path
-    from refpo_warp.envs.registry import get_task, list_tasks
+    from refpo_warp.config.resolve import run_config_set
 
-    run_config_path(parse_overrides(options))
-    for task in list_tasks():
-        print(f"{task:28s} {get_task(task).description}")
+    configs = run_config_set(parse_overrides(options))
+    for task in configs.task_ids():
+        print(f"{task:28s} {configs.task(task).description}")

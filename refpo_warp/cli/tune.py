@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import signal
 
-from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.cli.guard import EXIT_INTERRUPTED
+from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
 
 SUMMARY = "an equal tuning budget for several methods (Optuna studies of training runs), resumable"

@@ -205,7 +205,7 @@ def read_dataset(path: str | Path) -> Dataset:
         episodes = [_episode(raw) for raw in storage.get_episodes(range(total))] if total else []
     except DataFileError:
         raise
-    except Exception as err:  # noqa: BLE001  (h5py and Minari raise many types for a damaged file; one message)
+    except Exception as err:  # (h5py and Minari raise many types for a damaged file; one message)
         raise DataFileError(
             f"{path}: cannot be read as a Minari dataset ({type(err).__name__}: {' '.join(str(err).split())[:300]})"
         ) from None

@@ -65,8 +65,8 @@ class WarpVecEnv(VecEnv):
     """Whether ``_step_impl`` writes ``buffers.truncated`` (an episode end that is not a failure besides the
     time-out, e.g. the end of a motion clip)."""
     supports_final_observations: ClassVar[bool] = False
-    """Whether the subclass writes ``buffers.final_obs``: in ``_observe_final`` (see the module docstring), or in its own
-    step kernel with ``step_finishes_episode``."""
+    """Whether the subclass writes ``buffers.final_obs``: in ``_observe_final`` (see the module docstring), or in its
+    own step kernel with ``step_finishes_episode``."""
     step_finishes_episode: ClassVar[bool] = False
     """Whether ``_step_impl`` itself applies ``episode.finish_env_step``, writes ``final_obs`` and resets the envs
     that finished (one fused kernel); the base then launches neither ``finish_step`` nor ``_reset_impl`` after it.

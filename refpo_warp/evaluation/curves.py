@@ -13,12 +13,12 @@ import matplotlib
 import numpy as np
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib import ticker  # noqa: E402
+import matplotlib.pyplot as plt
+from matplotlib import ticker
 
-from refpo_warp.runner.progress import read_rows  # noqa: E402
-from refpo_warp.utils.atomic_files import save_figure  # noqa: E402
-from refpo_warp.utils.errors import DataFileError  # noqa: E402
+from refpo_warp.runner.progress import read_rows
+from refpo_warp.utils.atomic_files import save_figure
+from refpo_warp.utils.errors import DataFileError
 
 DIAGNOSTICS = (
     ("Flow/ratio_max", "max ratio per update"),

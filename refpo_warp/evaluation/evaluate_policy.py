@@ -48,7 +48,7 @@ def curve_key(setting: str) -> str:
 def make_policy(actor, flow_steps: int | None, initial_noise: str = "random", perturbation: bool = False):
     """obs -> actions for evaluation: a flow integrated with ``flow_steps`` Euler steps, or a Gaussian's mean."""
     if not is_flow(actor):
-        return lambda obs: actor(obs)
+        return actor
     return lambda obs: actor.sample(obs, flow_steps, initial_noise, perturbation)
 
 

@@ -26,7 +26,7 @@ MAX_SPEED = 100_000.0  # linear (m/s), angular and joint (rad/s) speeds in a con
 
 def resampled_frame_count(num_src: int, src_fps: float, fps: float) -> int:
     """Frames of a clip of ``num_src`` frames at ``src_fps`` resampled to ``fps`` (frame k at k / fps seconds)."""
-    return int(math.floor((num_src - 1) / src_fps * fps + 1e-6)) + 1
+    return math.floor((num_src - 1) / src_fps * fps + 1e-6) + 1
 
 
 def check_fps_argument(fps: float, name: str = "fps") -> float:

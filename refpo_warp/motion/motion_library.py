@@ -233,7 +233,8 @@ def _sample_kernel(
     out: MotionFrames,
 ):
     env, body = wp.tid()
-    if use_mask != 0:
+    # Warp kernel code: nested, as `and` is not short-circuit in Warp and mask may be empty when use_mask is 0
+    if use_mask != 0:  # noqa: SIM102
         if not mask[env]:
             return
     if num_clips < 1:

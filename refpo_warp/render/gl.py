@@ -31,7 +31,9 @@ def probe(platform: str) -> str | None:
     """None if MuJoCo can make an offscreen context with ``platform``, else the reason (its last error line)."""
     env = {**os.environ, "MUJOCO_GL": platform, "PYOPENGL_PLATFORM": "osmesa" if platform == "osmesa" else platform}
     try:
-        proc = subprocess.run([sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, timeout=60)
+        proc = subprocess.run(
+            [sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, timeout=60, check=False
+        )
     except subprocess.TimeoutExpired:
         return "timed out"
     if proc.returncode == 0:

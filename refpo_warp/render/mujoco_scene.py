@@ -99,7 +99,7 @@ class MujocoScene:
             raise ConfigError(f"camera={camera!r} is invalid; expected one of {', '.join(map(repr, choices))}")
         try:
             self.renderer = mujoco.Renderer(model, self.height, self.width, max_geom=model.ngeom + 256)
-        except Exception as err:  # noqa: BLE001  (each GL platform fails in its own way)
+        except Exception as err:  # (each GL platform fails in its own way)
             raise SystemRefusedError(
                 f"MuJoCo's offscreen renderer could not start ({type(err).__name__}: {err}); "
                 f"set MUJOCO_GL=egl or MUJOCO_GL=osmesa (docs/videos.md)"

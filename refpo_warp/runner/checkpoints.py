@@ -54,7 +54,7 @@ def read_checkpoint(path: str | Path, map_location: str | None = "cpu") -> dict[
         raise CheckpointError(f"{path}: truncated: its zip archive ends early (was the write interrupted?)")
     try:
         data = torch.load(path, map_location=map_location, weights_only=True)
-    except Exception as err:  # noqa: BLE001  (torch raises many types for a bad file; each becomes one message)
+    except Exception as err:  # (torch raises many types for a bad file; each becomes one message)
         text = " ".join(str(err).split())
         if "Weights only load failed" in text and "GLOBAL" in text:
             found = re.search(r"GLOBAL ([\w.]+)", text)

@@ -45,7 +45,9 @@ def read_rows(run_dir: str | Path) -> list[dict]:
         except ValueError as err:
             if number == len(lines):  # the last line, without its newline: a write that was cut off
                 break
-            raise DataFileError(f"{path}: line {number} is not a progress row ({err}); the file was edited or damaged")
+            raise DataFileError(
+                f"{path}: line {number} is not a progress row ({err}); the file was edited or damaged"
+            ) from err
         rows.append(row)
     return rows
 

@@ -11,7 +11,7 @@ def world_state_finite(joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dt
     for i in range(joint_q.shape[1]):
         if not wp.isfinite(joint_q[world, i]):
             return False
-    for i in range(joint_qd.shape[1]):
+    for i in range(joint_qd.shape[1]):  # noqa: SIM110  (Warp function code: Warp compiles no generator or all())
         if not wp.isfinite(joint_qd[world, i]):
             return False
     return True

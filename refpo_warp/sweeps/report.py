@@ -273,9 +273,11 @@ def report_markdown(spec, records, mrows, trows, figures, notes, sweep_dir: Path
     if spec.get("description"):
         lines += [spec["description"], ""]
     lines += [
-        f"Sweep dir `{sweep_dir}` (device profile: {spec.get('device', '?')}); {len(records)} runs, "
-        f"{len(ok)} finished, {len(records) - len(ok)} missing. Written by "
-        f"`refpo report {sweep_dir}`.",
+        (
+            f"Sweep dir `{sweep_dir}` (device profile: {spec.get('device', '?')}); {len(records)} runs, "
+            f"{len(ok)} finished, {len(records) - len(ok)} missing. Written by "
+            f"`refpo report {sweep_dir}`."
+        ),
         "",
         '## DMC table (the paper\'s "MuJoCo Playground results")',
         "",

@@ -201,8 +201,8 @@ def _method_entries(spec: dict, where: str) -> list[dict]:
     if not isinstance(entries, list) or not entries:
         raise ConfigError(f"{where}: 'methods' must be a non-empty list of {{label, algo, name, overrides}}")
     out = []
-    for entry in entries:
-        entry = {"algo": entry} if isinstance(entry, str) else entry
+    for given in entries:
+        entry = {"algo": given} if isinstance(given, str) else given
         if not isinstance(entry, dict) or "algo" not in entry:
             raise ConfigError(f"{where}: each method needs an 'algo' (e.g. {{label: ppo, algo: ppo}}), got {entry!r}")
         for key in entry:

@@ -133,9 +133,7 @@ def validate(tuning: Tuning) -> dict[str, list[dict[str, Any]]]:
             errors.append(f"- {method.label}: {err}")
             continue
         base = enqueued[method.label][0] if enqueued[method.label] else {}
-        probes = [base] + [
-            {**base, d.key: v} for d in method.space for v in (d.choices if d.choices else (d.low, d.high))
-        ]
+        probes = [base] + [{**base, d.key: v} for d in method.space for v in (d.choices or (d.low, d.high))]
         for task in tuning.tasks:
             for values in probes:
                 try:

@@ -43,7 +43,7 @@ def env_steps_per_second(env, steps: int = 200, warmup: int = 5, seed: int = 0) 
 
 
 def print_title(title: str) -> None:
-    """Start a titled block: a blank line and a Markdown heading, so each table stands apart (and pastes as Markdown)."""
+    """Start a titled block: a blank line and a Markdown heading, so each table stands apart (pastes as Markdown)."""
     print(f"\n### {title}\n", flush=True)
 
 

@@ -7,11 +7,11 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import torch  # noqa: E402
-from tensordict import TensorDict  # noqa: E402
+import matplotlib.pyplot as plt
+import torch
+from tensordict import TensorDict
 
-from refpo_warp.utils.atomic_files import save_figure  # noqa: E402
+from refpo_warp.utils.atomic_files import save_figure
 
 FIGURE_STARTS = ((17, 12), (11, 13), (6, 9), (20, 17))  # (x, y) starts of the paper's trajectory panel
 FIGURE_FLOW_STEPS = (10, 1)
@@ -78,7 +78,7 @@ def action_field(actor, size: int, flow_steps: int | None, samples: int = 8, dev
 
 @torch.inference_mode()
 def rollouts(actor, env, flow_steps: int | None, starts=FIGURE_STARTS, episodes_per_start: int = 20) -> list[list]:
-    """Trajectories (lists of (x, y)) of ``episodes_per_start`` episodes from each start; env must have that many envs."""
+    """Trajectories (lists of (x, y)) of ``episodes_per_start`` episodes from each start (env has that many envs)."""
     n = env.num_envs
     if n != len(starts) * episodes_per_start:
         raise ValueError(f"need {len(starts) * episodes_per_start} envs, got {n}")

@@ -20,7 +20,7 @@ N, T, OBS, ACT = 6, 3, 4, 2
 
 
 def make(cls=FPOPlusPlus, **kwargs):
-    defaults = dict(num_mc_samples=4, num_learning_epochs=1, num_mini_batches=1, max_grad_norm=1e9)
+    defaults = {"num_mc_samples": 4, "num_learning_epochs": 1, "num_mini_batches": 1, "max_grad_norm": 1e9}
     return small_flow_algorithm(cls, N, T, OBS, ACT, **{**defaults, **kwargs})
 
 

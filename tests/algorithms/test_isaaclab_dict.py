@@ -20,7 +20,7 @@ DOC = REPO_ROOT / "docs" / "rsl_rl_users.md"
 
 
 def documented_train_cfg() -> dict:
-    blocks = re.findall(r"```python\n(.*?)```", DOC.read_text(), flags=re.S)
+    blocks = re.findall(r"```python\n(.*?)```", DOC.read_text(), flags=re.DOTALL)
     block = next(b for b in blocks if "train_cfg = {" in b)
     namespace: dict = {}
     exec(block, namespace)

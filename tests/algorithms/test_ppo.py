@@ -42,8 +42,8 @@ def rollout(alg, seed=1, time_outs=True):
 @pytest.mark.parametrize(
     "options",
     [
-        dict(schedule="adaptive", desired_kl=0.001, use_clipped_value_loss=True),
-        dict(schedule="fixed", normalize_advantage_per_mini_batch=True),
+        {"schedule": "adaptive", "desired_kl": 0.001, "use_clipped_value_loss": True},
+        {"schedule": "fixed", "normalize_advantage_per_mini_batch": True},
     ],
     ids=["adaptive-clipped", "fixed-per-minibatch"],
 )

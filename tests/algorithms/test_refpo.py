@@ -22,7 +22,13 @@ N, T, OBS, ACT = 6, 3, 4, 2
 
 
 def make_refpo(actor_kwargs=None, **kwargs):
-    defaults = dict(num_mc_samples=4, num_learning_epochs=1, num_mini_batches=1, max_grad_norm=1e9, value_loss_coef=0.0)
+    defaults = {
+        "num_mc_samples": 4,
+        "num_learning_epochs": 1,
+        "num_mini_batches": 1,
+        "max_grad_norm": 1e9,
+        "value_loss_coef": 0.0,
+    }
     return small_flow_algorithm(ReFPO, N, T, OBS, ACT, actor_kwargs, **{**defaults, **kwargs})
 
 

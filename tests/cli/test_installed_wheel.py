@@ -26,7 +26,7 @@ TINY = [
 
 
 def run(cmd: list[str], cwd: Path, env: dict) -> subprocess.CompletedProcess:
-    proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, timeout=600, check=False)
     assert proc.returncode == 0, (
         f"{' '.join(cmd)}: exit {proc.returncode}\n{proc.stdout[-2000:]}\n{proc.stderr[-3000:]}"
     )
@@ -116,9 +116,11 @@ def test_the_wheel_trains_evaluates_explains_lists_and_sweeps_outside_the_checko
         [
             str(bin_dir / "python"),
             "-c",
-            "from refpo_warp.config.resolve import resolve_config as c; "
-            "from refpo_warp.tasks.humanoid.motions import resolve_motion_file as r; "
-            "print(r(c(['task=humanoid_all_residual'], device_type='cpu')['env']['motion_file']))",
+            (
+                "from refpo_warp.config.resolve import resolve_config as c; "
+                "from refpo_warp.tasks.humanoid.motions import resolve_motion_file as r; "
+                "print(r(c(['task=humanoid_all_residual'], device_type='cpu')['env']['motion_file']))"
+            ),
         ],
         tmp_path,
         env,

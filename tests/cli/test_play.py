@@ -6,8 +6,9 @@ import os
 import subprocess
 import sys
 
-from refpo_warp.cli.main import main
 from video_frames import read_video  # tests/ is on sys.path under pytest
+
+from refpo_warp.cli.main import main
 from refpo_warp.training import train
 from refpo_warp.utils.paths import REPO_ROOT
 
@@ -22,6 +23,7 @@ def play(*args, env=None):
         text=True,
         timeout=300,
         env=env,
+        check=False,
     )
 
 

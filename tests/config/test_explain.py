@@ -5,8 +5,8 @@ import subprocess
 import sys
 
 import pytest
-
 from constructor_config import effective_config  # tests/ is on sys.path under pytest
+
 from refpo_warp.config.explain import explain
 from refpo_warp.config.layers import PROFILE_KEYS
 from refpo_warp.config.resolve import resolve, resolve_config
@@ -77,7 +77,7 @@ def test_a_section_lists_every_option_of_its_class_and_env_defaults_name_their_c
     )
     assert "env.task = 'point_mass'\n  set by  the task id dmc_point_mass" in text
     assert "env.max_episode_length = 1000\n  set by  the default of refpo_warp.tasks.dmc.cfg.DmcCfg" in text
-    with pytest.raises(ConfigError, match="Unknown config key to explain 'algorithm.reflow_cof'.*reflow_coef"):
+    with pytest.raises(ConfigError, match=r"Unknown config key to explain 'algorithm.reflow_cof'.*reflow_coef"):
         explain(res, ["algorithm.reflow_cof"])
 
 
@@ -149,6 +149,7 @@ def test_the_cli_explains_without_writing_anything(tmp_path):
         capture_output=True,
         text=True,
         timeout=120,
+        check=False,
     )
     assert proc.returncode == 0, proc.stderr
     assert "num_envs = 16\n  set by  configs/task/gridworld.yaml\n  over    64 from configs/default.yaml" in proc.stdout

@@ -2,8 +2,8 @@
 profiles hold the paper's tables (c) and (d) with Brax batch semantics."""
 
 import pytest
-
 from constructor_config import effective_config  # tests/ is on sys.path under pytest
+
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.envs.registry import list_tasks
 

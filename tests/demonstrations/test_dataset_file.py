@@ -66,7 +66,7 @@ def test_a_dataset_made_by_minari_loads(tmp_path):
     )
     data = read_dataset(tmp_path / "other")
     check_spaces(data, "gridworld", 2, 2)
-    with pytest.raises(DataFileError, match="observation dim 2, action dim 2.*observation dim 3, action dim 2"):
+    with pytest.raises(DataFileError, match=r"observation dim 2, action dim 2.*observation dim 3, action dim 2"):
         check_spaces(data, "dmc_point_mass", 3, 2)
 
 

@@ -10,9 +10,9 @@ import pytest
 from refpo_warp.utils.paths import REPO_ROOT
 
 sys.path.insert(0, str(REPO_ROOT / "tests" / "learning"))
-from checks import CHECKS  # noqa: E402  (tests/learning/checks.py)
-from measure import RESULTS, read_records  # noqa: E402
-from table import BEGIN, END, standings, table_markdown  # noqa: E402
+from checks import CHECKS  # (tests/learning/checks.py)
+from measure import RESULTS, read_records
+from table import BEGIN, END, standings, table_markdown
 
 RECORDS = read_records()
 

@@ -108,7 +108,7 @@ def test_every_call_returns_new_arrays(mode):
     warp_env, vec = grid(mode, max_episode_length=2)
     calls = [vec.reset(seed=1)]
     for _ in range(4):
-        obs, rew, term, trunc, infos = vec.step(DOWN)
+        obs, _rew, _term, _trunc, infos = vec.step(DOWN)
         calls.append((obs, infos))
     for a, b in combinations(calls, 2):
         assert not data_shares_objects(a, b)

@@ -40,7 +40,7 @@ def test_group_members_share_initial_states_at_resets_and_auto_resets(task, fami
     first = initial_state(env, family)
     assert_grouped(first)
     zeros = torch.zeros(env.num_envs, env.num_actions)
-    for step in range(length):  # identical states and actions: every member's episode ends at the same step
+    for _step in range(length):  # identical states and actions: every member's episode ends at the same step
         _, _, dones, _ = env.step(zeros)
     assert dones.all()
     second = initial_state(env, family)  # the auto-reset inside the last step drew the second episodes

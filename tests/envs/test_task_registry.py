@@ -4,8 +4,7 @@ import dataclasses
 
 import pytest
 
-from refpo_warp.config.config_path import config_path
-from refpo_warp.config.layers import task_config_path
+from refpo_warp.config.config_set import config_set
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.envs.registry import _TASKS, get_task, list_tasks, register_task, task_families
 from refpo_warp.envs.task_spec import TaskSpec
@@ -16,7 +15,8 @@ from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR
 
 
 def test_every_registered_task_has_a_config_file():
-    missing = [t for t in list_tasks() if not task_config_path(t, config_path()).is_file()]
+    configs = config_set()
+    missing = [t for t in list_tasks() if not configs.task_file(t).is_file()]
     assert not missing, f"registered tasks without a config file: {missing}"
 
 
@@ -43,14 +43,14 @@ def test_a_registered_task_without_a_config_file_is_an_error(tmp_path):
     )
     register_task(spec)
     try:
-        with pytest.raises(ConfigError, match="test_no_config.*missing.yaml.*does not exist"):
+        with pytest.raises(ConfigError, match=r"test_no_config.*missing.yaml.*does not exist"):
             resolve_config({"task": "test_no_config", "device": "cpu"})
     finally:
         del _TASKS["test_no_config"]
 
 
 def test_a_spec_names_only_fields_of_its_cfg_and_ids_are_unique():
-    with pytest.raises(ConfigError, match="grid_size.*size"):
+    with pytest.raises(ConfigError, match=r"grid_size.*size"):
         TaskSpec("bad", "refpo_warp.tasks.gridworld.env:GridWorldEnv", GridWorldCfg, {"grid_size": 5})
     clash = dataclasses.replace(get_task("gridworld"), entry_point="refpo_warp.tasks.dmc.env:DmcEnv")
     with pytest.raises(ValueError, match="already registered"):

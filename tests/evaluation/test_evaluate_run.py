@@ -51,13 +51,14 @@ def test_eval_keeps_the_previous_eval_json_and_says_so(tmp_run_dir, quick_run):
         capture_output=True,
         text=True,
         timeout=300,
+        check=False,
     )
     assert proc.returncode == 0, proc.stderr
     assert (tmp_run_dir / "eval.prev.json").read_text() == first
     second = json.loads((tmp_run_dir / "eval.json").read_text())
     assert set(second["results"]) == {"N=1"} and set(json.loads(first)["results"]) == {"N=1", "N=2"}
     assert "the previous one is kept as" in proc.stdout
-    assert re.search(r"^  previous eval +.*eval\.prev\.json$", proc.stdout, flags=re.M), proc.stdout
+    assert re.search(r"^  previous eval +.*eval\.prev\.json$", proc.stdout, flags=re.MULTILINE), proc.stdout
     assert "Evaluated gridworld / refpo at iteration 2" in proc.stdout
     assert "Could not find or load the NVIDIA CUDA driver" not in proc.stderr
     assert not [m for m in RSL_RL_CHATTER if m in proc.stdout]

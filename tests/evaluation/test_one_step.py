@@ -10,7 +10,7 @@ from refpo_warp.models import FlowActor
 from refpo_warp.utils.paths import REPO_ROOT
 
 sys.path.insert(0, str(REPO_ROOT / "docs" / "results" / "one_step"))  # the probes live beside their analysis script
-from one_step_probes import drive, sampler_probe, velocity_error_by_tau  # noqa: E402
+from one_step_probes import drive, sampler_probe, velocity_error_by_tau
 
 OBS, ACT, ROWS = 3, 2, 256
 

@@ -3,8 +3,8 @@ recording leaves the run's random streams as they were."""
 
 import numpy as np
 import torch
-
 from video_frames import read_video  # tests/ is on sys.path under pytest
+
 from refpo_warp.training import train
 from refpo_warp.utils.rng import own_random_streams
 

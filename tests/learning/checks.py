@@ -10,7 +10,8 @@ changed); a check's bound must fail there. ``docs/results/learning_checks.md`` g
 
 CI's default test command runs six of them: ReFPO on GridWorld (N = 1 and 10), on the humanoid and on mjlab's
 cartpole (in the mjlab job), ReFPO's one-step configuration on point_mass (a whole 1M-step profile), ReinFlow on
-GridWorld, and ReFPO fine-tuning a flow clone of GridWorld demonstrations. The DMC cartpole's five run on demand (``--all-checks``; ``in_ci=False``), to keep CI's whole run within
+GridWorld, and ReFPO fine-tuning a flow clone of GridWorld demonstrations. The DMC cartpole's five run on demand
+(``--all-checks``; ``in_ci=False``), to keep CI's whole run within
 its 25 minutes: ReFPO, Gaussian PPO, the advantage-weighted ReFPO, FPO++ and Flow-GRPO (the first four share ReFPO's
 or rsl_rl's update loop, and each loss term of their own has hand-worked unit tests).
 
@@ -25,9 +26,9 @@ from __future__ import annotations
 import contextlib
 import io
 import operator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 

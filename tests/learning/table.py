@@ -120,16 +120,20 @@ def table_markdown(records: list[dict]) -> str:
     lines = [
         BEGIN,
         "",
-        "| check | bound | learning runs' worst | learning range | null control's best | halfway | "
-        "margin to learning | margin to null |",
+        (
+            "| check | bound | learning runs' worst | learning range | null control's best | halfway | "
+            "margin to learning | margin to null |"
+        ),
         "|---|---|---|---|---|---|---|---|",
     ]
     for check in CHECKS.values():
         lines += check_rows(check, records)
     lines += [
         "",
-        "Per run (statistics as the check reads them; wall seconds of the run, the initial evaluation "
-        "included, on a shared 2-core machine):",
+        (
+            "Per run (statistics as the check reads them; wall seconds of the run, the initial evaluation "
+            "included, on a shared 2-core machine):"
+        ),
         "",
         "| check | runs | torch threads | seed | statistics | bound | CPU | wall s |",
         "|---|---|---|---|---|---|---|---|",

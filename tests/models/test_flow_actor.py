@@ -120,7 +120,7 @@ def test_adaln_starts_time_independent_and_head_gain_scales_the_first_actions():
     """Zero-initialised modulation: the prediction ignores tau at first; gain 0.01 makes the first actions small."""
     torch.manual_seed(0)
     obs = TensorDict({"policy": torch.randn(2000, 30)}, batch_size=[2000])
-    kwargs = dict(hidden_dims=[64, 64, 64], activation="swish", time_conditioning="adaln", time_embed_dim=64)
+    kwargs = {"hidden_dims": [64, 64, 64], "activation": "swish", "time_conditioning": "adaln", "time_embed_dim": 64}
     actor = FlowActor(obs, {"actor": ["policy"]}, "actor", 12, parameterization="data", head_init_gain=0.01, **kwargs)
     feat, x = actor.velocity.project_obs(actor.encode(obs)), torch.randn(2000, 12)
     torch.testing.assert_close(
@@ -140,7 +140,7 @@ def test_obs_clip_clamps_the_normalised_observation():
 
 
 def test_gaussian_ppo_api_is_refused_with_a_clear_message():
-    actor, obs = make_actor()
+    actor, _obs = make_actor()
     with pytest.raises(NotImplementedError, match="ReFPO"):
         actor.get_output_log_prob(torch.zeros(4, 2))
 
@@ -160,7 +160,7 @@ def test_gaussian_ppo_api_is_refused_with_a_clear_message():
 )
 def trained_like_actor(request):
     torch.manual_seed(0)
-    actor, obs = make_actor(
+    actor, _obs = make_actor(
         obs_dim=5, act_dim=3, hidden_dims=[32, 32], obs_normalization=True, num_flow_steps=4, **request.param
     )
     actor.update_normalization(TensorDict({"policy": torch.randn(64, 5) * 3 + 1}, batch_size=[64]))

@@ -71,5 +71,5 @@ def test_straightness_error_hand_worked_on_a_constant_field():
         actor.velocity.head.bias.copy_(torch.tensor([0.4, -0.2]))
     # v = c: the policy samples a = eps_0 + c; for a pair (tau, eps) the error is |c - (a - eps)|^2 = |eps - eps_0|^2,
     # whose mean over independent eps, eps_0 ~ N(0, I) is 2 per dimension
-    value = straightness_error(actor, obs, lambda shape: torch.rand(shape), num_pairs=256)
+    value = straightness_error(actor, obs, torch.rand, num_pairs=256)
     assert value == pytest.approx(2.0, rel=0.05)

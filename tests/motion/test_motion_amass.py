@@ -146,25 +146,25 @@ def test_smplx_missing_or_misshaped_split_keys(tmp_path):
     with pytest.raises(MotionDataError, match=r"x_stageii.npz: key 'pose_body' has shape \(5, 60\)"):
         read_amass(path)
     path = write_npz(tmp_path / "y_stageii.npz", **base)  # no pose_body and no poses
-    with pytest.raises(MotionDataError, match="y_stageii.npz: missing key 'poses'.*'root_orient' \\+ 'pose_body'"):
+    with pytest.raises(MotionDataError, match=r"y_stageii.npz: missing key 'poses'.*'root_orient' \+ 'pose_body'"):
         read_amass(path)
 
 
 def test_not_an_npz(tmp_path):
     text = tmp_path / "notes.txt"
     text.write_text("hello")
-    with pytest.raises(MotionDataError, match="notes.txt: not an .npz file"):
+    with pytest.raises(MotionDataError, match=r"notes.txt: not an .npz file"):
         read_amass(text)
     fake = tmp_path / "fake_poses.npz"
     fake.write_text("this is not a zip archive")
-    with pytest.raises(MotionDataError, match="fake_poses.npz: cannot be read as an npz archive"):
+    with pytest.raises(MotionDataError, match=r"fake_poses.npz: cannot be read as an npz archive"):
         read_amass(fake)
     single = tmp_path / "single.npz"
     with open(single, "wb") as f:
         np.save(f, np.zeros(3))  # an .npy payload under an .npz name
-    with pytest.raises(MotionDataError, match="single.npz: cannot be read as an npz archive"):
+    with pytest.raises(MotionDataError, match=r"single.npz: cannot be read as an npz archive"):
         read_amass(single)
-    with pytest.raises(MotionDataError, match="missing.npz: no such file"):
+    with pytest.raises(MotionDataError, match=r"missing.npz: no such file"):
         read_amass(tmp_path / "missing.npz")
 
 
@@ -187,5 +187,5 @@ def test_folders(tmp_path):
         find_amass_files(only_shapes)
     # One bad file fails the whole folder, naming that file.
     write_npz(data / "s2_poses.npz", **{k: v for k, v in good_arrays().items() if k != "trans"})
-    with pytest.raises(MotionDataError, match="s2_poses.npz: missing key 'trans'"):
+    with pytest.raises(MotionDataError, match=r"s2_poses.npz: missing key 'trans'"):
         load_amass_clips(data, 30.0)

@@ -9,7 +9,7 @@ import json
 import mujoco
 import numpy as np
 import pytest
-from test_motion_kinematics import skeleton_mjcf  # noqa: E402  (tests/ is on sys.path under pytest)
+from test_motion_kinematics import skeleton_mjcf  # (tests/ is on sys.path under pytest)
 
 from refpo_warp.motion import rotations as rot
 from refpo_warp.motion.amass import write_amass

@@ -4,7 +4,6 @@ what the tool generates, and it loads."""
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
@@ -36,12 +35,12 @@ def test_clip_is_grounded_and_plausible(spec):
     assert lowest.min() > -1e-9  # no foot point below the ground
     if spec.kind in ("walk", "turn"):
         np.testing.assert_allclose(lowest, 0.0, atol=1e-9)  # a foot is always on the ground
-        assert 0.82 < pos[:, PELVIS, 2].min() and pos[:, PELVIS, 2].max() < 0.93
+        assert pos[:, PELVIS, 2].min() > 0.82 and pos[:, PELVIS, 2].max() < 0.93
         assert soles[..., 2].max() > 0.05  # swinging feet clear the ground
     else:
         np.testing.assert_allclose(lowest, 0.0, atol=2e-3)
         np.testing.assert_allclose(pos[:, PELVIS, 2], 0.934, atol=3e-3)  # standing with soft knees
-    assert 1.40 < pos[:, HEAD, 2].min() and pos[:, HEAD, 2].max() < 1.52
+    assert pos[:, HEAD, 2].min() > 1.40 and pos[:, HEAD, 2].max() < 1.52
     # Contact points do not slide: between consecutive frames on the ground, a sole point stays put.
     on_ground = soles[..., 2] < 1e-4
     both = on_ground[1:] & on_ground[:-1]

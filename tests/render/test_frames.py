@@ -4,11 +4,10 @@ the body, tiles and overlays, and MP4 / GIF files that read back with their fram
 import numpy as np
 import pytest
 import torch
+from video_frames import read_video  # tests/ is on sys.path under pytest
 
 from refpo_warp import make_env
 from refpo_warp.render.frames import overlay, tile
-from video_frames import read_video  # tests/ is on sys.path under pytest
-
 from refpo_warp.render.video import write_video
 
 W, H = 96, 72

@@ -54,7 +54,7 @@ def torchrun(script: Path | str, args: list[str], nproc: int = 2) -> subprocess.
         f"--nproc_per_node={nproc}",
         *str(script).split(),
     ]
-    proc = subprocess.run(cmd + args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(cmd + args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, check=False)
     assert proc.returncode == 0, f"torchrun failed ({proc.returncode}):\n{proc.stdout[-3000:]}\n{proc.stderr[-5000:]}"
     return proc
 

@@ -28,7 +28,7 @@ def test_timestep_is_read_from_the_file(tmp_path):
 
 
 def test_bad_files_get_clear_errors(tmp_path):
-    with pytest.raises(FileNotFoundError, match="missing.xml"):
+    with pytest.raises(FileNotFoundError, match=r"missing.xml"):
         build_mjcf_worlds(tmp_path / "missing.xml", 2, "cpu")
     wrong = tmp_path / "wrong.xml"
     wrong.write_text("<robot/>")

@@ -165,6 +165,7 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
         text=True,
         cwd=ROOT,
         timeout=300,
+        check=False,
     )
     text = result.stdout
     assert result.returncode == 1, text + result.stderr
@@ -210,7 +211,11 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
 
     # The report lists the crashed run as missing, with its log.
     result = subprocess.run(
-        [sys.executable, str(ROOT / "tools" / "report.py"), str(out)], capture_output=True, text=True, cwd=ROOT
+        [sys.executable, str(ROOT / "tools" / "report.py"), str(out)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        check=False,
     )
     assert result.returncode == 0, result.stderr
     report = (out / "report" / "report.md").read_text()

@@ -76,7 +76,7 @@ def test_a_bad_tuning_file_fails_before_anything_starts(tmp_path):
         tmp_path / "typo.yaml",
         methods=[{"algo": "ppo", "space": {"algorithm.learning_rat": LR["algorithm.learning_rate"]}}],
     )
-    with pytest.raises(ConfigError, match="Did you mean 'algorithm.learning_rate'"):
+    with pytest.raises(ConfigError, match=r"Did you mean 'algorithm.learning_rate'"):
         Tuner(load_tuning(str(typo), [f"out={out}"])).run()
     outside = write_tuning(
         tmp_path / "outside.yaml",

@@ -59,6 +59,7 @@ def run_tool(tool: str, *args: str, timeout: float = 180) -> subprocess.Complete
         capture_output=True,
         text=True,
         timeout=timeout,
+        check=False,
     )
 
 
@@ -83,7 +84,13 @@ def call_tool(tool: str, *args: str) -> subprocess.CompletedProcess:
 def run_python(code: str, timeout: float = 180) -> subprocess.CompletedProcess:
     """``python -c code`` with the project importable (for runs with a fault patched in)."""
     return subprocess.run(
-        [sys.executable, "-c", code], cwd=REPO, env=tool_env(), capture_output=True, text=True, timeout=timeout
+        [sys.executable, "-c", code],
+        cwd=REPO,
+        env=tool_env(),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        check=False,
     )
 
 

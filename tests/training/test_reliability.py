@@ -12,6 +12,7 @@ CI runs every case; the quick suite (-m "not slow") runs one or two of each kind
 from __future__ import annotations
 
 import json
+import pathlib
 
 import numpy as np
 import pytest
@@ -396,12 +397,12 @@ def _amass(path, frames=60, fps=30.0, trans_scale=1.0, nan=False):
 
 
 MOTIONS = {
-    "one-frame": (dict(frames=1), "1 frame"),
-    "resampled-to-one": (dict(frames=2, fps=1000.0), "too short to resample"),
-    "fps-1e9": (dict(fps=1e9), "mocap_framerate=1e+09"),
-    "fps-1e-6": (dict(fps=1e-6), "mocap_framerate=1e-06"),
-    "huge-translation": (dict(trans_scale=1e12), "'trans' holds values beyond"),
-    "nan-pose": (dict(nan=True), "NaN or infinite"),
+    "one-frame": ({"frames": 1}, "1 frame"),
+    "resampled-to-one": ({"frames": 2, "fps": 1000.0}, "too short to resample"),
+    "fps-1e9": ({"fps": 1e9}, "mocap_framerate=1e+09"),
+    "fps-1e-6": ({"fps": 1e-6}, "mocap_framerate=1e-06"),
+    "huge-translation": ({"trans_scale": 1e12}, "'trans' holds values beyond"),
+    "nan-pose": ({"nan": True}, "NaN or infinite"),
 }
 
 
@@ -455,13 +456,13 @@ def _boom(*args, **kwargs):
 
 
 def test_unexpected_error_before_the_run_dir_exists_goes_to_a_log_file(tmp_path, monkeypatch):
-    import refpo_warp.training.train_run as train_run
+    from refpo_warp.training import train_run
 
     monkeypatch.setattr(train_run, "build_runner", _boom)
     proc = call_tool("train", *tiny("max_iterations=2", f"run_dir={tmp_path / 'never'}"))
     assert_refused(proc, UNEXPECTED, "unexpected RuntimeError: injected fault", "full traceback is in")
     log = proc.stderr.rsplit("full traceback is in ", 1)[1].strip()
-    assert "Traceback (most recent call last)" in open(log).read()
+    assert "Traceback (most recent call last)" in pathlib.Path(log).read_text()
     assert not (tmp_path / "never").exists()
 
 

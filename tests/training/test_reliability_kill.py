@@ -8,6 +8,7 @@ checkpoint interval.
 
 from __future__ import annotations
 
+import itertools
 import json
 import re
 from pathlib import Path
@@ -38,7 +39,7 @@ def corrupt_files(run_dir: Path) -> list[str]:
         if (run_dir / name).exists():
             try:
                 reader(run_dir)
-            except Exception as err:  # noqa: BLE001
+            except Exception as err:
                 bad.append(f"{name}: {err}")
     return bad
 
@@ -63,7 +64,7 @@ def assert_continuous(run_dir: Path) -> None:
     rows = read_rows(run_dir)
     assert [r["iteration"] for r in rows] == list(range(len(rows))), "iterations repeat or skip after resume"
     steps = [r["env_steps"] for r in rows]
-    assert all(b > a for a, b in zip(steps, steps[1:])), "env_steps go back after resume"
+    assert all(b > a for a, b in itertools.pairwise(steps)), "env_steps go back after resume"
 
 
 def test_kill_during_training(tmp_path):
@@ -73,7 +74,7 @@ def test_kill_during_training(tmp_path):
         "train", *tiny("max_iterations=400", "runner.save_interval=3", "eval.at_end=false", f"run_dir={run_dir}")
     )
     for round_, at in enumerate((4, 11)):
-        assert kill_when(proc, lambda: last_logged(run_dir) >= at), proc.stderr.read() if proc.stderr else ""
+        assert kill_when(proc, lambda at=at: last_logged(run_dir) >= at), proc.stderr.read() if proc.stderr else ""
         logged, bad = last_logged(run_dir), corrupt_files(run_dir)
         resumed_from, _ = resume(run_dir, logged + 2)
         numbers.append(

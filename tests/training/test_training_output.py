@@ -32,7 +32,7 @@ def test_rsl_rl_messages_only_with_verbose(tmp_path, capsys, quick_run):
 def test_iterations_count_from_zero_everywhere_and_the_run_ends_with_its_summary(tmp_run_dir, capsys, quick_run):
     results = train(quick_run + [f"run_dir={tmp_run_dir}"])
     out = capsys.readouterr().out
-    shown = [int(m) for m in re.findall(r"^\[it (\d+)/2\]", out, flags=re.M)]
+    shown = [int(m) for m in re.findall(r"^\[it (\d+)/2\]", out, flags=re.MULTILINE)]
     rows = [json.loads(line) for line in (tmp_run_dir / "progress.jsonl").read_text().splitlines()]
     assert shown == [r["iteration"] for r in rows] == [0, 1, 2]
     assert sorted(p.name for p in tmp_run_dir.glob("model_*.pt")) == ["model_0.pt", "model_2.pt"]
@@ -44,7 +44,7 @@ def test_iterations_count_from_zero_everywhere_and_the_run_ends_with_its_summary
         ("eval.json", tmp_run_dir / "eval.json"),
         ("TensorBoard", tmp_run_dir),
     ]:
-        assert re.search(rf"^  {name} +{re.escape(str(where))}", block, flags=re.M), (name, block)
+        assert re.search(rf"^  {name} +{re.escape(str(where))}", block, flags=re.MULTILINE), (name, block)
     assert "curves.png" in block and "gridworld_field_N1.png" in block
     n1 = results["results"]["N=1"]
     assert f"return {n1['return_mean']:.2f}" in block and f"success_rate {n1['success_rate']:.4g}" in block

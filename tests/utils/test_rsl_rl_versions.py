@@ -40,7 +40,7 @@ GAUSSIAN = (
 
 def test_version_flags_agree_with_the_installed_package():
     assert (5, 0) <= RSL_RL_VERSION < (6, 0)
-    assert NORMALIZERS_UPDATE_PER_STEP == (RSL_RL_VERSION < (5, 5))
+    assert (RSL_RL_VERSION < (5, 5)) == NORMALIZERS_UPDATE_PER_STEP
 
 
 def test_refpo_normalisers_see_every_observation_once():

@@ -56,8 +56,9 @@ def cpu_rate(env, steps: int, seed: int = 0) -> float:
 
 def kernel_profile(env, steps: int) -> dict[str, list]:
     """{kernel: [launches, seconds, threads]} over ``steps`` eager steps (graph replay turned off)."""
-    from refpo_warp.utils.warp_setup import wp
     from warp._src import context
+
+    from refpo_warp.utils.warp_setup import wp
 
     stats = collections.defaultdict(lambda: [0, 0.0, 0])
     original = context.launch

@@ -177,8 +177,9 @@ def probe_run(run: Path, options: dict) -> dict:
 def point_mass_paths(loaded: CheckpointPolicy, actor) -> dict:
     """Positions, distance to the target (the origin) and |action| of the 1-step and 10-step policies, the same 8
     initial states (one env seed) and the same noise stream."""
-    from refpo_warp.envs.registry import make_env
     from one_step_probes import drive
+
+    from refpo_warp.envs.registry import make_env
 
     out = {}
     for n in (1, actor.num_flow_steps):
@@ -241,8 +242,10 @@ def screen(seeds: dict[str, dict[int, Path]], task: str, options: dict, out: Pat
     lines = [
         f"# Screen on {task}: {iterations} iterations from the iteration-{iteration} checkpoint of ReFPO",
         "",
-        "One-step error (on the checkpoint's N-step states) and N = 10 / N = 1 returns (32 episodes) per seed "
-        f"{', '.join(map(str, sorted(runs)))}; the checkpoint itself first.",
+        (
+            "One-step error (on the checkpoint's N-step states) and N = 10 / N = 1 returns (32 episodes) per seed "
+            f"{', '.join(map(str, sorted(runs)))}; the checkpoint itself first."
+        ),
         "",
         "| candidate | " + " | ".join(f"seed {s}: error, N=10 / N=1" for s in sorted(runs)) + " |",
         "|---|" + "---|" * len(runs),
@@ -293,8 +296,9 @@ def intervene(
     import contextlib
     import io
 
-    from refpo_warp.config.saved import load_run_config
     from one_step_probes import sampler_probe, velocity_error_by_tau
+
+    from refpo_warp.config.saved import load_run_config
     from refpo_warp.runner.build import build_runner, seed_everything
 
     checkpoint = run / f"model_{iteration}.pt"

@@ -1,5 +1,5 @@
-"""Probes of a flow policy's one-step sampler, for ``one_step_analysis.py`` beside it: where a_1(eps) lands against a_N(eps),
-against the policy's mean action and against the noise it started from; the velocity error by flow time on the
+"""Probes of a flow policy's one-step sampler, for ``one_step_analysis.py`` beside it: where a_1(eps) lands against
+a_N(eps), against the policy's mean action and against the noise it started from; the velocity error by flow time on the
 sampler's own straight paths and on independent pairs; and what the 1-step and N-step policies do in an env from
 the same initial states.
 

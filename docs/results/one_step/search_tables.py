@@ -70,7 +70,7 @@ def goal() -> str:
 def main() -> int:
     text = PAGE.read_text(encoding="utf-8")
     for name, make in (("full_runs", full_runs), ("goal", goal)):
-        pattern = re.compile(rf"(<!-- search: {name} -->)(.*?)(<!-- search: end -->)", re.S)
+        pattern = re.compile(rf"(<!-- search: {name} -->)(.*?)(<!-- search: end -->)", re.DOTALL)
         if not pattern.search(text):
             print(f"{PAGE}: no '<!-- search: {name} -->' ... '<!-- search: end -->' markers", file=sys.stderr)
             return 2

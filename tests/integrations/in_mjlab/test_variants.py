@@ -118,7 +118,7 @@ def test_a_users_task_gets_a_variant_and_bad_ones_are_named():
     assert register_refpo_variant("Test-User-Cartpole") == "Test-User-Cartpole-ReFPO"
     assert load_rl_cfg("Test-User-Cartpole-ReFPO").algorithm.class_name == ALGORITHM_CLASS
     assert load_runner_cls("Test-User-Cartpole-ReFPO") is refpo_runner_cls(None)
-    with pytest.raises(KeyError, match="'Test-Missing' is not a registered mjlab task; registered: .*Mjlab-Cartpole"):
+    with pytest.raises(KeyError, match=r"'Test-Missing' is not a registered mjlab task; registered: .*Mjlab-Cartpole"):
         register_refpo_variant("Test-Missing")
     vision = load_rl_cfg("Mjlab-Lift-Cube-Yam-Rgb")
     with pytest.raises(ValueError, match="FlowActor is an MLP"):

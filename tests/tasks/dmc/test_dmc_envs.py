@@ -50,7 +50,7 @@ def test_sizes_and_timing(task):
     assert env.get_observations()["policy"].shape == (N, num_obs)
     assert env.step_dt == pytest.approx(ctrl_dt)
     assert env.max_episode_length == 1000
-    obs, rew, done, extras = env.step(torch.zeros(N, num_act))
+    obs, rew, done, _extras = env.step(torch.zeros(N, num_act))
     assert obs["policy"].shape == (N, num_obs) and rew.shape == (N,) and not done.any()
     assert torch.isfinite(obs["policy"]).all() and torch.isfinite(rew).all()
     assert get_task(f"dmc_{task}").cfg_overrides == {"task": task}
@@ -212,7 +212,7 @@ def test_time_out_truncates_and_restarts():
     for _ in range(999):
         _, _, done, extras = env.step(zeros)
         assert not done.any()
-    obs, rew, done, extras = env.step(zeros)
+    obs, _rew, done, extras = env.step(zeros)
     assert done.all() and extras["time_outs"].all()  # truncated: the value is bootstrapped
     assert not env._terminated.any()
     assert (env.episode_length_buf == 0).all()

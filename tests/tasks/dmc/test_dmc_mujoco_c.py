@@ -1,9 +1,9 @@
 """Newton/MuJoCo-Warp envs against the MuJoCo C library running the same MJCF file from the same states.
 
 Both sides start from the env's reset states and apply the same controls (envs 0-1 passive, envs 2-3 random
-actions in [-1.5, 1.5], squashed by tanh on both sides as the env does). Positions, velocities, observations and rewards are compared after every
-control step; observations and rewards on the C side come from the independent numpy references in
-``dmc_mujoco_reference.py`` (Playground formulas on MuJoCo's own kinematics).
+actions in [-1.5, 1.5], squashed by tanh on both sides as the env does). Positions, velocities, observations and
+rewards are compared after every control step; observations and rewards on the C side come from the independent
+numpy references in ``dmc_mujoco_reference.py`` (Playground formulas on MuJoCo's own kinematics).
 
 Tolerances. The DMC models keep Playground's deliberately low solver iteration caps (1-4). Where a constraint is
 active (contacts, joint limits, friction loss, the ball-in-cup string), MuJoCo Warp and MuJoCo C then stop at
@@ -73,7 +73,7 @@ def _compare(task, converged, steps, tol_q, tol_v, tol_obs, tol_rew):
 
     gen = torch.Generator().manual_seed(0)
     worst = np.zeros(4)
-    for step in range(steps):
+    for _step in range(steps):
         actions = (torch.rand(N, model.nu, generator=gen) * 3.0 - 1.5) * torch.tensor([[0.0], [0.0], [1.0], [1.0]])
         obs, rew, done, _ = env.step(actions)
         assert not done.any()

@@ -106,4 +106,4 @@ def test_small_control_factor():
 
 
 def test_default_value_at_margin_is_dm_controls():
-    assert rewards.DEFAULT_VALUE_AT_MARGIN == pytest.approx(0.1)
+    assert pytest.approx(0.1) == rewards.DEFAULT_VALUE_AT_MARGIN

@@ -175,7 +175,7 @@ def test_kinematic_replay_gives_zero_error_and_maximal_reward(env):
 def test_observation_matches_numpy_reference(env):
     generator = torch.Generator().manual_seed(0)
     for _ in range(2):
-        obs, _, done, _ = env.step(0.3 * (torch.rand(3, 69, generator=generator) * 2 - 1))
+        obs, _, _done, _ = env.step(0.3 * (torch.rand(3, 69, generator=generator) * 2 - 1))
     ref = env.reference_at(torch.from_numpy(env.obs_time.numpy().copy()))
     sim = sim_bodies(env)
     expected = np.stack([numpy_observation(*[a[i] for a in sim], *[a[i] for a in frames(ref)]) for i in range(3)])
@@ -273,7 +273,7 @@ def test_a_body_off_the_reference_terminates_the_episode(env):
     q = env.sim.joint_q.numpy()
     q[1, 1] += 0.3
     env.sim.joint_q.assign(q)
-    _, rewards, done, extras = env.step(torch.zeros(3, 69))
+    _, _rewards, _done, extras = env.step(torch.zeros(3, 69))
     assert env._terminated[1] and not extras["time_outs"][1]
     assert float(env._metrics["success"][1]) == 0.0 and float(env._metrics["alive_steps"][1]) == 2.0
     assert float(env._metrics["mpjpe_mm"][1]) > 100.0  # the second frame was 0.3 m off
@@ -306,7 +306,7 @@ def test_eval_metrics_for_a_clip_played_to_its_end(eval_env):
     scale = torch.tensor(sk.ACTION_SCALE, dtype=torch.float32)
     steps0 = int(np.floor(env.motion.clip_duration[0] / DT + 1e-6))
     mpjpe = []
-    for k in range(1, steps0 + 1):
+    for k in range(1, steps0 + 1):  # noqa: B007  (k, the steps taken, is read after the loop)
         ref = env.reference_at(torch.from_numpy(env.obs_time.numpy().copy()))
         _, _, done, extras = env.step(torch.from_numpy(ref.dof_pos.numpy().copy()) / scale)
         pos, _, _, _ = sim_bodies(env)

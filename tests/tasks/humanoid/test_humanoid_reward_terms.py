@@ -28,14 +28,14 @@ def _launch(params, episode_length=5):
     pos = np.stack([np.zeros(NB), np.zeros(NB), 1.0 + 0.01 * np.arange(NB)], -1)
     body_q = np.concatenate([pos, np.tile([0.0, 0.0, 0.0, 1.0], (NB, 1))], -1)
     half = 0.1  # half of the 0.2 rad turn
-    arrays = dict(
-        body_q=wp.array(np.tile(body_q, (n, 1, 1)).astype(np.float32), dtype=wp.transform),
-        body_qd=wp.zeros((n, NB), dtype=wp.spatial_vector),
-        body_com=wp.zeros(NB, dtype=wp.vec3),
-        joint_q=wp.zeros((n, 7 + NDOF), dtype=float),
-        joint_qd=wp.array(np.concatenate([np.zeros((n, 6)), np.ones((n, NDOF))], 1).astype(np.float32)),
-        joint_target=wp.array(np.concatenate([np.zeros((n, 7)), np.full((n, NDOF), 0.01)], 1).astype(np.float32)),
-    )
+    arrays = {
+        "body_q": wp.array(np.tile(body_q, (n, 1, 1)).astype(np.float32), dtype=wp.transform),
+        "body_qd": wp.zeros((n, NB), dtype=wp.spatial_vector),
+        "body_com": wp.zeros(NB, dtype=wp.vec3),
+        "joint_q": wp.zeros((n, 7 + NDOF), dtype=float),
+        "joint_qd": wp.array(np.concatenate([np.zeros((n, 6)), np.ones((n, NDOF))], 1).astype(np.float32)),
+        "joint_target": wp.array(np.concatenate([np.zeros((n, 7)), np.full((n, NDOF), 0.01)], 1).astype(np.float32)),
+    }
     ref = MotionFrames()  # the body arrays: the reward reads no joint angles or rates
     ref.body_pos = wp.array(np.tile(pos + [0.1, 0.0, 0.0], (n, 1, 1)).astype(np.float32), dtype=wp.vec3)
     turned = np.tile([0.0, 0.0, math.sin(half), math.cos(half)], (n, NB, 1))

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 import torch
-
 from constructor_config import effective_config  # tests/ is on sys.path under pytest
+
 from refpo_warp.config.resolve import resolve_config
 from refpo_warp.envs.registry import make_env
 from refpo_warp.runner.build import build_runner, rsl_rl_config
