@@ -59,10 +59,9 @@ PAPER_PASSES = {
 
 def algorithms() -> list[str]:
     """Every algo file of the config folders (nothing to list here when an algorithm is added)."""
-    from refpo_warp.config.config_path import config_path
-    from refpo_warp.config.layers import algo_names
+    from refpo_warp.config.config_set import config_set
 
-    found = algo_names(config_path())
+    found = config_set().algo_names()
     return [a for a in ORDER if a in found] + sorted(set(found) - set(ORDER))
 
 

@@ -4,7 +4,7 @@ A user's folder has the layout of the shipped ``configs/``: ``task/<task>.yaml``
 ``sweep/<name>.yaml`` (any of them). It is named by the run option ``config_dir=DIR`` (saved in the run's config, so
 its evaluation finds the files again) and by the environment variable ``REFPO_CONFIG_PATH`` (folders separated by
 ``:``); its files are validated, explained and listed like the shipped ones (a task file that names no registered
-task adds one: ``refpo_warp.config.config_tasks``). Each name is found in one folder only: a file that repeats a
+task adds one: ``refpo_warp.config.config_set``). Each name is found in one folder only: a file that repeats a
 name of another folder (a shipped one included) is an error; derive from it with ``base:`` instead. The run
 options' defaults are the shipped ``default.yaml``'s.
 """

@@ -31,9 +31,9 @@ def _class_default(cfg: dict, section: str, name: str) -> tuple[Any, str] | None
 
 
 def _env_default(cfg: dict, section: str, name: str) -> tuple[Any, str] | None:
-    from refpo_warp.envs.registry import get_task
+    from refpo_warp.config.config_set import task_spec
 
-    spec = get_task(cfg["task"])
+    spec = task_spec(cfg)
     if name in spec.cfg_overrides:
         return spec.cfg_overrides[name], f"the task id {cfg['task']} (its TaskSpec)"
     defaults = spec.cfg_class.defaults()
@@ -68,9 +68,9 @@ def all_keys(cfg: dict) -> list[str]:
     keys = list(flatten(cfg))
     for section in CLASS_SECTIONS:
         keys += [f"{section}.{n}" for n in class_defaults(cfg[section]["class_name"]) if n not in POSITIONAL[section]]
-    from refpo_warp.envs.registry import get_task
+    from refpo_warp.config.config_set import task_spec
 
-    keys += [f"env.{n}" for n in get_task(cfg["task"]).cfg_class.defaults()]
+    keys += [f"env.{n}" for n in task_spec(cfg).cfg_class.defaults()]
     from refpo_warp.render.options import VideoOptions
 
     keys += [f"video.{n}" for n in VideoOptions.__dataclass_fields__]

@@ -15,13 +15,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from refpo_warp.config.config_path import DEFAULT_FILE, ConfigPath, config_path
-from refpo_warp.config.config_tasks import register_config_tasks
+from refpo_warp.config.config_set import ConfigSet, config_set
 from refpo_warp.config.dotted import flatten, merge, parse_overrides, set_dotted
-from refpo_warp.config.layers import PROFILE_KEYS, Layer, algo_names, generic_layers, specific_layers
-from refpo_warp.config.yaml_files import load_yaml
+from refpo_warp.config.layers import PROFILE_KEYS, Layer, generic_layers, specific_layers
 from refpo_warp.config.run_options import check_combinations
 from refpo_warp.config.validate import validate
+from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, unknown
 
 COMMAND_LINE = "command line"
@@ -29,43 +28,37 @@ COMMAND_LINE = "command line"
 
 @dataclass
 class Resolution:
-    """A resolved config and, per dotted key, every layer that set it with the value it gave (in order), and the
-    comment the last of them gives it on its line (``notes``)."""
+    """A resolved config and, per dotted key, every layer that set it with the value it gave (in order), the
+    comment the last of them gives it on its line (``notes``), and the spec of its task (``task``)."""
 
     cfg: dict
     sources: dict[str, list[tuple[str, Any]]] = field(default_factory=dict)
     layers: list[Layer] = field(default_factory=list)
     notes: dict[str, str] = field(default_factory=dict)
+    task: TaskSpec | None = None
 
 
-def run_config_path(flat: dict[str, Any]) -> ConfigPath:
-    """The config path of a run (its ``config_dir`` option and ``REFPO_CONFIG_PATH``), its user tasks registered."""
+def run_config_set(flat: dict[str, Any]) -> ConfigSet:
+    """The config files of a run: those of its ``config_dir`` option, of ``REFPO_CONFIG_PATH`` and the shipped ones."""
     config_dir = flat.get("config_dir")
     if config_dir is not None and not isinstance(config_dir, str):
         raise ConfigError(f"config_dir={config_dir!r} is invalid; expected the path of a folder")
-    path = config_path(config_dir)
-    register_config_tasks(path)
-    return path
+    return config_set(config_dir)
 
 
-def identity(flat: dict[str, Any], path: ConfigPath) -> tuple[str, str]:
+def identity(flat: dict[str, Any], configs: ConfigSet) -> tuple[str, str]:
     """The task and algo a flat override dict asks for (default.yaml's when not given), each checked by name."""
-    from refpo_warp.envs.registry import list_tasks
-
-    defaults = load_yaml(DEFAULT_FILE)
+    defaults = configs.defaults.data
     task, algo = str(flat.get("task", defaults["task"])), str(flat.get("algo", defaults["algo"]))
-    if task not in list_tasks():
-        raise unknown("task", task, list_tasks())
-    if algo not in algo_names(path):
-        raise unknown("algo", algo, algo_names(path))
+    configs.task(task)
+    if algo not in configs.algo_names():
+        raise unknown("algo", algo, configs.algo_names())
     return task, algo
 
 
-def _with_env_prefix(flat: dict[str, Any], task: str, defaults: dict) -> dict[str, Any]:
+def _with_env_prefix(flat: dict[str, Any], task: TaskSpec, defaults: dict) -> dict[str, Any]:
     """Env options given without the ``env.`` prefix (``motion_file=clips/``) under their prefixed key."""
-    from refpo_warp.envs.registry import get_task
-
-    fields = get_task(task).cfg_class.defaults()
+    fields = task.cfg_class.defaults()
     out = dict(flat)
     for key in [k for k in flat if "." not in k and k not in defaults and k in fields]:
         if f"env.{key}" in flat:
@@ -82,23 +75,24 @@ def resolve(overrides: list[str] | dict[str, Any] | None = None, device_type: st
         device_type: ``"cpu"`` or ``"cuda"`` profile to apply; default: from the resolved ``device``.
     """
     flat = parse_overrides(overrides) if isinstance(overrides, list) else dict(overrides or {})
-    path = run_config_path(flat)
+    configs = run_config_set(flat)
     if flat.get("config_dir"):  # saved with the run as an absolute path: its evaluation finds it from anywhere
         flat["config_dir"] = str(Path(flat["config_dir"]).expanduser().resolve())
-    task, algo = identity(flat, path)
+    task, algo = identity(flat, configs)
     flat = {k: v for k, v in flat.items() if k not in ("task", "algo")}
     for key in flat:
         if key.split(".")[0] in PROFILE_KEYS:
             raise ConfigError(f"'{key}' is a config-file key, not a run option")
-    layers = generic_layers(task, path)
+    spec, task_files = configs.task(task), configs.task_chain(task)
+    layers = generic_layers(configs.defaults, task_files)
     defaults = layers[0].values
-    flat = _with_env_prefix(flat, task, defaults)
+    flat = _with_env_prefix(flat, spec, defaults)
     if device_type is None:
         from refpo_warp.utils.device import resolve_device
 
         device = flat.get("device", _merged(layers).get("device", "auto"))
         device_type = resolve_device(str(device)).split(":")[0]
-    layers += specific_layers(task, algo, device_type, path)
+    layers += specific_layers(task_files, configs.algo_chain(algo), device_type)
     layers.append(Layer(COMMAND_LINE, {}))
     cfg: dict = {}
     sources: dict[str, list[tuple[str, Any]]] = {}
@@ -116,9 +110,9 @@ def resolve(overrides: list[str] | dict[str, Any] | None = None, device_type: st
         sources.setdefault(key, []).append((COMMAND_LINE, value))
         notes.pop(key, None)
     cfg["task"], cfg["algo"] = task, algo
-    cfg = validate(cfg, defaults)
+    cfg = validate(cfg, defaults, spec)
     check_combinations(cfg)
-    return Resolution(cfg, sources, layers, notes)
+    return Resolution(cfg, sources, layers, notes, spec)
 
 
 def _merged(layers: list[Layer]) -> dict:

@@ -12,10 +12,12 @@ from pathlib import Path
 from typing import Any
 
 from refpo_warp.config.classes import CLASS_SECTIONS, class_parameters, resolve_class
+from refpo_warp.config.config_set import task_spec
 from refpo_warp.config.dotted import flatten
-from refpo_warp.config.resolve import resolve_config
+from refpo_warp.config.resolve import resolve, resolve_config
 from refpo_warp.config.run_options import RUN_RULES
 from refpo_warp.config.yaml_files import load_yaml
+from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, DataFileError
 from refpo_warp.utils.option_rules import rules_for
 
@@ -49,14 +51,15 @@ def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
                 f"keeps its {key}: choose another run_dir for a new run"
             )
     try:
-        cfg = resolve_config({**flatten(saved), **overrides})
+        resolution = resolve({**flatten(saved), **overrides})
     except ConfigError as err:
         try:  # whose fault: the file's (it no longer resolves on its own) or the overrides'
             resolve_config(flatten(saved))
         except ConfigError:
             raise DataFileError(f"{Path(run_dir) / RUN_CONFIG}: {err}") from None
         raise
-    changed = fixed_changes(saved, cfg)
+    cfg = resolution.cfg
+    changed = fixed_changes(saved, cfg, resolution.task)
     if changed:
         raise ConfigError(
             f"the run in {run_dir} keeps its task, algorithm and model, but these options differ from "
@@ -65,15 +68,17 @@ def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
     return cfg
 
 
-def fixed_changes(saved: dict, cfg: dict) -> list[str]:
+def fixed_changes(saved: dict, cfg: dict, task: TaskSpec | None = None) -> list[str]:
     """``key: saved -> new`` for every option that may not change on resume and does. An option the saved config
-    does not list (left at its default, or added to the code since) is compared with its default."""
+    does not list (left at its default, or added to the code since) is compared with its default. ``task``: the spec
+    of ``cfg["task"]`` (found from the config when not given)."""
+    task = task_spec(cfg) if task is None else task
     old, new = flatten(saved), flatten(cfg)
     changes = []
     for key, value in new.items():
-        if not _is_fixed(cfg, key):
+        if not _is_fixed(cfg, task, key):
             continue
-        before = old[key] if key in old else _default(cfg, key)
+        before = old[key] if key in old else _default(cfg, task, key)
         if before is not _UNKNOWN and _plain(before) != _plain(value):
             changes.append(f"{key}: {before!r} -> {value!r}")
     return changes
@@ -87,19 +92,17 @@ def _plain(value: Any) -> Any:
     return [_plain(v) for v in value] if isinstance(value, (list, tuple)) else value
 
 
-def _default(cfg: dict, key: str) -> Any:
+def _default(cfg: dict, task: TaskSpec, key: str) -> Any:
     """The value an option has when a config does not set it (constructor or env cfg default)."""
     section, _, name = key.partition(".")
     if section in CLASS_SECTIONS and "." not in name:
         return class_parameters(cfg[section]["class_name"]).get(name, _UNKNOWN)
     if section == "env" and "." not in name:
-        from refpo_warp.envs.registry import get_task
-
-        return get_task(cfg["task"]).cfg_class.defaults().get(name, _UNKNOWN)
+        return task.cfg_class.defaults().get(name, _UNKNOWN)
     return _UNKNOWN
 
 
-def _is_fixed(cfg: dict, key: str) -> bool:
+def _is_fixed(cfg: dict, task: TaskSpec, key: str) -> bool:
     section, _, name = key.partition(".")
     if key in IDENTITY_KEYS:
         return True
@@ -110,9 +113,7 @@ def _is_fixed(cfg: dict, key: str) -> bool:
         default = section in ("actor", "critic")  # the networks
         return default if rule is None or rule.fixed is None else rule.fixed
     if section == "env":
-        from refpo_warp.envs.registry import get_task
-
-        rule = rules_for(get_task(cfg["task"]).cfg_class).get(name)
+        rule = rules_for(task.cfg_class).get(name)
         return bool(rule is not None and rule.fixed)
     rule = RUN_RULES.get(key)
     return bool(rule is not None and rule.fixed)

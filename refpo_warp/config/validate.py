@@ -15,6 +15,7 @@ from __future__ import annotations
 from refpo_warp.config.classes import CLASS_SECTIONS, check_class_kind, section_options
 from refpo_warp.config.dotted import LEAF_KEYS
 from refpo_warp.config.run_options import RUN_RULES
+from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.option_rules import check_options, rules_for
 
@@ -39,12 +40,10 @@ def class_section(section: str, values: dict) -> dict:
     return {"class_name": values["class_name"], **check_options(rules_for(cls), options, f"{section}.")}
 
 
-def env_section(task: str, values: dict, prefix: str = "env.") -> dict:
+def env_section(task: TaskSpec, values: dict, prefix: str = "env.") -> dict:
     """Env options: fields of the task's env cfg, each checked by the cfg's rules."""
-    from refpo_warp.envs.registry import get_task
-
-    cfg_class = get_task(task).cfg_class
-    cfg_class.check_keys(values, f"env option for task '{task}'", prefix)
+    cfg_class = task.cfg_class
+    cfg_class.check_keys(values, f"env option for task '{task.task_id}'", prefix)
     return check_options(rules_for(cfg_class), values, prefix)
 
 
@@ -79,14 +78,15 @@ def _schema_keys(schema: dict, prefix: str = "") -> list[str]:
     return keys
 
 
-def validate(cfg: dict, defaults: dict) -> dict:
-    """The merged config with every section validated (see the module docstring); ``defaults`` is default.yaml."""
+def validate(cfg: dict, defaults: dict, task: TaskSpec) -> dict:
+    """The merged config with every section validated (see the module docstring); ``defaults`` is default.yaml,
+    ``task`` the spec of ``cfg["task"]``."""
     for section in CLASS_SECTIONS:
         cfg[section] = class_section(section, cfg.get(section) or {})
-    cfg["env"] = env_section(cfg["task"], cfg.get("env") or {})
+    cfg["env"] = env_section(task, cfg.get("env") or {})
     cfg["video"] = video_section(cfg.get("video") or {})
     if isinstance(cfg.get("eval"), dict):
-        cfg["eval"]["env"] = env_section(cfg["task"], cfg["eval"].get("env") or {}, "eval.env.")
+        cfg["eval"]["env"] = env_section(task, cfg["eval"].get("env") or {}, "eval.env.")
     plain = {k: v for k, v in cfg.items() if k not in CLASS_SECTIONS + ("env", "video")}
     run_options(plain, {k: v for k, v in defaults.items() if k not in CLASS_SECTIONS + ("env", "video")})
     cfg.update(plain)

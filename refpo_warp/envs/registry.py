@@ -4,7 +4,8 @@ Task families are the subpackages of the task root package (``tasks``); each dec
 of ``refpo_warp.envs.task_spec.TaskSpec`` next to its code. The registry finds the families (nothing lists them by
 hand), imports each once and reads its list; the families never import the registry. Listing tasks and resolving configs
 never import a simulator: the env module is imported only when ``make_env`` builds that task. Code outside the task
-root adds tasks with ``register_task``.
+root adds tasks with ``register_task``; a task that a config folder adds (``refpo_warp.config.config_set``) is never
+registered: ``make_env``, ``make_env_cfg`` and ``family_module`` take its ``TaskSpec`` in place of an id.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ _FAMILIES: list[str] = []
 
 def register_task(spec: TaskSpec, replace: bool = False) -> None:
     """Add a task (a family's ``TASKS`` entries are added this way when the family is discovered); ``replace``: a
-    different spec of the same id gives way (a user's task file read again from another config folder)."""
+    different spec of the same id gives way."""
     if not isinstance(spec, TaskSpec):
         raise TypeError(f"register_task takes a TaskSpec, got {type(spec).__name__}")
     if spec.task_id in _TASKS and _TASKS[spec.task_id] != spec and not replace:
@@ -63,10 +64,14 @@ def get_task(task_id: str) -> TaskSpec:
     return _TASKS[task_id]
 
 
-def family_module(task_id: str, name: str):
+def _spec(task: str | TaskSpec) -> TaskSpec:
+    return task if isinstance(task, TaskSpec) else get_task(task)
+
+
+def family_module(task: str | TaskSpec, name: str):
     """The optional module ``name`` of the task's family (``refpo_warp.tasks.<family>.<name>``, e.g. ``evaluation`` or
     ``render``), or None where the family has none."""
-    family = get_task(task_id).entry_point.split(":")[0].rsplit(".", 1)[0]
+    family = _spec(task).entry_point.split(":")[0].rsplit(".", 1)[0]
     try:
         return importlib.import_module(f"{family}.{name}")
     except ModuleNotFoundError as err:
@@ -75,18 +80,19 @@ def family_module(task_id: str, name: str):
         return None
 
 
-def make_env_cfg(task_id: str, **overrides: Any):
-    """The env cfg dataclass of ``task_id`` with ``overrides`` applied (unknown fields raise with a suggestion)."""
-    spec = get_task(task_id)
-    spec.cfg_class.check_keys(overrides, f"env option for task '{task_id}'")
+def make_env_cfg(task: str | TaskSpec, **overrides: Any):
+    """The env cfg dataclass of ``task`` with ``overrides`` applied (unknown fields raise with a suggestion)."""
+    spec = _spec(task)
+    spec.cfg_class.check_keys(overrides, f"env option for task '{spec.task_id}'")
     return spec.cfg_class(**{**spec.cfg_overrides, **overrides})
 
 
-def make_env(task_id: str, num_envs: int = 64, device: str = "auto", seed: int = 0, **env_cfg: Any):
+def make_env(task: str | TaskSpec, num_envs: int = 64, device: str = "auto", seed: int = 0, **env_cfg: Any):
     """Build the rsl_rl ``VecEnv`` of a registered task.
 
     Args:
-        task_id: A registered id such as ``"gridworld"``, ``"dmc_cartpole_balance"`` or ``"humanoid_root"``.
+        task: A registered id such as ``"gridworld"``, ``"dmc_cartpole_balance"`` or ``"humanoid_root"``, or the
+            ``TaskSpec`` of a task a config folder adds (``refpo_warp.config.config_set.task_spec``).
         num_envs: Number of parallel environments (one Warp thread / Newton world each).
         device: ``"auto"`` (CUDA when available, else CPU), ``"cpu"`` or ``"cuda:N"``.
         seed: Seed of the per-env random streams.
@@ -94,8 +100,8 @@ def make_env(task_id: str, num_envs: int = 64, device: str = "auto", seed: int =
 
     With ``action_chunk`` above 1 the env comes wrapped in an ``ActionChunkWrapper`` (H env steps per action).
     """
-    spec = get_task(task_id)
-    cfg = make_env_cfg(task_id, **env_cfg)
+    spec = _spec(task)
+    cfg = make_env_cfg(spec, **env_cfg)
     env = spec.env_class()(cfg, num_envs=num_envs, device=device, seed=seed)
     if cfg.action_chunk > 1:
         from refpo_warp.envs.action_chunk import ActionChunkWrapper

@@ -18,12 +18,11 @@ import math
 from pathlib import Path
 from typing import Any
 
-from refpo_warp.config.config_path import DEFAULT_FILE
 from refpo_warp.config.dotted import parse_overrides
-from refpo_warp.config.resolve import identity, resolve_config, run_config_path
+from refpo_warp.config.resolve import identity, resolve_config, run_config_set
 from refpo_warp.config.run_options import RUN_RULES
 from refpo_warp.config.saved import RUN_CONFIG, load_run_config
-from refpo_warp.config.yaml_files import dump_config, load_yaml
+from refpo_warp.config.yaml_files import dump_config
 from refpo_warp.evaluation.evaluate_run import evaluate_run
 from refpo_warp.evaluation.periodic import periodic_evaluator
 from refpo_warp.evaluation.videos import run_video, wants_video
@@ -52,8 +51,9 @@ def resolve_run(flat: dict[str, Any]) -> dict:
     elif flat.get("run_dir"):
         cfg = load_run_config(Path(flat["run_dir"]), flat)
     else:
-        seed = RUN_RULES["seed"].check("seed", flat.get("seed", load_yaml(DEFAULT_FILE)["seed"]))
-        run_dir = default_run_dir(*identity(flat, run_config_path(flat)), seed)
+        configs = run_config_set(flat)
+        seed = RUN_RULES["seed"].check("seed", flat.get("seed", configs.defaults.data["seed"]))
+        run_dir = default_run_dir(*identity(flat, configs), seed)
         cfg = load_run_config(run_dir, {**flat, "run_dir": str(run_dir)})
     cfg["run_dir"] = str(cfg["run_dir"] or default_run_dir(cfg["task"], cfg["algo"], cfg["seed"]))
     return cfg

@@ -85,17 +85,16 @@ REFPO_PPO_KEYS = tuple(f.name for f in fields(RslRlPpoAlgorithmCfg) if f.name in
 def algo_deltas(algo: str) -> dict:
     """The algorithm options ``configs/algo/<algo>.yaml`` sets beyond ReFPO's own file (its ``base`` chain after
     ``refpo``), e.g. ``refpo_onestep``'s one-step term: the one home of a named ReFPO configuration."""
-    from refpo_warp.config.config_path import config_path
-    from refpo_warp.config.layers import algo_files
+    from refpo_warp.config.config_set import config_set
 
-    chain = algo_files(algo, config_path())
-    if chain[0][0] != "refpo":
+    chain = config_set().algo_chain(algo)
+    if chain[0].name != "refpo":
         raise ValueError(
             f"algo '{algo}' does not derive from refpo: an mjlab ReFPO variant takes a configuration of ReFPO's"
         )
     deltas: dict = {}
-    for _, _, data in chain[1:]:
-        deltas.update({k: v for k, v in (data.get("algorithm") or {}).items() if k != "class_name"})
+    for file in chain[1:]:
+        deltas.update({k: v for k, v in (file.data.get("algorithm") or {}).items() if k != "class_name"})
     return deltas
 
 
