@@ -7,6 +7,7 @@ Several runs can share one figure (e.g. FPO vs ReFPO): each run dir is one colou
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib
@@ -182,7 +183,7 @@ def figure_grid(run_dirs: list[Path], path: Path) -> Path | None:
     return path
 
 
-def plot_runs(run_dirs: list[str | Path], out_dir: str | Path | None = None) -> list[Path]:
+def plot_runs(run_dirs: Sequence[str | Path], out_dir: str | Path | None = None) -> list[Path]:
     """Write ``curves.png`` (return, episode length, success), ``curves_diagnostics.png`` (flow runs) and, when
     every run has the same evaluation figures, ``figures_grid.png`` tiling them; default out dir: the first run's."""
     runs = {_label(Path(d)): read_rows(d) for d in run_dirs}

@@ -45,10 +45,11 @@ def reward_cliff(rewards: list[float]) -> dict:
     if len(rewards) < MIN_PLATEAU + WINDOW:
         return {**out, "message": f"needs {MIN_PLATEAU + WINDOW} iterations, has {len(rewards)}"}
     peak = max(rewards)
-    out.update(peak=peak, peak_iteration=rewards.index(peak))
+    peak_iteration = rewards.index(peak)
+    out.update(peak=peak, peak_iteration=peak_iteration)
     if peak < MIN_PEAK:
         return {**out, "message": f"peak reward {peak:.4g} under {MIN_PEAK:g}"}
-    for start in range(out["peak_iteration"] + MIN_PLATEAU, len(rewards) - WINDOW + 1):
+    for start in range(peak_iteration + MIN_PLATEAU, len(rewards) - WINDOW + 1):
         drop = (peak - sum(rewards[start : start + WINDOW]) / WINDOW) / max(peak, 1e-8)
         if drop >= DROP:
             return {

@@ -86,7 +86,7 @@ _GAINS = {
 PD_GAINS = np.array([(0.0, 0.0)] + [_GAINS[n.split("_")[-1]] for n in BODY_NAMES[1:]], dtype=np.float64)  # (24, 2)
 
 # Policy action a in [-1, 1] maps to a PD target offset + scale * a per DoF (x, y, z hinge of each joint).
-ACTION_SCALE = np.full((NUM_JOINTS, 3), np.pi)
+ACTION_SCALE: np.ndarray = np.full((NUM_JOINTS, 3), np.pi)
 for _knee in ("L_Knee", "R_Knee"):
     ACTION_SCALE[BODY_NAMES.index(_knee) - 1, 1] = 5.0  # knee flexion (y hinge) uses the reference's wider scale
 ACTION_SCALE = ACTION_SCALE.reshape(-1)

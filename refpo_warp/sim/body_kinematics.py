@@ -14,7 +14,7 @@ def world_com_velocity(
     Equals MuJoCo's ``subtreelinvel`` sensor of a root body whose subtree is the whole world (e.g. a walker's torso).
     """
     momentum = wp.vec3(0.0)
-    mass = 0.0
+    mass = float(0.0)
     for b in range(body_qd.shape[1]):
         momentum += body_mass[world, b] * wp.spatial_top(body_qd[world, b])
         mass += body_mass[world, b]

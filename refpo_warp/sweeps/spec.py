@@ -339,8 +339,9 @@ def validate(sweep: Sweep) -> dict[str, str]:
                 resolved[cell] = None
                 errors.setdefault(str(err), [])
                 errors[str(err)].append(run.key)
-        if resolved[cell] is not None:
-            prints[run.key] = fingerprint({**resolved[cell], "seed": run.seed})
+        cell_config = resolved[cell]
+        if cell_config is not None:
+            prints[run.key] = fingerprint({**cell_config, "seed": run.seed})
     if errors:
         lines = [f"- {len(keys)} (task, method) cell(s), e.g. {keys[0]}: {msg}" for msg, keys in errors.items()]
         raise ConfigError(

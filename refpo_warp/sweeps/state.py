@@ -88,7 +88,8 @@ def write_spec(sweep: Sweep, prints: dict[str, str]) -> Path:
 def plan(sweep: Sweep, prints: dict[str, str]) -> tuple[list[Run], list[Run], dict[str, list[str]]]:
     """(runs to train, runs already done, run keys per state) for the current state of the sweep dir."""
     states: dict[str, list[str]] = {}
-    todo, done = [], []
+    todo: list[Run] = []
+    done: list[Run] = []
     for run in sweep.runs:
         state = run_state(run, prints[run.key])
         states.setdefault(state, []).append(run.key)

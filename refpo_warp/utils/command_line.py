@@ -38,10 +38,12 @@ class Flag:
         return f"    {self.name + value:24s}{self.doc}{default}"
 
     def convert(self, text: str) -> Any:
+        kind = self.kind
+        assert kind is not None  # only a flag that takes a value converts one
         try:
-            return self.kind(text)
+            return kind(text)
         except ValueError:
-            raise ConfigError(f"{self.name} {text!r} is invalid; expected {self.kind.__name__} ({self.doc})") from None
+            raise ConfigError(f"{self.name} {text!r} is invalid; expected {kind.__name__} ({self.doc})") from None
 
 
 @dataclass

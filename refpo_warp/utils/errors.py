@@ -67,5 +67,5 @@ def tag_run_dir(run_dir: str | Path) -> Iterator[None]:
     except BaseException as err:
         if getattr(err, "run_dir", None) is None:
             with contextlib.suppress(AttributeError):  # a few built-in exception types take no attributes
-                err.run_dir = Path(run_dir)
+                err.run_dir = Path(run_dir)  # type: ignore[attr-defined]  # any exception type, tagged at run time
         raise

@@ -15,7 +15,6 @@ import warp as wp
 # RL needs no kernel adjoints; skipping them halves cold compile times.
 wp.config.enable_backward = False
 wp.config.log_level = wp.LOG_WARNING
-wp.config.quiet = True
 if os.environ.get("REFPO_WARP_PORTABLE_CACHE"):
     # A generic CPU target keeps a restored kernel cache valid on another CPU model.
     wp.config.cpu_compiler_flags = ""

@@ -103,6 +103,7 @@ class GridWorldEnv(WarpVecEnv):
     """Multimodal GridWorld; ``episode_metrics`` record whether and where (top/bottom) a goal was reached."""
 
     cfg_class = GridWorldCfg
+    cfg: GridWorldCfg
     episode_metrics = ("success", "reached_top")
     supports_final_observations = True
     step_finishes_episode = True  # a few flops per env: one kernel launch instead of three

@@ -34,6 +34,7 @@ class HumanoidTrackingEnv(WarpVecEnv):
     """Motion tracking with 69 PD-controlled hinges; observation groups ``policy`` (masked) and ``critic`` (full)."""
 
     cfg_class = HumanoidTrackingCfg
+    cfg: HumanoidTrackingCfg
     episode_metrics = ("success", "mpjpe_mm", "alive_steps")
     reward_terms = TERMS
     task_truncation = True  # the end of the reference clip
@@ -77,12 +78,12 @@ class HumanoidTrackingEnv(WarpVecEnv):
                 frozen[3 * (body - 1) : 3 * body] = True
         gains = np.repeat(sk.PD_GAINS[1:], 3, axis=0).astype(np.float32)
         eval_body = np.array([n_ in sk.EVAL_TERMINATION_BODIES for n_ in sk.BODY_NAMES], dtype=np.float32)
-        self.action_scale = wp.array(sk.ACTION_SCALE.astype(np.float32), dtype=float, device=dev)
-        self.frozen_dof = wp.array(frozen, dtype=wp.bool, device=dev)
-        self.kp = wp.array(gains[:, 0], dtype=float, device=dev)
-        self.kd = wp.array(gains[:, 1], dtype=float, device=dev)
-        self.eval_body = wp.array(eval_body, dtype=float, device=dev)
-        self.mask = wp.array(self.obs_mask, dtype=float, device=dev)
+        self.action_scale: wp.array = wp.array(sk.ACTION_SCALE.astype(np.float32), dtype=float, device=dev)
+        self.frozen_dof: wp.array = wp.array(frozen, dtype=wp.bool, device=dev)
+        self.kp: wp.array = wp.array(gains[:, 0], dtype=float, device=dev)
+        self.kd: wp.array = wp.array(gains[:, 1], dtype=float, device=dev)
+        self.eval_body: wp.array = wp.array(eval_body, dtype=float, device=dev)
+        self.mask: wp.array = wp.array(self.obs_mask, dtype=float, device=dev)
 
         self.clip_id = wp.zeros(n, dtype=int, device=dev)
         self.start_time = wp.zeros(n, dtype=float, device=dev)

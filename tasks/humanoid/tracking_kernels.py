@@ -139,14 +139,14 @@ def reward_and_termination_kernel(
     reward_terms: wp.array2d(dtype=float),
 ):
     i = wp.tid()
-    pos_err = 0.0
-    rot_err = 0.0
-    vel_err = 0.0
-    angvel_err = 0.0
-    max_dist = 0.0
-    sum_dist = 0.0
-    eval_dist = 0.0
-    eval_count = 0.0
+    pos_err = float(0.0)
+    rot_err = float(0.0)
+    vel_err = float(0.0)
+    angvel_err = float(0.0)
+    max_dist = float(0.0)
+    sum_dist = float(0.0)
+    eval_dist = float(0.0)
+    eval_count = float(0.0)
     for b in range(NB):
         pos = wp.transform_get_translation(body_q[i, b])
         rot = wp.transform_get_rotation(body_q[i, b])
@@ -172,8 +172,8 @@ def reward_and_termination_kernel(
     terms[2] = imitation_term(w[2], k[2], vel_err, 3.0 * n)
     terms[3] = imitation_term(w[3], k[3], angvel_err, 3.0 * n)
 
-    power = 0.0
-    fastest = 0.0
+    power = float(0.0)
+    fastest = float(0.0)
     for d in range(NDOF):
         q = joint_q[i, QS + d]
         qd = joint_qd[i, DS + d]
