@@ -117,6 +117,7 @@ def play(args: list[str]) -> list[Path]:
 
 
 def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -> list[Path]:
+    from refpo_warp.config.config_set import task_spec
     from refpo_warp.config.saved import load_run_config
     from refpo_warp.evaluation.videos import VIDEO_DIR, policy_panels, record
     from refpo_warp.runner.build import build_runner
@@ -129,8 +130,9 @@ def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -
     env_options = {**cfg["env"], **cfg["eval"]["env"]}
     from refpo_warp.envs.registry import make_env
 
+    task = task_spec(cfg)
     host = make_env(
-        cfg["task"], num_envs=video.num_envs, device=resolve_device(cfg["device"]), seed=cfg["seed"], **env_options
+        task, num_envs=video.num_envs, device=resolve_device(cfg["device"]), seed=cfg["seed"], **env_options
     )
     _, runner = build_runner(cfg, None, env=host)
     if checkpoint is not None:
@@ -141,7 +143,7 @@ def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -
     panels, tag = policy_panels(cfg, runner.get_inference_policy(device=runner.device), video)
     seed = cfg["seed"] if video.seed is None else video.seed
     return record(
-        cfg["task"], env_options, runner.device, panels, video, run_dir / VIDEO_DIR, f"model_{iteration}_{tag}", seed
+        task, env_options, runner.device, panels, video, run_dir / VIDEO_DIR, f"model_{iteration}_{tag}", seed
     )
 
 

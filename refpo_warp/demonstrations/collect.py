@@ -15,6 +15,7 @@ from typing import Any
 
 import torch
 
+from refpo_warp.config.config_set import task_spec
 from refpo_warp.config.run_options import RUN_RULES
 from refpo_warp.config.saved import load_run_config
 from refpo_warp.demonstrations.dataset_file import write_dataset
@@ -147,7 +148,7 @@ def _run_policy(options: dict, device: str):
     run_dir = Path(options["run_dir"])
     cfg = load_run_config(run_dir, {"device": device})
     seed = options["seed"] if options["seed"] is not None else cfg["seed"] + COLLECT_SEED_OFFSET
-    env = make_env(cfg["task"], num_envs=_num_envs(options), device=device, seed=seed, **cfg["env"])
+    env = make_env(task_spec(cfg), num_envs=_num_envs(options), device=device, seed=seed, **cfg["env"])
     _, runner = build_runner(cfg, None, env=env)
     if options["checkpoint"]:
         runner.load(options["checkpoint"], map_location=device)

@@ -16,7 +16,9 @@ from functools import partial
 
 import torch
 
-from refpo_warp.envs.registry import family_module, get_task, make_env, make_env_cfg
+from refpo_warp.config.config_set import task_spec
+from refpo_warp.envs.registry import family_module, make_env, make_env_cfg
+from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.evaluation.episodes import run_episodes, summarize
 from refpo_warp.utils.device import resolve_device
 
@@ -27,7 +29,7 @@ def is_flow(actor) -> bool:
     return hasattr(actor, "num_flow_steps") and hasattr(actor, "sample")
 
 
-def family_evaluation(task: str):
+def family_evaluation(task: str | TaskSpec):
     """The task family's optional evaluation module (``refpo_warp.tasks.<family>.evaluation``) or None."""
     return family_module(task, "evaluation")
 
@@ -57,15 +59,16 @@ def eval_num_envs(cfg: dict, interval: bool = False) -> int:
     n = cfg["eval"]["interval_num_envs" if interval else "num_envs"]
     if n:
         return int(n)
-    env_class = get_task(cfg["task"]).env_class()
-    env_cfg = make_env_cfg(cfg["task"], **{**cfg["env"], **cfg["eval"]["env"]})
+    spec = task_spec(cfg)
+    env_class = spec.env_class()
+    env_cfg = make_env_cfg(spec, **{**cfg["env"], **cfg["eval"]["env"]})
     return int(env_class.eval_num_envs(env_cfg)) if hasattr(env_class, "eval_num_envs") else 64
 
 
 def make_eval_env(cfg: dict, interval: bool = False):
     """The evaluation env of a run's config (its ``eval.env`` options over ``env``)."""
     return make_env(
-        cfg["task"],
+        task_spec(cfg),
         num_envs=eval_num_envs(cfg, interval),
         device=resolve_device(cfg["device"]),
         seed=cfg["seed"] + EVAL_SEED_OFFSET,
@@ -84,7 +87,7 @@ def evaluate_actor(cfg: dict, actor, envs, flow_steps: list[int], record_obs: in
     """Summaries per evaluation setting (``{"N=10": {...}, "N=1": {...}, "N=10/zero": ...}`` for flows,
     ``{"mean_action": {...}}`` otherwise) and up to ``record_obs`` observations visited in the first setting (None if
     none were asked for). ``envs``: one env per protocol (``make_eval_envs``), or one env for all of them."""
-    hooks = family_evaluation(cfg["task"])
+    hooks = family_evaluation(task_spec(cfg))
     protocols = cfg["eval"]["initial_noise"]
     envs = envs if isinstance(envs, dict) else dict.fromkeys(protocols, envs)
     settings = [("mean_action", None, protocols[0])]

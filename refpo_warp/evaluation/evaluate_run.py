@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from refpo_warp.config.config_set import task_spec
 from refpo_warp.config.saved import load_run_config
 from refpo_warp.evaluation import curves
 from refpo_warp.evaluation.evaluate_policy import (
@@ -148,7 +149,7 @@ def run_figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
         figures.append(curves.training_curves({label: rows}, run_dir / "curves.png"))
         if any(key in row for row in rows for key, _ in curves.DIAGNOSTICS):
             figures.append(curves.diagnostic_curves({label: rows}, run_dir / "curves_diagnostics.png"))
-    hooks = family_evaluation(cfg["task"])
+    hooks = family_evaluation(task_spec(cfg))
     if hooks is not None and hasattr(hooks, "figures"):
         figures += hooks.figures(run_dir, actor, cfg)
     return figures

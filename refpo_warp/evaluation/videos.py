@@ -16,7 +16,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from refpo_warp.config.config_set import task_spec
 from refpo_warp.envs.registry import family_module, make_env
+from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.render.frames import overlay, tile
 from refpo_warp.render.options import VideoOptions
 from refpo_warp.render.video import write_video
@@ -27,11 +29,12 @@ MAX_FPS = 30.0
 VIDEO_DIR = "videos"
 
 
-def frame_source(task: str, env, options: VideoOptions):
+def frame_source(task: str | TaskSpec, env, options: VideoOptions):
     """The task family's frames of ``env`` (its ``render.py``); a clear error for a family that has none."""
     module = family_module(task, "render")
     if module is None:
-        raise ConfigError(f"task {task!r} has no frames to record: its family has no render.py")
+        task_id = task.task_id if isinstance(task, TaskSpec) else task
+        raise ConfigError(f"task {task_id!r} has no frames to record: its family has no render.py")
     inner = getattr(env, "env", env)  # an action-chunk wrapper's env
     return module.frame_source(
         inner,
@@ -44,7 +47,13 @@ def frame_source(task: str, env, options: VideoOptions):
 
 
 def record_panel(
-    task: str, env_options: dict, device: str, make_policy: Callable, label: str, options: VideoOptions, seed: int
+    task: str | TaskSpec,
+    env_options: dict,
+    device: str,
+    make_policy: Callable,
+    label: str,
+    options: VideoOptions,
+    seed: int,
 ) -> tuple[list[np.ndarray], float]:
     """(frames, frames per second) of one panel: ``options.num_envs`` envs tiled, from their first reset until each
     ended its first episode (or ``options.length`` env steps), every k-th env step drawn (k from the real-time rate
@@ -93,7 +102,7 @@ def side_by_side(panels: list[list[np.ndarray]]) -> list[np.ndarray]:
 
 
 def record(
-    task: str,
+    task: str | TaskSpec,
     env_options: dict,
     device: str,
     policies: dict[str, Callable],
@@ -157,7 +166,7 @@ def run_video(cfg: dict, runner, run_dir: Path, name: str) -> list[Path]:
         panels, _ = policy_panels(cfg, actor, options)
         seed = cfg["seed"] if options.seed is None else options.seed
         return record(
-            cfg["task"],
+            task_spec(cfg),
             {**cfg["env"], **cfg["eval"]["env"]},
             runner.device,
             panels,

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from refpo_warp.config.config_set import task_spec
 from refpo_warp.envs.registry import make_env
 from refpo_warp.runner.distributed import process_rank, rank_device
 from refpo_warp.runner.runner import Runner
@@ -89,7 +90,9 @@ def build_runner(cfg: dict, log_dir: Path | None, env=None):
     rank = process_rank()
     device = rank_device(cfg["device"], rank)
     if env is None:
-        env = make_env(cfg["task"], num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank, **cfg["env"])
+        env = make_env(
+            task_spec(cfg), num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank, **cfg["env"]
+        )
     check_obs_groups(cfg, env)
     log_dir = log_dir if rank.is_main else None
     run_info = {"task": cfg["task"], "algo": cfg["algo"]}  # written into and checked against every checkpoint

@@ -107,12 +107,13 @@ def figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
     """Write ``gridworld_field_N{10,1}.png`` and ``gridworld_trajectories_N{10,1}.png`` into the run dir (a Gaussian
     policy: ``gridworld_field.png`` and ``gridworld_trajectories.png``)."""
     from refpo_warp.envs.registry import make_env
+    from refpo_warp.tasks.gridworld import TASKS
 
     size = int(cfg["env"].get("size", 25))
     device = next(actor.parameters()).device
     env_cfg = {**cfg["env"], "action_chunk": 1, "reset_group_size": 1}  # one move per step from the set starts
-    env = make_env(
-        cfg["task"], num_envs=len(FIGURE_STARTS) * 20, device=str(device), seed=cfg["seed"] + 20_000, **env_cfg
+    env = make_env(  # the family's own task: a config folder's variant of it has the same env
+        TASKS[0], num_envs=len(FIGURE_STARTS) * 20, device=str(device), seed=cfg["seed"] + 20_000, **env_cfg
     )
     written = []
     for n in FIGURE_FLOW_STEPS if hasattr(actor, "num_flow_steps") else (None,):
