@@ -8,4 +8,4 @@ from refpo_warp.algorithms.refpo import ReFPO
 from refpo_warp.algorithms.refpo_aw import AdvantageWeightedReFPO
 from refpo_warp.algorithms.reinflow import ReinFlow
 
-__all__ = ["AdvantageWeightedReFPO", "FPOPlusPlus", "FlowGRPO", "PPO", "ReFPO", "ReinFlow"]
+__all__ = ["PPO", "AdvantageWeightedReFPO", "FPOPlusPlus", "FlowGRPO", "ReFPO", "ReinFlow"]

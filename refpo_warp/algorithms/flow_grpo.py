@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import copy
 import warnings
-from dataclasses import dataclass
 from enum import Enum
 
 import torch
@@ -90,58 +89,56 @@ class FlowGRPO(OnPolicyAlgorithm):
 
     uses_critic = False
 
-    @dataclass(frozen=True)
-    class Options:
-        """Flow-GRPO's options, besides the shared ones (``OnPolicyAlgorithm.Options``) and rsl_rl's PPO arguments."""
+    # Options (refpo_warp/utils/options.py), besides the shared ones (OnPolicyAlgorithm) and rsl_rl's PPO arguments.
+    noise_level: float = option(
+        1.0,
+        Real(0, 100, lo_open=True),
+        "a, the SDE noise level (table (c): 1.0; Flow-GRPO's default 0.7); the log-probabilities need noise",
+    )
+    feather_std: float = option(
+        0.05, Real(0, 100), "std of the Gaussian noise added to the sampled action (table (c): 0.05)"
+    )
+    feather_in_chain: bool = option(
+        True,
+        Flag(),
+        "the feathered action replaces x_N in the chain (FPO's denoising_mdp); else it stays outside the likelihood",
+    )
+    kl_coef: float = option(5e-3, Real(0, 1e6), "beta of the KL term (table (c): 5e-3); 0 turns it off")
+    kl_reference: KlReference = option(
+        "rollout",
+        OneOf(KlReference),
+        "rollout: the policy that collected the batch; initial: a frozen copy of the policy at construction",
+    )
+    group_size: int | None = option(
+        None, Int(2, 1_000_000, optional=True), "envs per group; null: the env's reset_group_size"
+    )
+    group_std: GroupStd = option(
+        "global",
+        OneOf(GroupStd),
+        "advantage std over all envs at a time step (global, Flow-GRPO's default) or within the group",
+    )
+    adv_clip: float | None = option(
+        8.0, Real(0, None, lo_open=True, optional=True), "clip of the advantages (table (c): 8); null: no clip"
+    )
+    timestep_fraction: float = option(
+        1.0,
+        Real(0, 1, lo_open=True),
+        "train the first int(N * fraction) denoising steps (Flow-GRPO: 0.99, i.e. 9 of 10)",
+    )
+    explosion_threshold: float = option(
+        3.0, Real(0, None, lo_open=True), "|log rho| above which a step counts in Flow/explosion_rate"
+    )
+    clip_param: float = option(0.1, doc="PPO clip range (table (c))")
+    learning_rate: float = option(1e-4, doc="learning rate (table (c))")
+    schedule: str = option("fixed", doc="learning-rate schedule (rsl_rl's default: adaptive)")
+    entropy_coef: float = option(0.0, doc="entropy bonus (rsl_rl's default: 0.01)")
+    value_loss_coef: float = option(0.0, doc="no critic, no value loss")
 
-        noise_level: float = option(
-            1.0,
-            Real(0, 100, lo_open=True),
-            "a, the SDE noise level (table (c): 1.0; Flow-GRPO's default 0.7); the log-probabilities need noise",
-        )
-        feather_std: float = option(
-            0.05, Real(0, 100), "std of the Gaussian noise added to the sampled action (table (c): 0.05)"
-        )
-        feather_in_chain: bool = option(
-            True,
-            Flag(),
-            "the feathered action replaces x_N in the chain (FPO's "
-            "denoising_mdp); else it stays outside the likelihood",
-        )
-        kl_coef: float = option(5e-3, Real(0, 1e6), "beta of the KL term (table (c): 5e-3); 0 turns it off")
-        kl_reference: KlReference = option(
-            "rollout",
-            OneOf(KlReference),
-            "rollout: the policy that collected the batch; initial: a frozen copy of the policy at construction",
-        )
-        group_size: int | None = option(
-            None, Int(2, 1_000_000, optional=True), "envs per group; null: the env's reset_group_size"
-        )
-        group_std: GroupStd = option(
-            "global",
-            OneOf(GroupStd),
-            "advantage std over all envs at a time step (global, Flow-GRPO's default) or within the group",
-        )
-        adv_clip: float | None = option(
-            8.0, Real(0, None, lo_open=True, optional=True), "clip of the advantages (table (c): 8); null: no clip"
-        )
-        timestep_fraction: float = option(
-            1.0,
-            Real(0, 1, lo_open=True),
-            "train the first int(N * fraction) denoising steps (Flow-GRPO: 0.99, i.e. 9 of 10)",
-        )
-        explosion_threshold: float = option(
-            3.0, Real(0, None, lo_open=True), "|log rho| above which a step counts in Flow/explosion_rate"
-        )
-        clip_param: float = option(0.1, doc="PPO clip range (table (c))")
-        learning_rate: float = option(1e-4, doc="learning rate (table (c))")
-        schedule: str = option("fixed", doc="learning-rate schedule (rsl_rl's default: adaptive)")
-        entropy_coef: float = option(0.0, doc="entropy bonus (rsl_rl's default: 0.01)")
-        value_loss_coef: float = option(0.0, doc="no critic, no value loss")
-
-    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
+    def check_actor(self, actor: nn.Module) -> None:
         if not (hasattr(actor, "velocity") and hasattr(actor, "encode") and hasattr(actor, "num_flow_steps")):
             raise TypeError("FlowGRPO needs a flow actor; set actor.class_name to refpo_warp.models:FlowActor")
+
+    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         super().__init__(actor, critic, storage, **kwargs)
         if self.bound_coef > 0:
             warnings.warn("FlowGRPO ignores bound_coef: its policy predicts no clean action to bound.")

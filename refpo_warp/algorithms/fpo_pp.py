@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 from enum import Enum
 
 import torch
@@ -48,43 +47,40 @@ def straight_through_max(x: torch.Tensor, cap: float) -> torch.Tensor:
 class FPOPlusPlus(ReFPO):
     """FPO++ on ReFPO's machinery; its defaults are FPO++'s algorithm (module docstring)."""
 
-    @dataclass(frozen=True)
-    class Options:
-        """FPO++'s own options, and its defaults for ReFPO's (``ReFPO.Options``)."""
-
-        cfm_reduction: CfmReduction = option(
-            "sqrt_dim",
-            OneOf(CfmReduction),
-            "sqrt_dim: the CFM loss summed over action dimensions / sqrt(D) (FPO++); mean: ReFPO's mean over them",
-        )
-        loss_cap: float | None = option(
-            20.0,
-            Real(0, None, lo_open=True, optional=True),
-            "cap on the old and new CFM losses of the ratio (FPO++: 20); null: none",
-        )
-        negative_advantage_loss_cap: float | None = option(
-            20.0,
-            Real(0, None, lo_open=True, optional=True),
-            "cap on the new CFM loss where A < 0 (FPO++: 20); null: none",
-        )
-        log_ratio_cap: float | None = option(
-            10.0,
-            Real(0, None, lo_open=True, optional=True),
-            "straight-through upper cap on each pair's log-ratio (FPO++: 10); null: none",
-        )
-        advantage_clip: float | None = option(
-            100.0,
-            Real(0, None, lo_open=True, optional=True),
-            "clamp of the normalised advantages to [-c, c] (FPO++: 100); null: none",
-        )
-        reflow_coef: float = option(0.0, doc="lambda; 0 is FPO++, > 0 ReFPO on FPO++ (algo=refpo_pp: 0.04)")
-        ratio_mode: str = option("per_sample", doc="one ratio per (tau, eps) pair (FPO++)")
-        trust_region: str = option("aspo", doc="PPO's clip for A > 0, SPO's penalty otherwise (FPO++)")
-        tau_sampling: str = option("uniform_inset", doc="flow times U[0.005, 0.995] (FPO++)")
-        output_mode: str | None = option("u", doc="velocity regression (FPO++ hard-codes it)")
-        ema_decay: float | None = option(
-            0.95, doc="the EMA actor that evaluation and export use after its warm-up (FPO++: 0.95)"
-        )
+    # Options (refpo_warp/utils/options.py): FPO++'s own, and its defaults for ReFPO's.
+    cfm_reduction: CfmReduction = option(
+        "sqrt_dim",
+        OneOf(CfmReduction),
+        "sqrt_dim: the CFM loss summed over action dimensions / sqrt(D) (FPO++); mean: ReFPO's mean over them",
+    )
+    loss_cap: float | None = option(
+        20.0,
+        Real(0, None, lo_open=True, optional=True),
+        "cap on the old and new CFM losses of the ratio (FPO++: 20); null: none",
+    )
+    negative_advantage_loss_cap: float | None = option(
+        20.0,
+        Real(0, None, lo_open=True, optional=True),
+        "cap on the new CFM loss where A < 0 (FPO++: 20); null: none",
+    )
+    log_ratio_cap: float | None = option(
+        10.0,
+        Real(0, None, lo_open=True, optional=True),
+        "straight-through upper cap on each pair's log-ratio (FPO++: 10); null: none",
+    )
+    advantage_clip: float | None = option(
+        100.0,
+        Real(0, None, lo_open=True, optional=True),
+        "clamp of the normalised advantages to [-c, c] (FPO++: 100); null: none",
+    )
+    reflow_coef: float = option(0.0, doc="lambda; 0 is FPO++, > 0 ReFPO on FPO++ (algo=refpo_pp: 0.04)")
+    ratio_mode: str = option("per_sample", doc="one ratio per (tau, eps) pair (FPO++)")
+    trust_region: str = option("aspo", doc="PPO's clip for A > 0, SPO's penalty otherwise (FPO++)")
+    tau_sampling: str = option("uniform_inset", doc="flow times U[0.005, 0.995] (FPO++)")
+    output_mode: str | None = option("u", doc="velocity regression (FPO++ hard-codes it)")
+    ema_decay: float | None = option(
+        0.95, doc="the EMA actor that evaluation and export use after its warm-up (FPO++: 0.95)"
+    )
 
     def cfm_losses(self, obs, actions, tau, eps):
         loss, terms = super().cfm_losses(obs, actions, tau, eps)

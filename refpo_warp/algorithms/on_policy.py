@@ -14,11 +14,13 @@ copied (on the device) before the update and put back when any loss of the updat
 the update. (rsl_rl's adaptive schedule, ``schedule=adaptive``, still reads each minibatch's KL: its learning rate is
 a number on the host.)
 
-Options: each algorithm declares its own once, as the fields of its ``Options`` dataclass (default, rule, doc;
-``refpo_warp/utils/options.py``), and inherits its bases' (``OnPolicyAlgorithm.Options`` below: those every algorithm
-shares) and rsl_rl's PPO arguments; a field may give one of those another default. The constructor sets every option
-as an attribute of the same name and passes rsl_rl's arguments to rsl_rl's PPO; a subclass's constructor only adds
-what it derives from them.
+Options: each algorithm declares its own once, as ``option`` fields in its class body (default, rule, doc;
+``refpo_warp/utils/options.py``: ``reflow_coef: float = option(...)``), and inherits its bases' (those below every
+algorithm shares) and rsl_rl's PPO arguments (``refpo_warp/utils/rsl_rl_options.py``); a field may give one of those
+another default. The constructor checks every argument against its rule (the error names ``<Class>.<option>``), assigns
+every declared option to the attribute its field declares (typed, so ``self.reflow_coef`` is a ``float`` to an editor
+and a type checker) and passes rsl_rl's arguments to rsl_rl's PPO; a subclass's constructor only adds what it derives
+from them.
 
 The EMA actor (``ema_decay``, ``ema_warmup``; FPO++): an exponential moving average of the actor's weights that starts
 from the live weights after ``ema_warmup`` updates and is updated once per update from then on
@@ -41,12 +43,11 @@ from rsl_rl.algorithms import PPO as RslPPO
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.algorithms import rsl_rl_rules  # noqa: F401  (the rules of rsl_rl's PPO arguments, inherited here)
 from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_indices
 from refpo_warp.models.ema import ActorEMA
 from refpo_warp.utils.device import flush_denormals_on_cpu
 from refpo_warp.utils.errors import NonFiniteLossError
-from refpo_warp.utils.option_rules import Flag, Int, Real, checks_options
+from refpo_warp.utils.option_rules import Flag, Int, Real
 from refpo_warp.utils.options import option, option_values
 from refpo_warp.utils.rsl_rl_versions import (
     NORMALIZERS_UPDATE_PER_STEP,
@@ -87,64 +88,61 @@ def soft_bound_loss(actions: torch.Tensor, bound: float) -> torch.Tensor:
     return (actions.abs() - bound).clamp(min=0.0).square().mean()
 
 
-@checks_options  # every subclass's constructor checks its arguments against the option rules
 class OnPolicyAlgorithm(RslPPO):
     """Shared update loop; subclasses implement ``act`` and ``policy_loss`` (see the module docstring)."""
 
     uses_critic: bool = True
 
-    @dataclass(frozen=True)
-    class Options:
-        """Options every algorithm shares, besides rsl_rl's PPO arguments."""
-
-        reward_scale: float = option(
-            1.0, Real(0, 1e6, lo_open=True), "rewards x scale for learning; logged returns unscaled (Brax; DMC: 10)"
-        )
-        value_clip_param: float | None = option(
-            None,
-            Real(0, None, lo_open=True, optional=True),
-            "clip range of the clipped value loss; null: clip_param, as rsl_rl "
-            "(Puffer-PHC clips the ratio at 0.01, values at 0.2)",
-        )
-        reshuffle_each_epoch: bool = option(
-            False,
-            Flag(),
-            "a new minibatch permutation on every pass (Brax / Playground; DMC: true) instead of one for all (rsl_rl)",
-        )
-        joint_grad_clip: bool = option(
-            False, Flag(), "one gradient-norm clip over actor and critic (Puffer-PHC) instead of one each (rsl_rl)"
-        )
-        lr_decay_rate: float = option(
-            0.0,
-            Real(0, 10),
-            "after update k the learning rate is lr * max(exp(-rate k), "
-            "lr_decay_floor); 0 keeps it (Puffer-PHC: 1.5e-4)",
-        )
-        lr_decay_floor: float = option(0.2, Real(0, 1), "the floor of that decay (Puffer-PHC: 0.2)")
-        bound_coef: float = option(
-            0.0,
-            Real(0, 1e6),
-            "soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on "
-            "the predicted action; 0 turns it off (Puffer-PHC: 10)",
-        )
-        bound: float = option(0.9, Real(0, None), "the bound of that loss, in the action range (Puffer-PHC: 0.9)")
-        weight_decay: float | None = option(
-            None,
-            Real(0, 1, optional=True),
-            "the optimizer's weight decay; null: its own default (adam 0, adamw 0.01) (FPO++: adamw, 1e-4)",
-        )
-        ema_decay: float | None = option(
-            None,
-            Real(0, 1, lo_open=True, hi_open=True, optional=True),
-            "an EMA of the actor's weights, which evaluation and export use after its warm-up (FPO++: 0.95); null: off",
-        )
-        ema_warmup: int = option(
-            500,
-            Int(0, 10**9),
-            "updates before the EMA starts from the live weights; until then the live actor is the policy (FPO++: 500)",
-        )
+    # Options every algorithm shares (refpo_warp/utils/options.py), besides rsl_rl's PPO arguments.
+    reward_scale: float = option(
+        1.0, Real(0, 1e6, lo_open=True), "rewards x scale for learning; logged returns unscaled (Brax; DMC: 10)"
+    )
+    value_clip_param: float | None = option(
+        None,
+        Real(0, None, lo_open=True, optional=True),
+        "clip range of the clipped value loss; null: clip_param, as rsl_rl "
+        "(Puffer-PHC clips the ratio at 0.01, values at 0.2)",
+    )
+    reshuffle_each_epoch: bool = option(
+        False,
+        Flag(),
+        "a new minibatch permutation on every pass (Brax / Playground; DMC: true) instead of one for all (rsl_rl)",
+    )
+    joint_grad_clip: bool = option(
+        False, Flag(), "one gradient-norm clip over actor and critic (Puffer-PHC) instead of one each (rsl_rl)"
+    )
+    lr_decay_rate: float = option(
+        0.0,
+        Real(0, 10),
+        "after update k the learning rate is lr * max(exp(-rate k), lr_decay_floor); 0 keeps it (Puffer-PHC: 1.5e-4)",
+    )
+    lr_decay_floor: float = option(0.2, Real(0, 1), "the floor of that decay (Puffer-PHC: 0.2)")
+    bound_coef: float = option(
+        0.0,
+        Real(0, 1e6),
+        "soft bound loss bound_coef * mean(relu(|a_hat| - bound)^2) on "
+        "the predicted action; 0 turns it off (Puffer-PHC: 10)",
+    )
+    bound: float = option(0.9, Real(0, None), "the bound of that loss, in the action range (Puffer-PHC: 0.9)")
+    weight_decay: float | None = option(
+        None,
+        Real(0, 1, optional=True),
+        "the optimizer's weight decay; null: its own default (adam 0, adamw 0.01) (FPO++: adamw, 1e-4)",
+    )
+    ema_decay: float | None = option(
+        None,
+        Real(0, 1, lo_open=True, hi_open=True, optional=True),
+        "an EMA of the actor's weights, which evaluation and export use after its warm-up (FPO++: 0.95); null: off",
+    )
+    ema_warmup: int = option(
+        500,
+        Int(0, 10**9),
+        "updates before the EMA starts from the live weights; until then the live actor is the policy (FPO++: 500)",
+    )
 
     def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
+        # Every argument checked against its option's rule before anything is built.
+        options, ppo_kwargs = option_values(type(self), kwargs)
         for name in ("rnd_cfg", "symmetry_cfg"):
             if kwargs.get(name):
                 raise ValueError(
@@ -153,13 +151,13 @@ class OnPolicyAlgorithm(RslPPO):
                 )
         if getattr(critic, "is_recurrent", False) or getattr(actor, "is_recurrent", False):
             raise ValueError(f"{type(self).__name__} supports feed-forward actors and critics only.")
-        options, ppo_kwargs = option_values(type(self), kwargs)
+        self.check_actor(actor)
         ppo_kwargs.update({name: options.pop(name) for name in list(options) if name in PPO_ARGUMENTS})
         newer = split_newer_ppo_args(ppo_kwargs, honoured=("use_mixed_precision",))  # rsl-rl-lib < 5.5
         super().__init__(actor, critic, storage, **ppo_kwargs)
         if not hasattr(self, "use_mixed_precision"):  # this update loop applies it on every rsl_rl version
             self.use_mixed_precision = bool(newer.get("use_mixed_precision", False))
-        for name, value in options.items():
+        for name, value in options.items():  # the options this class and its bases declare (typed attributes)
             setattr(self, name, value)
         if self.value_clip_param is None:
             self.value_clip_param = self.clip_param
@@ -180,6 +178,10 @@ class OnPolicyAlgorithm(RslPPO):
         super().process_env_step(obs, rewards * self.reward_scale, dones, extras)
 
     # ------------------------------------------------------------------------------------------------ subclass API
+    def check_actor(self, actor: nn.Module) -> None:
+        """Refuse an actor this algorithm cannot train (a ``TypeError`` naming the actor class to set); called by the
+        constructor after the options are checked, before anything is built."""
+
     def before_update(self) -> None:
         """Work on the whole rollout before the first gradient step (e.g. ReFPO's old CFM losses)."""
 
@@ -239,8 +241,8 @@ class OnPolicyAlgorithm(RslPPO):
                     nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
             self._adapt_learning_rate(self.kl_estimate(stats))
             self.optimizer.step()
-            for key, value in stats.items():
-                value = value.detach().float()
+            for key, raw in stats.items():
+                value = raw.detach().float()
                 if key.endswith("_max"):
                     maxima[key] = torch.maximum(maxima[key], value) if key in maxima else value
                 else:

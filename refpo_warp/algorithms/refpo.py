@@ -36,7 +36,6 @@ on ``one_step_states`` states of the rollout, ``one_step_error``, ``policy_sprea
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
 from enum import Enum
 
 import torch
@@ -103,97 +102,95 @@ class ReFPO(OnPolicyAlgorithm):
     The defaults are the project's tuned values (a fixed learning rate, not rsl_rl's adaptive schedule).
     """
 
-    @dataclass(frozen=True)
-    class Options:
-        """ReFPO's options, besides the shared ones (``OnPolicyAlgorithm.Options``) and rsl_rl's PPO arguments."""
+    # Options (refpo_warp/utils/options.py), besides the shared ones (OnPolicyAlgorithm) and rsl_rl's PPO arguments.
+    reflow_coef: float = option(
+        0.04,
+        Real(0, 1e6),
+        "lambda, the weight of the un-weighted CFM (Reflow) term; 0 gives FPO (0.04 DMC, 0.1 GridWorld / humanoid)",
+    )
+    num_mc_samples: int = option(
+        8, Int(1, 1024), "K, (tau, eps) pairs stored per action (8 DMC, 50 GridWorld, 1 humanoid)"
+    )
+    output_mode: str | None = option(
+        None, OneOf(None, OUTPUT_MODES), "the CFM loss mode (u, eps, data); null: the actor's output_mode"
+    )
+    tau_sampling: TauSampling = option(
+        "uniform",
+        OneOf(TauSampling),
+        "flow times of the pairs: uniform "
+        "U[0, 1), discrete k/N (Playground), logit_normal (Puffer-PHC), "
+        "uniform_inset U[0.005, 0.995] (FPO++)",
+    )
+    tau_logit_mean: float = option(-1.2, Real(-10, 10), "mean of the logit-normal tau (Puffer-PHC: -1.2)")
+    tau_logit_std: float = option(1.2, Real(0, 10, lo_open=True), "std of the logit-normal tau (Puffer-PHC: 1.2)")
+    ratio_mode: RatioMode = option(
+        "mean", OneOf(RatioMode), "mean: average the K losses before the exp; per_sample: one ratio per pair"
+    )
+    log_ratio_clip: float | None = option(
+        None,
+        Real(0, 100, lo_open=True, optional=True),
+        "clamp each pair's log-ratio to [-c, c]; null: no clamp (GridWorld reference: 3)",
+    )
+    explosion_threshold: float = option(
+        3.0, Real(0, None, lo_open=True), "|log-ratio| above which an action (or pair) counts in the Explosion Rate"
+    )
+    reflow_pairs: ReflowPairs = option(
+        "independent",
+        OneOf(ReflowPairs),
+        "independent: the Reflow term on the ratio's pairs (the paper's); coupled: on the rollout's (eps_0, a)",
+    )
+    reflow_schedule: ScheduleMode = option(
+        "fixed",
+        OneOf(ScheduleMode),
+        "fixed lambda (the paper's), or adaptive to the one-step ratio (reflow_schedule.py)",
+    )
+    one_step_target: float = option(
+        0.25, Real(0, None, lo_open=True), "the one-step ratio the adaptive schedule steers towards"
+    )
+    reflow_coef_range: tuple[float, float] = option(
+        (0.01, 0.2),
+        Check(coefficient_range, "[min, max] with 0 <= min <= max"),
+        "[min, max] of the adaptive lambda",
+    )
+    one_step_states: int = option(
+        256,
+        Int(0, 1_000_000),
+        "rollout states of the per-update one-step diagnostic; 0 turns it off (the adaptive schedule needs it)",
+    )
+    trust_region: TrustRegion = option(
+        "ppo",
+        OneOf(TrustRegion),
+        "ppo: PPO's clip (the paper's); spo: SPO's "
+        "penalty; aspo: clip for A > 0, penalty otherwise (FPO++; trust_region.py)",
+    )
+    reflow_tau_weight: ReflowTauWeight = option(
+        "uniform",
+        OneOf(ReflowTauWeight),
+        "uniform (the paper's), or towards_zero: Reflow pairs weighted by 1 - tau (ours)",
+    )
+    one_step_coef: float = option(
+        0.0,
+        Real(0, 1e6),
+        "weight of the one-step consistency term |v(eps_0, 0) - "
+        "(a - eps_0)|^2 on the rollout's own noise and action (ours); 0: off",
+    )
+    clip_param: float = option(0.05, doc="PPO clip range (rsl_rl's default: 0.2)")
+    learning_rate: float = option(3e-4, doc="learning rate (rsl_rl's default: 1e-3)")
+    schedule: str = option(
+        "fixed",
+        doc="learning-rate schedule (rsl_rl's default: adaptive, which the proxy ratio's KL would drive to its bounds)",
+    )
+    entropy_coef: float = option(0.0, doc="ignored: a flow policy has no closed-form entropy (rsl_rl's: 0.01)")
+    use_clipped_value_loss: bool = option(False, doc="PPO's clipped value loss (rsl_rl's default: true)")
 
-        reflow_coef: float = option(
-            0.04,
-            Real(0, 1e6),
-            "lambda, the weight of the un-weighted CFM (Reflow) term; 0 gives FPO (0.04 DMC, 0.1 GridWorld / humanoid)",
-        )
-        num_mc_samples: int = option(
-            8, Int(1, 1024), "K, (tau, eps) pairs stored per action (8 DMC, 50 GridWorld, 1 humanoid)"
-        )
-        output_mode: str | None = option(
-            None, OneOf(None, OUTPUT_MODES), "the CFM loss mode (u, eps, data); null: the actor's output_mode"
-        )
-        tau_sampling: TauSampling = option(
-            "uniform",
-            OneOf(TauSampling),
-            "flow times of the pairs: uniform "
-            "U[0, 1), discrete k/N (Playground), logit_normal (Puffer-PHC), "
-            "uniform_inset U[0.005, 0.995] (FPO++)",
-        )
-        tau_logit_mean: float = option(-1.2, Real(-10, 10), "mean of the logit-normal tau (Puffer-PHC: -1.2)")
-        tau_logit_std: float = option(1.2, Real(0, 10, lo_open=True), "std of the logit-normal tau (Puffer-PHC: 1.2)")
-        ratio_mode: RatioMode = option(
-            "mean", OneOf(RatioMode), "mean: average the K losses before the exp; per_sample: one ratio per pair"
-        )
-        log_ratio_clip: float | None = option(
-            None,
-            Real(0, 100, lo_open=True, optional=True),
-            "clamp each pair's log-ratio to [-c, c]; null: no clamp (GridWorld reference: 3)",
-        )
-        explosion_threshold: float = option(
-            3.0, Real(0, None, lo_open=True), "|log-ratio| above which an action (or pair) counts in the Explosion Rate"
-        )
-        reflow_pairs: ReflowPairs = option(
-            "independent",
-            OneOf(ReflowPairs),
-            "independent: the Reflow term on the ratio's pairs (the paper's); coupled: on the rollout's (eps_0, a)",
-        )
-        reflow_schedule: ScheduleMode = option(
-            "fixed",
-            OneOf(ScheduleMode),
-            "fixed lambda (the paper's), or adaptive to the one-step ratio (reflow_schedule.py)",
-        )
-        one_step_target: float = option(
-            0.25, Real(0, None, lo_open=True), "the one-step ratio the adaptive schedule steers towards"
-        )
-        reflow_coef_range: tuple[float, float] = option(
-            (0.01, 0.2),
-            Check(coefficient_range, "[min, max] with 0 <= min <= max"),
-            "[min, max] of the adaptive lambda",
-        )
-        one_step_states: int = option(
-            256,
-            Int(0, 1_000_000),
-            "rollout states of the per-update one-step diagnostic; 0 turns it off (the adaptive schedule needs it)",
-        )
-        trust_region: TrustRegion = option(
-            "ppo",
-            OneOf(TrustRegion),
-            "ppo: PPO's clip (the paper's); spo: SPO's "
-            "penalty; aspo: clip for A > 0, penalty otherwise (FPO++; trust_region.py)",
-        )
-        reflow_tau_weight: ReflowTauWeight = option(
-            "uniform",
-            OneOf(ReflowTauWeight),
-            "uniform (the paper's), or towards_zero: Reflow pairs weighted by 1 - tau (ours)",
-        )
-        one_step_coef: float = option(
-            0.0,
-            Real(0, 1e6),
-            "weight of the one-step consistency term |v(eps_0, 0) - "
-            "(a - eps_0)|^2 on the rollout's own noise and action (ours); 0: off",
-        )
-        clip_param: float = option(0.05, doc="PPO clip range (rsl_rl's default: 0.2)")
-        learning_rate: float = option(3e-4, doc="learning rate (rsl_rl's default: 1e-3)")
-        schedule: str = option(
-            "fixed",
-            doc="learning-rate schedule (rsl_rl's default: adaptive, which the proxy "
-            "ratio's KL would drive to its bounds)",
-        )
-        entropy_coef: float = option(0.0, doc="ignored: a flow policy has no closed-form entropy (rsl_rl's: 0.01)")
-        use_clipped_value_loss: bool = option(False, doc="PPO's clipped value loss (rsl_rl's default: true)")
-
-    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
+    def check_actor(self, actor: nn.Module) -> None:
         for method in ("cfm_terms", "sample"):
             if not hasattr(actor, method):
                 raise TypeError(
                     f"ReFPO needs a flow actor with {method}(); set actor.class_name to refpo_warp.models:FlowActor"
                 )
+
+    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         super().__init__(actor, critic, storage, **kwargs)
         if self.entropy_coef:
             warnings.warn("ReFPO ignores entropy_coef: a flow policy has no closed-form entropy.")

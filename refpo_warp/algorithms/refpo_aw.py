@@ -15,7 +15,6 @@ per-action CFM loss on the stored pairs and A_i the advantage the surrogate uses
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import Enum
 
 import torch
@@ -69,13 +68,11 @@ def segment_returns(rewards: torch.Tensor, dones: torch.Tensor) -> torch.Tensor:
 class AdvantageWeightedReFPO(ReFPO):
     """ReFPO with the Reflow term weighted by the advantage (``reflow_weighting``, see the module docstring)."""
 
-    @dataclass(frozen=True)
-    class Options:
-        reflow_weighting: ReflowWeighting = option(
-            "positive",
-            OneOf(ReflowWeighting),
-            "which actions' CFM loss the Reflow term weights, and how (module docstring)",
-        )
+    reflow_weighting: ReflowWeighting = option(
+        "positive",
+        OneOf(ReflowWeighting),
+        "which actions' CFM loss the Reflow term weights, and how (module docstring)",
+    )
 
     def before_update(self, chunk: int = 65536) -> None:
         super().before_update(chunk)

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
 
 import torch
 from tensordict import TensorDict
@@ -55,38 +54,37 @@ def log_prob_range(key: str, value) -> list[float]:
 class ReinFlow(OnPolicyAlgorithm):
     """ReinFlow on rsl_rl's PPO machinery (see the module docstring); defaults from the ReFPO paper's table (d)."""
 
-    @dataclass(frozen=True)
-    class Options:
-        """ReinFlow's options, besides the shared ones (``OnPolicyAlgorithm.Options``) and rsl_rl's PPO arguments."""
+    # Options (refpo_warp/utils/options.py), besides the shared ones (OnPolicyAlgorithm) and rsl_rl's PPO arguments.
+    logprob_clip: tuple[float, float] | None = option(
+        (-1.0, 1.0),
+        Check(log_prob_range, "null or [min, max] with min < max", optional=True),
+        "[min, max] clamp of the old and new normalised log-probabilities; null: no clamp",
+    )
+    noise_decay_updates: int | None = option(
+        None, Int(1, None, optional=True), "updates over which the noise bound decays; null: constant bounds"
+    )
+    noise_hold_ratio: float = option(0.35, Real(0, 1), "ReinFlow's hold fraction of the decay")
+    noise_decay_ratio: float = option(0.7, Real(0, 1), "ReinFlow's decayed-bound ratio")
+    explosion_threshold: float = option(
+        3.0, Real(0, None, lo_open=True), "|log rho| above which a sample counts in Flow/explosion_rate"
+    )
+    clip_param: float = option(0.1, doc="PPO clip range (table (d))")
+    entropy_coef: float = option(0.05, doc="entropy bonus (table (d))")
+    value_loss_coef: float = option(0.3, doc="value loss weight (table (d))")
+    learning_rate: float = option(3e-5, doc="learning rate (table (d))")
+    gamma: float = option(0.99, doc="discount (table (d))")
+    lam: float = option(0.95, doc="GAE lambda (table (d))")
+    schedule: str = option("fixed", doc="learning-rate schedule (rsl_rl's default: adaptive)")
+    use_clipped_value_loss: bool = option(False, doc="PPO's clipped value loss (rsl_rl's default: true)")
+    normalize_advantage_per_mini_batch: bool = option(True, doc="normalise advantages per minibatch (ReinFlow's)")
 
-        logprob_clip: tuple[float, float] | None = option(
-            (-1.0, 1.0),
-            Check(log_prob_range, "null or [min, max] with min < max", optional=True),
-            "[min, max] clamp of the old and new normalised log-probabilities; null: no clamp",
-        )
-        noise_decay_updates: int | None = option(
-            None, Int(1, None, optional=True), "updates over which the noise bound decays; null: constant bounds"
-        )
-        noise_hold_ratio: float = option(0.35, Real(0, 1), "ReinFlow's hold fraction of the decay")
-        noise_decay_ratio: float = option(0.7, Real(0, 1), "ReinFlow's decayed-bound ratio")
-        explosion_threshold: float = option(
-            3.0, Real(0, None, lo_open=True), "|log rho| above which a sample counts in Flow/explosion_rate"
-        )
-        clip_param: float = option(0.1, doc="PPO clip range (table (d))")
-        entropy_coef: float = option(0.05, doc="entropy bonus (table (d))")
-        value_loss_coef: float = option(0.3, doc="value loss weight (table (d))")
-        learning_rate: float = option(3e-5, doc="learning rate (table (d))")
-        gamma: float = option(0.99, doc="discount (table (d))")
-        lam: float = option(0.95, doc="GAE lambda (table (d))")
-        schedule: str = option("fixed", doc="learning-rate schedule (rsl_rl's default: adaptive)")
-        use_clipped_value_loss: bool = option(False, doc="PPO's clipped value loss (rsl_rl's default: true)")
-        normalize_advantage_per_mini_batch: bool = option(True, doc="normalise advantages per minibatch (ReinFlow's)")
-
-    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
+    def check_actor(self, actor: nn.Module) -> None:
         if not (hasattr(actor, "sample_chain") and hasattr(actor, "chain_log_prob")):
             raise TypeError(
                 "ReinFlow needs a noisy-chain actor; set actor.class_name to refpo_warp.models:ReinFlowActor"
             )
+
+    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
         super().__init__(actor, critic, storage, **kwargs)
         if self.bound_coef > 0:
             warnings.warn("ReinFlow ignores bound_coef: its chain already clamps the action to [-1, 1].")

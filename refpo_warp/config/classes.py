@@ -1,9 +1,10 @@
 """What a ``class_name`` selects and what its constructor accepts: the class (only a model or an algorithm), its
 options with their defaults and the class that declares each default.
 
-The options of a class are the fields of its ``Options`` dataclasses (``refpo_warp/utils/options.py``), its
-constructor's keyword parameters, and those of the bases it forwards ``**kwargs`` to (ReFPO -> OnPolicyAlgorithm ->
-rsl_rl's PPO), minus what rsl_rl passes itself (``POSITIONAL``).
+The options of a class are its ``option`` fields and its bases' that have a default of their own
+(``refpo_warp/utils/options.py``), its constructor's keyword parameters, and those of the bases it forwards
+``**kwargs`` to (ReFPO -> OnPolicyAlgorithm -> rsl_rl's PPO, whose rules are in
+``refpo_warp/utils/rsl_rl_options.py``), minus what rsl_rl passes itself (``POSITIONAL``).
 """
 
 from __future__ import annotations
@@ -12,8 +13,7 @@ import inspect
 from typing import Any
 
 from refpo_warp.utils.errors import ConfigError
-from refpo_warp.utils.option_rules import OPTIONS
-from refpo_warp.utils.options import declared_options
+from refpo_warp.utils.options import declared_options, option_fields
 
 CLASS_SECTIONS = ("actor", "critic", "algorithm")
 # Constructor arguments that rsl_rl itself passes positionally; a config must not set them.
@@ -29,9 +29,6 @@ def resolve_class(class_name: str) -> type:
     """The class a ``class_name`` string selects (``"pkg.mod:Class"``, or a bare rsl_rl name)."""
     from rsl_rl.utils import resolve_callable
 
-    from refpo_warp.algorithms import rsl_rl_rules as _ppo_rules  # noqa: F401  (register the rules of rsl_rl's classes)
-    from refpo_warp.models import rsl_rl_rules as _model_rules  # noqa: F401
-
     try:
         return resolve_callable(class_name)
     except (ImportError, AttributeError, ValueError, TypeError) as err:
@@ -40,14 +37,15 @@ def resolve_class(class_name: str) -> type:
 
 def class_defaults(class_name: str) -> dict[str, tuple[Any, type]]:
     """Every option of the class: name -> (default, the class that declares it), a subclass's first; the fields of
-    the ``Options`` dataclasses, then the keyword parameters of the constructor chain (a parameter without a default
+    the ``option`` fields, then the keyword parameters of the constructor chain (a parameter without a default
     has None)."""
     cls = resolve_class(class_name)
     params: dict[str, tuple[Any, type]] = {}
     declared = declared_options(cls) if inspect.isclass(cls) else {}
     for klass in inspect.getmro(cls) if inspect.isclass(cls) else [cls]:
-        for name in getattr(getattr(klass, "__dict__", {}).get(OPTIONS), "__dataclass_fields__", {}):
-            params.setdefault(name, (declared[name].default, declared[name].owner))
+        for name in option_fields(klass) if inspect.isclass(klass) else ():
+            if name in declared:
+                params.setdefault(name, (declared[name].default, declared[name].owner))
         init = klass.__init__ if inspect.isclass(klass) else klass
         if init is object.__init__:
             continue

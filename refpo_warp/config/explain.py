@@ -3,8 +3,8 @@
 
 For each key: the resolved value, the layer that set it (a file and section, the command line, a constructor's or an
 env cfg's default, or the task id) with the comment that file gives the value on its line, what the earlier layers had
-set, and what the option means where its class
-declares it in an ``Options`` dataclass. A section (``--explain algorithm``) lists every option of it, the ones only a
+set, and what the option means: the doc of its field (``refpo_warp/utils/options.py``; a class's, the env cfg's,
+the video options' or the run options'). A section (``--explain algorithm``) lists every option of it, the ones only a
 constructor sets included.
 """
 
@@ -15,10 +15,10 @@ from typing import Any
 
 from refpo_warp.config.classes import CLASS_SECTIONS, POSITIONAL, class_defaults, resolve_class
 from refpo_warp.config.dotted import LEAF_KEYS, flatten
-from refpo_warp.utils.paths import shown
 from refpo_warp.config.resolve import Resolution
 from refpo_warp.utils.errors import unknown
-from refpo_warp.utils.options import declared_options
+from refpo_warp.utils.options import docs_for
+from refpo_warp.utils.paths import shown
 
 
 def _class_default(cfg: dict, section: str, name: str) -> tuple[Any, str] | None:
@@ -78,12 +78,23 @@ def all_keys(cfg: dict) -> list[str]:
 
 
 def _meaning(cfg: dict, key: str) -> str:
-    """The one-line doc of a class option (its ``Options`` field's), or ``""``."""
+    """The one-line doc of an option's field, or ``""``."""
+    from refpo_warp.config.run_options import RUN_DOCS
+
     section, _, name = key.partition(".")
-    if section not in CLASS_SECTIONS or not name or "." in name:
-        return ""
-    found = declared_options(resolve_class(cfg[section]["class_name"])).get(name)
-    return found.doc if found else ""
+    if key.startswith("eval.env."):
+        section, name = "env", key[len("eval.env.") :]
+    if section in CLASS_SECTIONS and name and "." not in name:
+        return docs_for(resolve_class(cfg[section]["class_name"])).get(name, "")
+    if section == "env" and name:
+        from refpo_warp.envs.registry import get_task
+
+        return docs_for(get_task(cfg["task"]).cfg_class).get(name, "")
+    if section == "video" and name:
+        from refpo_warp.render.options import VideoOptions
+
+        return docs_for(VideoOptions).get(name, "")
+    return RUN_DOCS.get(key, "")
 
 
 def _value(cfg: dict, key: str) -> tuple[bool, Any]:

@@ -1,5 +1,5 @@
-"""The option tables of the docs, made from the classes' ``Options`` (default, valid values, meaning), so a page cannot
-state another default than the code. A table stands in a page between two markers naming the class::
+"""The option tables of the docs, made from the classes' option fields (default, valid values, meaning), so a page
+cannot state another default than the code. A table stands in a page between two markers naming the class::
 
     <!-- options refpo_warp.algorithms:ReFPO -->
     | option | default | valid values | meaning |
@@ -19,10 +19,9 @@ from typing import Any
 
 from refpo_warp.config.classes import resolve_class
 from refpo_warp.utils.atomic_files import write_text
-from refpo_warp.utils.option_rules import OPTIONS
-from refpo_warp.utils.options import declared_options
+from refpo_warp.utils.options import declared_options, option_fields
 
-BLOCK = re.compile(r"(<!-- options (?P<name>\S+) -->\n)(?P<table>.*?)(<!-- end options -->)", re.S)
+BLOCK = re.compile(r"(<!-- options (?P<name>\S+) -->\n)(?P<table>.*?)(<!-- end options -->)", re.DOTALL)
 
 
 def shown_value(value: Any) -> str:
@@ -40,10 +39,10 @@ def shown_value(value: Any) -> str:
 
 
 def options_table(class_name: str) -> str:
-    """The Markdown table of the options ``class_name``'s own ``Options`` declares (not its bases')."""
+    """The Markdown table of the options ``class_name`` declares itself (not its bases')."""
     cls = resolve_class(class_name)
     declared = declared_options(cls)
-    own = getattr(cls.__dict__.get(OPTIONS), "__dataclass_fields__", {})
+    own = option_fields(cls)
     rows = ["| option | default | valid values | meaning |", "|---|---|---|---|"]
     for name in own:
         found = declared[name]

@@ -1,17 +1,21 @@
-"""Option rules of the run options in ``configs/default.yaml`` (everything outside the class and env sections),
-and the checks that involve several options. See ``refpo_warp.utils.option_rules`` for the rule types.
+"""The run options of ``configs/default.yaml`` (everything outside the class, env and video sections), declared like
+every other option: a field with its rule and doc (``refpo_warp/utils/options.py``), its default being
+``default.yaml``'s; a section of keys (``runner.*``) is a dataclass of its own. Also the checks that involve several
+options.
 
-A new key in ``default.yaml`` gets its rule here (``tests/utils/test_option_rules.py`` fails for a key without one).
+A new key in ``default.yaml`` gets its field here (``tests/utils/test_option_rules.py`` fails for a key without one).
 """
 
 from __future__ import annotations
 
 import importlib.util
+from dataclasses import dataclass
 from typing import Any
 
 from refpo_warp.models.sampled_policy import NOISE_PROTOCOLS_RULE, NUM_FLOW_STEPS
 from refpo_warp.utils.errors import ConfigError
-from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real, Text
+from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real, Rule, Text
+from refpo_warp.utils.options import docs_for, option, rules_for
 
 MAX_ENVS = 1 << 22  # 4M envs: far above what one GPU holds, low enough to catch a typo before allocating
 MAX_TRANSITIONS = 1 << 28  # num_envs x num_steps_per_env held in the rollout storage
@@ -62,45 +66,77 @@ def _check_obs_groups(key: str, value: Any) -> dict:
     return value
 
 
-RUN_RULES = {
-    "seed": Int(0, 2**32 - 1),  # numpy's seed range
-    "device": Check(_check_device, "auto, cpu, cuda or cuda:N"),
-    "num_envs": Int(1, MAX_ENVS),
-    "total_env_steps": Int(1, 10**13),
-    "max_iterations": Int(1, 10**8, optional=True),
-    "run_dir": Text(optional=True),
-    "resume": Flag(),
-    "verbose": Flag(),
-    "init_from": Text(optional=True),  # the run dir itself is checked when training starts (training/init_from.py)
-    "critic_warmup_iterations": Int(0, 10**8),
-    "config_dir": Text(optional=True),  # the folder itself is checked when the config path is built
-    "notice": Check(_check_notice, "null or a text ({task} and {algo} are filled in)", optional=True),
-    "runner.num_steps_per_env": Int(1, 1_000_000),
-    "runner.save_interval": Int(1, 10**8),
-    "runner.logger": Check(_check_logger, "tensorboard, wandb or neptune"),
-    "runner.check_for_nan": Flag(),
+@dataclass(frozen=True)
+class RunOptions:
+    seed: int = option(rule=Int(0, 2**32 - 1), doc="seed of the run (numpy's seed range)")
+    device: str = option(rule=Check(_check_device, "auto, cpu, cuda or cuda:N"), doc="where the run trains")
+    num_envs: int = option(rule=Int(1, MAX_ENVS), doc="parallel envs")
+    total_env_steps: int = option(rule=Int(1, 10**13), doc="env steps of the run (all envs together)")
+    max_iterations: int | None = option(
+        rule=Int(1, 10**8, optional=True), doc="iterations of the run; null: from total_env_steps"
+    )
+    run_dir: str | None = option(rule=Text(optional=True), doc="the run's folder; null: a new one under runs/")
+    resume: bool = option(rule=Flag(), doc="train on from the run dir's last checkpoint")
+    verbose: bool = option(rule=Flag(), doc="print every iteration's statistics")
+    # the run dir itself is checked when training starts (training/init_from.py)
+    init_from: str | None = option(rule=Text(optional=True), doc="a run dir whose weights start this run")
+    critic_warmup_iterations: int = option(rule=Int(0, 10**8), doc="iterations that train the critic alone first")
+    # the folder itself is checked when the config path is built
+    config_dir: str | None = option(rule=Text(optional=True), doc="a folder of config files that replaces configs/")
+    notice: str | None = option(
+        rule=Check(_check_notice, "null or a text ({task} and {algo} are filled in)", optional=True),
+        doc="a line printed when the run starts",
+    )
+
+
+@dataclass(frozen=True)
+class RunnerOptions:
+    num_steps_per_env: int = option(rule=Int(1, 1_000_000), doc="env steps per env and iteration (the rollout)")
+    save_interval: int = option(rule=Int(1, 10**8), doc="iterations between checkpoints")
+    logger: str = option(rule=Check(_check_logger, "tensorboard, wandb or neptune"), doc="where statistics go")
+    check_for_nan: bool = option(rule=Flag(), doc="rsl_rl's check of the observations and rewards for NaN")
     # rsl_rl refuses the CUDA-graph modes "reduce-overhead" and "max-autotune"
-    "runner.torch_compile_mode": OneOf(None, "default", "max-autotune-no-cudagraphs"),
-    "runner.obs_groups": Check(_check_obs_groups, "a mapping {set: [observation groups]}", fixed=True),
-    "runner.init_at_random_ep_len": Flag(),
-    "runner.log_full": Flag(),
-    "pretrain.dataset": Text(optional=True),  # read and checked by refpo pretrain (demonstrations/dataset_file.py)
-    "pretrain.epochs": Int(1, 10**6),
-    "pretrain.batch_size": Int(1, 1 << 24),
-    "pretrain.learning_rate": Real(0, 10, lo_open=True),
-    "pretrain.validation_fraction": Real(0, 1, lo_open=True, hi_open=True),
-    "pretrain.patience": Int(1, 10**6),
-    "pretrain.num_pairs": Int(1, 4096, optional=True),
-    "eval.at_end": Flag(),
-    "eval.flow_steps": FLOW_STEPS,
-    "eval.num_envs": Int(1, MAX_ENVS, optional=True),
-    "eval.max_steps": Int(1, 10**8, optional=True),
-    "eval.initial_noise": NOISE_PROTOCOLS_RULE,
-    "eval.perturbation": Flag(),
-    "eval.interval": Int(0, 10**8, optional=True),
-    "eval.interval_flow_steps": FLOW_STEPS,
-    "eval.interval_num_envs": Int(1, MAX_ENVS),
-}
+    torch_compile_mode: str | None = option(
+        rule=OneOf(None, "default", "max-autotune-no-cudagraphs"), doc="torch.compile's mode; null: not compiled"
+    )
+    obs_groups: dict = option(
+        rule=Check(_check_obs_groups, "a mapping {set: [observation groups]}", fixed=True),
+        doc="the observation groups each of actor and critic reads",
+    )
+    init_at_random_ep_len: bool = option(rule=Flag(), doc="start the envs at random points of their time-out")
+    log_full: bool = option(rule=Flag(), doc="log every statistic rsl_rl has")
+
+
+@dataclass(frozen=True)
+class PretrainOptions:
+    # read and checked by refpo pretrain (demonstrations/dataset_file.py)
+    dataset: str | None = option(rule=Text(optional=True), doc="the demonstration file refpo pretrain reads")
+    epochs: int = option(rule=Int(1, 10**6), doc="passes over the demonstrations")
+    batch_size: int = option(rule=Int(1, 1 << 24), doc="demonstrations per gradient step")
+    learning_rate: float = option(rule=Real(0, 10, lo_open=True), doc="the pre-training learning rate")
+    validation_fraction: float = option(
+        rule=Real(0, 1, lo_open=True, hi_open=True), doc="share of the demonstrations held out"
+    )
+    patience: int = option(rule=Int(1, 10**6), doc="epochs without a better validation loss before it stops")
+    num_pairs: int | None = option(rule=Int(1, 4096, optional=True), doc="(tau, eps) pairs per demonstration")
+
+
+@dataclass(frozen=True)
+class EvalOptions:
+    at_end: bool = option(rule=Flag(), doc="evaluate the final policy")
+    flow_steps: list[int] = option(rule=FLOW_STEPS, doc="flow-step counts N the final evaluation samples with")
+    num_envs: int | None = option(rule=Int(1, MAX_ENVS, optional=True), doc="envs of the final evaluation")
+    max_steps: int | None = option(rule=Int(1, 10**8, optional=True), doc="env steps of an evaluation")
+    initial_noise: list[str] = option(rule=NOISE_PROTOCOLS_RULE, doc="initial-noise protocols evaluated")
+    perturbation: bool = option(rule=Flag(), doc="evaluate with the actor's action perturbation")
+    interval: int | None = option(rule=Int(0, 10**8, optional=True), doc="iterations between periodic evaluations")
+    interval_flow_steps: list[int] = option(rule=FLOW_STEPS, doc="flow-step counts of the periodic evaluations")
+    interval_num_envs: int = option(rule=Int(1, MAX_ENVS), doc="envs of the periodic evaluations")
+
+
+SECTIONS = {"": RunOptions, "runner.": RunnerOptions, "pretrain.": PretrainOptions, "eval.": EvalOptions}
+RUN_RULES: dict[str, Rule] = {f"{p}{k}": r for p, c in SECTIONS.items() for k, r in rules_for(c).items()}
+RUN_DOCS: dict[str, str] = {f"{p}{k}": d for p, c in SECTIONS.items() for k, d in docs_for(c).items()}
 # Keys checked elsewhere: task and algo (by name, against the registry and configs/algo), the sections env, actor,
 # critic, algorithm (against their classes' rules), eval.env (against the task's env cfg) and video (VideoOptions).
 NOT_RULED = ("task", "algo", "env", "actor", "critic", "algorithm", "eval.env", "video")

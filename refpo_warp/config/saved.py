@@ -19,7 +19,7 @@ from refpo_warp.config.run_options import RUN_RULES
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, DataFileError
-from refpo_warp.utils.option_rules import rules_for
+from refpo_warp.utils.options import rules_for
 
 RUN_CONFIG = "config.yaml"
 IDENTITY_KEYS = ("task", "algo")

@@ -1,10 +1,10 @@
-"""Every key of a merged config checked where it is consumed, each value against the rule its option declares
-(``refpo_warp.utils.option_rules``):
+"""Every key of a merged config checked where it is consumed, each value against the rule its option field declares
+(``refpo_warp/utils/options.py``):
 
 - ``actor``, ``critic``, ``algorithm``: against the constructor of the class their ``class_name`` selects and that
   class's rules;
 - ``env`` and ``eval.env``: against the task's env cfg dataclass and its rules; ``video`` against ``VideoOptions``;
-- every other key: against ``configs/default.yaml`` and the rules in ``refpo_warp/config/run_options.py``.
+- every other key: against ``configs/default.yaml`` and the fields of ``refpo_warp/config/run_options.py``.
 
 An unknown key is an error that names the closest valid one; a refused value names the key and the valid range or
 choices.
@@ -17,7 +17,8 @@ from refpo_warp.config.dotted import LEAF_KEYS
 from refpo_warp.config.run_options import RUN_RULES
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, unknown
-from refpo_warp.utils.option_rules import check_options, rules_for
+from refpo_warp.utils.option_rules import check_options
+from refpo_warp.utils.options import rules_for
 
 
 def class_section(section: str, values: dict) -> dict:
@@ -52,7 +53,7 @@ def video_section(values: dict) -> dict:
     from refpo_warp.render.options import VideoOptions
 
     VideoOptions.from_dict(values)
-    return check_options(VideoOptions.option_rules, values, "video.")
+    return check_options(rules_for(VideoOptions), values, "video.")
 
 
 def run_options(cfg: dict, schema: dict, prefix: str = "") -> None:

@@ -24,6 +24,7 @@ from refpo_warp.envs.registry import family_module, get_task, make_env, make_env
 from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real, Text, check_options
+from refpo_warp.utils.options import declared_options, rules_for
 
 SAMPLING = ("stochastic", "mean")
 RULES = {
@@ -192,10 +193,14 @@ def _scripted_policy(options: dict, demo: dict, device: str):
             f"task={task} has no scripted demonstrator (tasks/<family>/demonstrator.py); collect from a "
             f"trained run with run_dir=..."
         )
+    declared = declared_options(module.Options)  # the demonstrator module's option dataclass
     for key in demo:
-        if key not in module.OPTIONS:
-            raise unknown(f"option of {task}'s demonstrator (demonstrator.<option>)", key, module.OPTIONS)
-    demo = {**module.DEFAULTS, **check_options(module.OPTIONS, demo, "demonstrator.")}
+        if key not in declared:
+            raise unknown(f"option of {task}'s demonstrator (demonstrator.<option>)", key, list(declared))
+    demo = {
+        **{k: found.default for k, found in declared.items()},
+        **check_options(rules_for(module.Options), demo, "demonstrator."),
+    }
     seed = options["seed"] if options["seed"] is not None else 1
     env_cfg = make_env_cfg(task)
     env = make_env(task, num_envs=_num_envs(options), device=device, seed=seed)

@@ -26,7 +26,7 @@ from torch import nn
 
 from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyOptions, SampledPolicyProtocol
 from refpo_warp.models.velocity_field import DATA_GUARD, Parameterization, TimeConditioning, VelocityField
-from refpo_warp.utils.option_rules import Int, OneOf, Real, checks_options
+from refpo_warp.utils.option_rules import Int, OneOf, Real
 from refpo_warp.utils.options import choices, constructor_options, option
 
 
@@ -61,7 +61,6 @@ def cfm_loss(terms: CfmTerms, tau: torch.Tensor, output_mode: str, loss_scale: f
     return loss_scale * loss
 
 
-@checks_options
 class FlowActor(SampledPolicyProtocol, nn.Module):
     """Flow-matching actor with the constructor and model protocol of rsl_rl's ``MLPModel``: rsl_rl's ``obs``,
     ``obs_groups``, ``obs_set`` and ``output_dim``, then the options below by keyword."""
@@ -124,7 +123,7 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
         self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int, **options
     ) -> None:
         super().__init__()
-        o = constructor_options(type(self), options)
+        o = constructor_options(type(self), type(self).Options, options)
         if o.distribution_cfg is not None:
             warnings.warn("FlowActor ignores distribution_cfg: actions are sampled by integrating the flow.")
         self._set_up_observations(obs, obs_groups, obs_set, output_dim, o.obs_normalization, o.obs_clip)

@@ -16,12 +16,11 @@ from rsl_rl.models import MLPModel
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
-from refpo_warp.utils.option_rules import Real, checks_options
+from refpo_warp.utils.option_rules import Real
 from refpo_warp.utils.options import option, option_values
 from refpo_warp.utils.rsl_rl_versions import split_learn_std
 
 
-@checks_options
 class PhcMLPModel(MLPModel):
     """``MLPModel`` plus ``head_init_gain`` and ``obs_clip`` (see the module docstring); every other argument is
     ``MLPModel``'s."""
@@ -42,8 +41,9 @@ class PhcMLPModel(MLPModel):
         )
 
     def __init__(self, *args, **kwargs) -> None:
-        options, kwargs = option_values(type(self), kwargs)
-        head_init_gain, obs_clip = options["head_init_gain"], options["obs_clip"]
+        options, kwargs = option_values(type(self), kwargs)  # every argument checked against its rule
+        o = self.Options(**options)
+        head_init_gain, obs_clip = o.head_init_gain, o.obs_clip
         kwargs["distribution_cfg"], learn_std = split_learn_std(kwargs.get("distribution_cfg"))
         super().__init__(*args, **kwargs)
         if not learn_std:  # rsl-rl-lib < 5.2: its GaussianDistribution has no learn_std, so fix the std here

@@ -34,11 +34,11 @@ from rsl_rl.utils import resolve_nn_activation
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.models.rsl_rl_rules import HIDDEN_DIMS, Activation
 from refpo_warp.models.sampled_policy import NUM_FLOW_STEPS, SampledPolicyOptions, SampledPolicyProtocol
 from refpo_warp.models.velocity_field import VelocityField
-from refpo_warp.utils.option_rules import Int, OneOf, Real, checks_options
+from refpo_warp.utils.option_rules import Int, OneOf, Real
 from refpo_warp.utils.options import choices, constructor_options, option
+from refpo_warp.utils.rsl_rl_options import HIDDEN_DIMS, Activation
 
 
 class NoiseSchedule(str, Enum):
@@ -65,7 +65,6 @@ def fixed_sigma(t: float, schedule: str, sigma_min: float, sigma_max: float) -> 
     return min(max(sigma, sigma_min), sigma_max)
 
 
-@checks_options
 class ReinFlowActor(SampledPolicyProtocol, nn.Module):
     """ReinFlow's noisy flow policy with the constructor and model protocol of rsl_rl's ``MLPModel``: rsl_rl's
     ``obs``, ``obs_groups``, ``obs_set`` and ``output_dim``, then the options below by keyword."""
@@ -121,7 +120,7 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int, **options
     ) -> None:
         super().__init__()
-        o = constructor_options(type(self), options)
+        o = constructor_options(type(self), type(self).Options, options)
         if o.distribution_cfg is not None:
             warnings.warn("ReinFlowActor ignores distribution_cfg: its noisy Euler chain defines the distribution.")
         if o.ft_denoising_steps > o.num_flow_steps:

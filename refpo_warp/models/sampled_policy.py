@@ -16,11 +16,11 @@ from tensordict import TensorDict
 from torch import nn
 
 from refpo_warp.models.normalization import with_clip
-from refpo_warp.models.rsl_rl_rules import HIDDEN_DIMS, Activation
 from refpo_warp.models.stateless import Stateless
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, mapping_or_none
 from refpo_warp.utils.options import option
+from refpo_warp.utils.rsl_rl_options import HIDDEN_DIMS, Activation
 
 NUM_FLOW_STEPS = Int(1, 1000, fixed=False)  # Euler / chain steps N of a sampler; any N samples the same policy
 

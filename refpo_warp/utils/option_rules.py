@@ -1,50 +1,22 @@
-"""Option rules: the valid values of every option, declared once next to the option and checked in two places.
+"""The rule types of options: the valid values of one option (``Int``, ``Real``, ``OneOf``, ``Flag``, ``Text``,
+``ListOf``, ``Check``), each with ``check(key, value)``, which returns the value (normalised: a whole float becomes an
+int, an ``Enum`` member its plain value) or raises a ``ConfigError`` that names the key and the valid values.
 
-How to declare the options of a class (algorithm, actor/critic model, env cfg dataclass)::
-
-    from refpo_warp.utils.option_rules import Int, OneOf, Real, checks_options
-
-    @checks_options                                   # the constructor checks its arguments against the rules
-    class MyAlgo(PPO):
-        option_rules = {                              # next to the constructor it describes
-            "num_samples": Int(1, 1024),              # integer in [1, 1024]
-            "mode": OneOf("fast", "exact"),           # one of the listed values
-            "clip": Real(0, None, lo_open=True, optional=True),   # null or a number > 0
-        }
-        def __init__(self, ..., num_samples: int = 8, mode: str = "fast", clip: float | None = None, **kw): ...
-
-Env cfg dataclasses declare ``option_rules: ClassVar[dict] = {...}`` after their fields; ``EnvCfg.__post_init__``
-checks them. Run options (``configs/default.yaml``) have theirs in ``refpo_warp/config/run_options.py``; classes we do
-not own (rsl_rl's) get theirs through ``register_rules``.
-
-The same rules serve:
-- the config resolver (``refpo_warp.config.resolve``), which checks every option when a run's config is resolved, before
-  anything is built or written, and names the dotted key (``algorithm.num_samples``) in its error;
-- the constructor (``checks_options`` / ``EnvCfg.__post_init__``), so code that builds the class directly (an
-  rsl_rl config dict, a test) gets the same errors;
-- resume: ``fixed=True`` marks an option that may not change when a run is resumed (it changes the model or the
-  spaces; e.g. hidden sizes). Without ``fixed``, actor and critic options are fixed and all others may change
-  (``fixed=False`` frees an actor option such as the number of flow steps).
-
-Subclasses inherit their bases' rules and may replace them. ``tests/utils/test_option_rules.py`` fails for any option
-without a rule, so a new option cannot be forgotten.
+An option is declared as a field with its default, its rule and its doc (``refpo_warp.utils.options.option``); this
+module only holds the rule types. ``fixed=True`` marks an option that may not change when a run is resumed (it changes
+the model or the spaces); without ``fixed``, actor and critic options are fixed and all others may change
+(``fixed=False`` frees an actor option such as the number of flow steps).
 """
 
 from __future__ import annotations
 
 import copy
-import dataclasses
-import functools
-import inspect
 import math
 from collections.abc import Callable
 from enum import Enum
 from typing import Any
 
 from refpo_warp.utils.errors import ConfigError
-
-_EXTERNAL_RULES: dict[type, dict[str, Rule]] = {}
-OPTIONS = "Options"  # a class's dataclass of options, each field with its rule (refpo_warp/utils/options.py)
 
 
 class Rule:
@@ -128,15 +100,15 @@ class Num(Rule):
             return f"{kind} {'>' if self.lo_open else '>='} {_fmt(self.lo)}"
         if self.hi is not None:
             return f"{kind} {'<' if self.hi_open else '<='} {_fmt(self.hi)}"
-        return f"a finite {kind[2:] if kind.startswith('a ') else kind}"
+        return f"a finite {kind.removeprefix('a ')}"
 
 
-def Int(lo: int | None = None, hi: int | None = None, **kwargs) -> Num:  # noqa: N802 (reads like a type)
+def Int(lo: int | None = None, hi: int | None = None, **kwargs) -> Num:
     """An integer in [lo, hi]."""
     return Num(lo, hi, integer=True, **kwargs)
 
 
-def Real(lo: float | None = None, hi: float | None = None, **kwargs) -> Num:  # noqa: N802
+def Real(lo: float | None = None, hi: float | None = None, **kwargs) -> Num:
     """A finite real number in [lo, hi] (``lo_open``/``hi_open`` exclude a bound)."""
     return Num(lo, hi, **kwargs)
 
@@ -237,82 +209,9 @@ def mapping_or_none(key: str, value: Any) -> Any:
     return value
 
 
-# ---------------------------------------------------------------------------------------------------- lookup
-def register_rules(cls: type, rules: dict[str, Rule]) -> None:
-    """Declare the rules of a class we do not own (e.g. rsl_rl's PPO); subclasses inherit them."""
-    _EXTERNAL_RULES[cls] = {**_EXTERNAL_RULES.get(cls, {}), **rules}
-
-
-def rules_for(cls: type) -> dict[str, Rule]:
-    """The option rules of ``cls`` and its bases (a subclass's rule for an option replaces its base's): registered,
-    in an ``option_rules`` dict, or in the fields of an ``Options`` dataclass (``refpo_warp/utils/options.py``)."""
-    rules: dict[str, Rule] = {}
-    for klass in reversed(inspect.getmro(cls) if inspect.isclass(cls) else (cls,)):
-        rules.update(_EXTERNAL_RULES.get(klass, {}))
-        rules.update(getattr(klass, "__dict__", {}).get("option_rules", {}))
-        options = getattr(klass, "__dict__", {}).get(OPTIONS)
-        for f in dataclasses.fields(options) if dataclasses.is_dataclass(options) else ():
-            if f.metadata.get("rule") is not None:
-                rules[f.name] = f.metadata["rule"]
-    return rules
-
-
 def check_options(rules: dict[str, Rule], values: dict[str, Any], prefix: str = "") -> dict[str, Any]:
     """``values`` with every option that has a rule checked (and normalised); raises ``ConfigError``."""
     return {k: rules[k].check(f"{prefix}{k}", v) if k in rules else v for k, v in values.items()}
-
-
-def checks_options(cls: type) -> type:
-    """Class decorator: the constructor checks the arguments it receives against the rules of the object's class.
-
-    Subclasses are covered too (their constructors are wrapped when they are defined), with their own
-    ``option_rules``; only the outermost constructor of an object checks, bases called through ``super()`` do not
-    check again.
-    """
-    _wrap_init(cls)
-    inherited = cls.__dict__.get("__init_subclass__")
-
-    def __init_subclass__(sub, **kwargs):
-        if inherited is not None:
-            inherited.__func__(sub, **kwargs)
-        else:
-            super(cls, sub).__init_subclass__(**kwargs)
-        if "__init__" in sub.__dict__:
-            _wrap_init(sub)
-
-    cls.__init_subclass__ = classmethod(__init_subclass__)
-    return cls
-
-
-def _wrap_init(cls: type) -> None:
-    init = cls.__init__
-    if getattr(init, "_checks_options", False):
-        return
-    signature = inspect.signature(init)
-    var_kw = next((n for n, p in signature.parameters.items() if p.kind is p.VAR_KEYWORD), None)
-
-    @functools.wraps(init)
-    def __init__(self, *args, **kwargs):
-        if id(self) in _CONSTRUCTING:
-            return init(self, *args, **kwargs)
-        _CONSTRUCTING.add(id(self))
-        try:
-            bound = signature.bind(self, *args, **kwargs)
-            rules, owner = rules_for(type(self)), type(self).__name__
-            for name, value in list(bound.arguments.items()):
-                if name == var_kw:
-                    bound.arguments[name] = check_options(rules, value, f"{owner}.")
-                elif name in rules:
-                    bound.arguments[name] = rules[name].check(f"{owner}.{name}", value)
-            init(*bound.args, **bound.kwargs)
-        finally:
-            _CONSTRUCTING.discard(id(self))
-
-    __init__._checks_options = True
-    cls.__init__ = __init__
-
-
-_CONSTRUCTING: set[int] = set()  # ids of objects whose outermost decorated constructor is running
 
 
 def _fmt(x: float) -> str:

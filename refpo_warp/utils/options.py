@@ -1,22 +1,32 @@
-"""Options declared once: each option of a class is one field of the class's ``Options`` dataclass, holding its
-default, its rule (``refpo_warp.utils.option_rules``) and a one-line doc::
+"""One way to declare an option: a field made by ``option(default, rule, doc)``, which holds the option's default, its
+rule (the valid values; ``refpo_warp.utils.option_rules``) and a one-line doc::
 
-    @dataclass(frozen=True)
-    class ReFPOOptions:
-        reflow_coef: float = option(0.04, Real(0, 1e6), "lambda, the weight of the Reflow (CFM) term; 0 is FPO")
+    class MyAlgo(OnPolicyAlgorithm):                  # an algorithm: fields in the class body
+        num_samples: int = option(3, Int(1, 1024), "samples per action")
 
-    class ReFPO(OnPolicyAlgorithm):
-        Options = ReFPOOptions
+    @dataclass
+    class MyCfg(EnvCfg):                              # an env cfg, the video options, the run options: a dataclass
+        speed: float = option(0.5, Real(0, 10, lo_open=True), "distance moved per step at action 1")
 
-The config resolver checks a value against the field's rule, ``--explain`` shows the field's default and doc,
-``docs/`` prints its table (``refpo_warp/config/option_docs.py``) and the constructor receives it
-(``OnPolicyAlgorithm``: every option becomes an attribute of the same name; a model such as ``FlowActor`` takes
-``**options`` after rsl_rl's positional arguments and reads them through ``constructor_options``). A class's options
-are the fields of the ``Options`` of every class in its MRO, a subclass's field replacing its base's; a field without a
-rule of its own (``option(0.05, doc=...)``: another default for a base's option, e.g. rsl_rl's ``clip_param``) keeps
-the base's rule.
-A fixed set of choices is an ``enum.Enum`` of strings: ``OneOf(TauSampling)`` accepts its values, which stay plain
-strings in a config.
+    class MyActor(nn.Module):                         # a model: a nested ``Options`` dataclass
+        @dataclass(frozen=True)
+        class Options:
+            width: int = option(64, Int(1, 4096), "hidden width")
+
+Where the fields stand (``option_fields``): in the body of an algorithm class (the constructor assigns each one, so
+``self.num_samples`` is a typed attribute), in an env cfg / option dataclass itself, or in a model's ``Options``
+dataclass (a model is a ``torch.nn.Module``, whose class attributes would shadow its buffers; its constructor holds a
+typed ``Options`` instance). rsl_rl's classes, which cannot be edited, have theirs in one table of the same fields
+(``refpo_warp/utils/rsl_rl_options.py``), read here. A field without a default of its own (``option(rule=...)``) takes
+the constructor's (rsl_rl) or ``configs/default.yaml``'s (run options).
+
+The same field is read by the config resolver (``refpo_warp/config/validate.py``, which names the dotted key in its
+error), ``--explain`` (``refpo_warp/config/explain.py``), the docs' tables (``refpo_warp/config/option_docs.py``) and
+the constructor (``option_values``, ``constructor_options``, ``check_fields``). A class's options are the fields of
+every class in its MRO, a subclass's field replacing its base's; a field without a rule of its own
+(``option(0.05, doc=...)``: another default for a base's option) keeps the base's rule, and a field without a doc keeps
+the base's doc. A fixed set of choices is an ``enum.Enum`` of strings: ``OneOf(MyEnum)`` accepts its values, which stay
+plain strings in a config. ``tests/utils/test_option_rules.py`` fails for an option without a rule.
 """
 
 from __future__ import annotations
@@ -24,11 +34,12 @@ from __future__ import annotations
 import dataclasses
 import inspect
 from dataclasses import dataclass
-from enum import Enum
-from types import SimpleNamespace
-from typing import Any
+from typing import Any, TypeVar
 
-from refpo_warp.utils.option_rules import OPTIONS, Rule, rules_for
+from refpo_warp.utils.option_field import MARK, UNSET, choices, option  # noqa: F401  (option, choices: re-exported)
+from refpo_warp.utils.option_rules import Rule, check_options
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -38,50 +49,91 @@ class DeclaredOption:
     default: Any
     rule: Rule | None
     doc: str
-    owner: type  # the class whose ``Options`` declares this default
+    owner: type  # the class that declares this default
 
 
-def option(default: Any, rule: Rule | None = None, doc: str = "") -> Any:
-    """A field of an ``Options`` dataclass: ``default`` (a list or tuple is copied for every instance), ``rule`` and
-    a one-line ``doc``."""
-    metadata = {"rule": rule, "doc": doc}
-    if isinstance(default, (list, dict, set)):
-        return dataclasses.field(default_factory=lambda: type(default)(default), metadata=metadata)
-    return dataclasses.field(default=default, metadata=metadata)
+def _default(f: dataclasses.Field) -> Any:
+    return f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+
+
+def option_fields(klass: type) -> dict[str, dataclasses.Field]:
+    """The option fields ``klass`` itself declares (not its bases'), by name (see the module docstring)."""
+    if klass.__module__.split(".")[0] == "rsl_rl":
+        from refpo_warp.utils.rsl_rl_options import RSL_RL_OPTIONS
+
+        table = RSL_RL_OPTIONS.get(klass)
+        return {f.name: f for f in dataclasses.fields(table)} if table is not None else {}
+    own = vars(klass)
+    if "__dataclass_fields__" in own:  # an option dataclass (env cfg, video, run options, a model's Options)
+        names = own.get("__annotations__", {})
+        return {f.name: f for f in dataclasses.fields(klass) if f.name in names}
+    nested = own.get("Options")
+    if dataclasses.is_dataclass(nested) and isinstance(nested, type):  # a model: every field of its Options
+        return {f.name: f for f in dataclasses.fields(nested)}
+    return {k: v for k, v in own.items() if isinstance(v, dataclasses.Field) and MARK in v.metadata}
+
+
+def _mro(cls: type) -> list[type]:
+    return list(reversed(inspect.getmro(cls))) if inspect.isclass(cls) else []
+
+
+def rules_for(cls: type) -> dict[str, Rule]:
+    """The rule of every option of ``cls`` and its bases (a subclass's rule replaces its base's)."""
+    rules: dict[str, Rule] = {}
+    for klass in _mro(cls):
+        for name, f in option_fields(klass).items():
+            if f.metadata.get("rule") is not None:
+                rules[name] = f.metadata["rule"]
+    return rules
+
+
+def docs_for(cls: type) -> dict[str, str]:
+    """The doc of every option of ``cls`` and its bases (a subclass's doc replaces its base's; none keeps it)."""
+    docs: dict[str, str] = {}
+    for klass in _mro(cls):
+        for name, f in option_fields(klass).items():
+            if f.metadata.get("doc"):
+                docs[name] = f.metadata["doc"]
+    return docs
 
 
 def declared_options(cls: type) -> dict[str, DeclaredOption]:
-    """Every option the ``Options`` of ``cls`` and its bases declare, by name: a subclass's default wins, a doc
+    """Every option of ``cls`` and its bases with a default of its own, by name: a subclass's default wins, a doc
     missing there is its base's, and the rule is the class's (``rules_for``: a base's when the field has none)."""
     out: dict[str, DeclaredOption] = {}
     rules = rules_for(cls)
-    for klass in reversed(inspect.getmro(cls) if inspect.isclass(cls) else ()):
-        options = getattr(klass, "__dict__", {}).get(OPTIONS)
-        for f in dataclasses.fields(options) if dataclasses.is_dataclass(options) else ():
-            default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
-            doc = f.metadata.get("doc") or (out[f.name].doc if f.name in out else "")
-            out[f.name] = DeclaredOption(default, rules.get(f.name), doc, klass)
+    for klass in _mro(cls):
+        for name, f in option_fields(klass).items():
+            default = _default(f)
+            if default is UNSET:
+                continue
+            doc = f.metadata.get("doc") or (out[name].doc if name in out else "")
+            out[name] = DeclaredOption(default, rules.get(name), doc, klass)
     return out
 
 
 def option_values(cls: type, given: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """(every declared option of ``cls`` with its default or the given value, the given arguments it does not
-    declare)."""
+    """For a constructor taking ``**kwargs``: every given value checked against its rule (the error names
+    ``<Class>.<option>``), then (every declared option of ``cls`` with the given value or its default, the given
+    arguments it does not declare)."""
+    checked = check_options(rules_for(cls), given, f"{cls.__name__}.")
     declared = declared_options(cls)
-    values = {name: given.get(name, found.default) for name, found in declared.items()}
-    return values, {k: v for k, v in given.items() if k not in declared}
+    values = {name: checked.get(name, found.default) for name, found in declared.items()}
+    return values, {k: v for k, v in checked.items() if k not in declared}
 
 
-def constructor_options(cls: type, given: dict[str, Any]) -> SimpleNamespace:
-    """The options a constructor taking ``**options`` receives (a model's: rsl_rl passes them by keyword): every
-    declared option of ``cls``, given or its default, as attributes; an argument ``cls`` does not declare is a
-    ``TypeError``, as for a constructor with these parameters."""
+def constructor_options(cls: type, options: type[T], given: dict[str, Any]) -> T:
+    """A model's ``Options`` instance from the keyword arguments its constructor received (rsl_rl passes them by
+    keyword), each checked against its rule; an argument ``options`` does not declare is a ``TypeError``, as for a
+    constructor with these parameters."""
     values, unknown = option_values(cls, given)
     if unknown:
         raise TypeError(f"{cls.__name__}.__init__() got an unexpected keyword argument '{next(iter(unknown))}'")
-    return SimpleNamespace(**values)
+    return options(**values)
 
 
-def choices(enum: type[Enum]) -> tuple[str, ...]:
-    """The values of a choice enum, as a config writes them."""
-    return tuple(member.value for member in enum)
+def check_fields(obj: Any, prefix: str) -> None:
+    """In an option dataclass's ``__post_init__``: every field checked against its rule and normalised in place."""
+    values = {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}
+    for name, value in check_options(rules_for(type(obj)), values, prefix).items():
+        object.__setattr__(obj, name, value)

@@ -58,8 +58,6 @@ class DmcEnv(WarpVecEnv):
     def _build(self) -> None:
         cfg, task_class = self.cfg, self.task_class
         options = {}
-        if cfg.solver_iterations < 0 or cfg.solver_ls_iterations < 0:
-            raise ValueError("env.solver_iterations and env.solver_ls_iterations must be >= 0 (0: model's value)")
         if cfg.solver_iterations:
             options["iterations"] = cfg.solver_iterations
         if cfg.solver_ls_iterations:

@@ -6,12 +6,12 @@ from dataclasses import dataclass
 
 from refpo_warp.envs.env_cfg import EnvCfg
 from refpo_warp.utils.option_rules import Int, Real
+from refpo_warp.utils.options import option
 
 
 @dataclass
 class GridWorldCfg(EnvCfg):
-    size: int = 25
-    goal_reward: float = 20.0
-    max_episode_length: int = 200
     # starts lie in rows 2 .. size - 3, between the goal rows: at least 5 rows
-    option_rules = {"size": Int(5, 100_000), "goal_reward": Real(-1e6, 1e6)}
+    size: int = option(25, Int(5, 100_000), "side of the square grid, in cells")
+    goal_reward: float = option(20.0, Real(-1e6, 1e6), "reward for reaching a goal row")
+    max_episode_length: int = option(200)

@@ -11,13 +11,21 @@ band in the data's shares.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 from tensordict import TensorDict
 
 from refpo_warp.utils.option_rules import Int, Real
+from refpo_warp.utils.options import option
 
-OPTIONS = {"up_share": Real(0, 1), "band": Int(0, 1000)}  # demonstrator.<option>=value on refpo collect's line
-DEFAULTS = {"up_share": 0.7, "band": 3}
+
+@dataclass(frozen=True)
+class Options:
+    """The demonstrator's options: demonstrator.<option>=value on refpo collect's line."""
+
+    up_share: float = option(0.7, Real(0, 1), "probability of stepping up inside the band")
+    band: int = option(3, Int(0, 1000), "rows on each side of the middle row where it steps up or down at random")
 
 
 class Demonstrator:

@@ -1,13 +1,13 @@
-"""The option tables of the docs are made from the classes' Options (refpo_warp/config/option_docs.py): a page states
-the defaults, rules and meanings the code has, and every algorithm and model that declares options has a table."""
+"""The option tables of the docs are made from the classes' option fields (refpo_warp/config/option_docs.py): a page
+states the defaults, rules and meanings the code has, and every algorithm and model that declares options has a
+table."""
 
 import inspect
 
-import refpo_warp.algorithms as algorithms
-import refpo_warp.models as models
+from refpo_warp import algorithms, models
 from refpo_warp.config.classes import resolve_class
 from refpo_warp.config.option_docs import BLOCK, main, with_tables
-from refpo_warp.utils.option_rules import OPTIONS
+from refpo_warp.utils.options import option_fields
 from refpo_warp.utils.paths import REPO_ROOT
 
 DOCS = REPO_ROOT / "docs"
@@ -31,8 +31,9 @@ def _tabled() -> set[type]:
 
 
 def _declaring(package) -> set[type]:
-    declaring = {cls for cls in vars(package).values() if inspect.isclass(cls) and OPTIONS in cls.__dict__}
-    return declaring | {base for cls in declaring for base in cls.__mro__ if OPTIONS in base.__dict__}
+    declaring = {cls for cls in vars(package).values() if inspect.isclass(cls) and option_fields(cls)}
+    ours = {base for cls in declaring for base in cls.__mro__ if option_fields(base)}
+    return {cls for cls in declaring | ours if cls.__module__.startswith("refpo_warp.")}  # not rsl_rl's
 
 
 def test_every_algorithm_with_options_has_a_table():
@@ -55,7 +56,7 @@ def test_a_changed_default_is_written_into_the_page(tmp_path, monkeypatch):
     written = page.read_text()
     assert "| `reflow_coef` | 0.04 | a number in [0, 1e+06] | lambda, the weight of" in written
     assert "| old |" not in written and written.startswith("text\n") and written.endswith("more\n")
-    monkeypatch.setattr(ReFPO.Options.__dataclass_fields__["reflow_coef"], "default", 0.5)
+    monkeypatch.setattr(vars(ReFPO)["reflow_coef"], "default", 0.5)
     assert "| `reflow_coef` | 0.5 |" in with_tables(written)
 
 

@@ -1,13 +1,14 @@
 """mjlab config classes for the flow actor and ReFPO, and the ReFPO variant of a task's PPO runner config.
 
 Each default has one home, the class (``FlowActor``'s constructor; ``ReFPO``'s and its shared update loop's
-``Options``): the two dataclasses are made from them, so every option is a flag of mjlab's ``train``
+option fields): the two dataclasses are made from them, so every option is a flag of mjlab's ``train``
 (``--agent.algorithm.reflow-coef 0.1``, ``--agent.actor.num-flow-steps 5``) with the class's default, and a new option
 needs no edit here. A choice enum is a plain string flag (a config holds the string).
 """
 
 from __future__ import annotations
 
+import sys
 import typing
 from dataclasses import field, fields, make_dataclass, replace
 from enum import Enum
@@ -15,7 +16,7 @@ from enum import Enum
 from mjlab.rl import RslRlModelCfg, RslRlOnPolicyRunnerCfg, RslRlPpoAlgorithmCfg
 
 from refpo_warp.config.classes import POSITIONAL, class_defaults
-from refpo_warp.utils.option_rules import OPTIONS
+from refpo_warp.utils.options import option_fields
 
 ACTOR_CLASS = "refpo_warp.models:FlowActor"
 ALGORITHM_CLASS = "refpo_warp.algorithms:ReFPO"
@@ -35,11 +36,16 @@ def _own_options(class_name: str, section: str, base: type) -> dict[str, tuple[o
 
 
 def _hint(owner: type, name: str) -> typing.Any:
-    """The declared type of an option: its ``Options`` field's or its constructor parameter's; a choice enum's is
-    ``str``."""
-    declared = owner.__dict__.get(OPTIONS)
-    in_options = declared is not None and name in getattr(declared, "__dataclass_fields__", {})
-    hint = typing.get_type_hints(declared if in_options else owner.__init__)[name]
+    """The declared type of an option: its field's (``refpo_warp/utils/options.py``) or its constructor parameter's; a
+    choice enum's is ``str``."""
+    if name in option_fields(owner):
+        declared = owner.__dict__.get("Options", owner)  # a model's Options dataclass, or the class body
+        namespace = vars(sys.modules[owner.__module__])
+        hint = eval(declared.__annotations__[name], namespace) if name in declared.__annotations__ else None
+        if hint is None:  # a field inherited by a model's Options
+            hint = typing.get_type_hints(declared)[name]
+    else:
+        hint = typing.get_type_hints(owner.__init__)[name]
     args = typing.get_args(hint)
     if isinstance(hint, type) and issubclass(hint, Enum):
         return str

@@ -72,9 +72,9 @@ class CheetahRun(DmcTask):
     num_actions = 6
 
     def prepare(self) -> None:
-        """Settle ``reset_bank_size`` random leg poses for SETTLE_STEPS physics steps at zero control."""
+        """Settle ``cfg.reset_bank(num_envs)`` random leg poses for SETTLE_STEPS physics steps at zero control."""
         n, v, sim = self.num_envs, self.views, self.sim
-        size = self.cfg.reset_bank_size or max(n, 256)
+        size = self.cfg.reset_bank(n)
         rounds = math.ceil(size / n)
         bank_q = torch.zeros(rounds * n, v.joint_q.shape[1], device=wp.device_to_torch(self.device))
         bank_qd = torch.zeros(rounds * n, v.joint_qd.shape[1], device=bank_q.device)

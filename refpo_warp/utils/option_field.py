@@ -1,0 +1,34 @@
+"""``option(default, rule, doc)``: the field that declares an option (see ``refpo_warp/utils/options.py``, which reads
+the fields; it re-exports ``option``). Apart so that rsl_rl's table (``refpo_warp/utils/rsl_rl_options.py``) can
+declare fields without importing the reader."""
+
+from __future__ import annotations
+
+import dataclasses
+from enum import Enum
+from typing import Any
+
+from refpo_warp.utils.option_rules import Rule
+
+
+class _Unset:
+    def __repr__(self) -> str:
+        return "UNSET"
+
+
+UNSET: Any = _Unset()  # a field's default is elsewhere: the constructor's (rsl_rl) or configs/default.yaml's
+MARK = "refpo_option"  # in a field's metadata: the field is an option
+
+
+def option(default: Any = UNSET, rule: Rule | None = None, doc: str = "") -> Any:
+    """An option field: ``default`` (a list, dict or set is copied for every instance), ``rule`` and a one-line
+    ``doc``; the same in a dataclass and in an algorithm's class body."""
+    metadata = {MARK: True, "rule": rule, "doc": doc}
+    if isinstance(default, (list, dict, set)):
+        return dataclasses.field(default_factory=lambda: type(default)(default), metadata=metadata)
+    return dataclasses.field(default=default, metadata=metadata)
+
+
+def choices(enum: type[Enum]) -> tuple[str, ...]:
+    """The values of a choice enum, as a config writes them."""
+    return tuple(member.value for member in enum)
