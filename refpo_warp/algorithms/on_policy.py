@@ -95,7 +95,9 @@ class OnPolicyAlgorithm(RslPPO):
 
     # Options every algorithm shares (refpo_warp/utils/options.py), besides rsl_rl's PPO arguments.
     reward_scale: float = option(
-        1.0, Real(0, 1e6, lo_open=True), "rewards x scale for learning; logged returns unscaled (Brax; DMC: 10)"
+        1.0,
+        Real(0, 1e6, lo_open=True),
+        "rewards x scale for learning; logged returns unscaled (Brax); set per task in configs/task/*.yaml",
     )
     value_clip_param: float | None = option(
         None,
@@ -106,7 +108,7 @@ class OnPolicyAlgorithm(RslPPO):
     reshuffle_each_epoch: bool = option(
         False,
         Flag(),
-        "a new minibatch permutation on every pass (Brax / Playground; DMC: true) instead of one for all (rsl_rl)",
+        "a new minibatch permutation on every pass (Brax / Playground) instead of one for all (rsl_rl); per task",
     )
     joint_grad_clip: bool = option(
         False, Flag(), "one gradient-norm clip over actor and critic (Puffer-PHC) instead of one each (rsl_rl)"

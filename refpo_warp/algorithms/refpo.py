@@ -106,10 +106,10 @@ class ReFPO(OnPolicyAlgorithm):
     reflow_coef: float = option(
         0.04,
         Real(0, 1e6),
-        "lambda, the weight of the un-weighted CFM (Reflow) term; 0 gives FPO (0.04 DMC, 0.1 GridWorld / humanoid)",
+        "lambda, the weight of the un-weighted CFM (Reflow) term; 0 gives FPO; set per task in configs/task/*.yaml",
     )
     num_mc_samples: int = option(
-        8, Int(1, 1024), "K, (tau, eps) pairs stored per action (8 DMC, 50 GridWorld, 1 humanoid)"
+        8, Int(1, 1024), "K, (tau, eps) pairs stored per action; set per task in configs/task/*.yaml"
     )
     output_mode: str | None = option(
         None, OneOf(None, OUTPUT_MODES), "the CFM loss mode (u, eps, data); null: the actor's output_mode"
@@ -129,7 +129,7 @@ class ReFPO(OnPolicyAlgorithm):
     log_ratio_clip: float | None = option(
         None,
         Real(0, 100, lo_open=True, optional=True),
-        "clamp each pair's log-ratio to [-c, c]; null: no clamp (GridWorld reference: 3)",
+        "clamp each pair's log-ratio to [-c, c]; null: no clamp",
     )
     explosion_threshold: float = option(
         3.0, Real(0, None, lo_open=True), "|log-ratio| above which an action (or pair) counts in the Explosion Rate"
