@@ -87,9 +87,9 @@ def _meaning(cfg: dict, key: str) -> str:
     if section in CLASS_SECTIONS and name and "." not in name:
         return docs_for(resolve_class(cfg[section]["class_name"])).get(name, "")
     if section == "env" and name:
-        from refpo_warp.envs.registry import get_task
+        from refpo_warp.config.config_set import task_spec
 
-        return docs_for(get_task(cfg["task"]).cfg_class).get(name, "")
+        return docs_for(task_spec(cfg).cfg_class).get(name, "")
     if section == "video" and name:
         from refpo_warp.render.options import VideoOptions
 
