@@ -11,6 +11,7 @@ from __future__ import annotations
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import torch
 
@@ -21,7 +22,7 @@ from refpo_warp.render.video import write_video
 from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.timing import print_table
 
-CASES = (
+CASES: tuple[tuple[str, dict[str, Any], dict[str, Any]], ...] = (
     ("dmc_cheetah_run", {}, {}),
     ("humanoid_all", {"eval_mode": True}, {"reference": True}),
     ("humanoid_all", {"eval_mode": True}, {"reference": False}),
@@ -31,8 +32,9 @@ CASES = (
 
 def frames_per_second(
     task: str, env_options: dict, render_options: dict, width: int, height: int, frames: int
-) -> tuple[float, object]:
-    """Frames per second of drawing env 0 of ``task`` after each of ``frames`` random steps (the steps untimed)."""
+) -> tuple[float, tuple[Any, Any]]:
+    """Frames per second of drawing env 0 of ``task`` after each of ``frames`` random steps (the steps untimed), and
+    (the env, its frame source)."""
     env = make_env(task, num_envs=1, device="cpu", seed=0, **env_options)
     source = family_module(task, "render").frame_source(env, width, height, **render_options)
     gen = torch.Generator().manual_seed(0)

@@ -86,6 +86,7 @@ def split_arguments(args: list[str]) -> tuple[dict[str, Any], VideoOptions, dict
             key,
             [*own, *(f"video.{k}" for k in VIDEO_KEYS), *(f"env.{k}" for k in env_keys)],
         )
+    assert spec is not None  # an agent plays a task=ID (has_task)
     spec.cfg_class(**{**spec.cfg_overrides, **env})  # the env options' rules
     return picked, video, env
 

@@ -8,7 +8,9 @@ here and on the command line, so no option ever needs a string turned into a num
 from __future__ import annotations
 
 import re
+from collections.abc import Hashable
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -20,7 +22,7 @@ class ConfigLoader(yaml.SafeLoader):
     """SafeLoader that reads ``1e-3`` as a float and refuses a key given twice in one mapping (YAML itself keeps the
     last one silently)."""
 
-    def construct_mapping(self, node, deep=False):
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Hashable, Any]:
         seen: dict = {}
         for key_node, _ in node.value:
             if key_node.tag == "tag:yaml.org,2002:merge":  # '<<: *anchor' may be repeated and overridden

@@ -85,7 +85,7 @@ class GymVectorEnv(gym.vector.VectorEnv):
         self._reset_pending[:] = False
         return _numpy(obs[self.obs_group]), {}
 
-    def step(self, actions):
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
         actions = np.asarray(actions, dtype=np.float32)
         if actions.shape != self.action_space.shape:
             raise ValueError(f"actions must have shape {self.action_space.shape}, got {actions.shape}")
@@ -101,6 +101,7 @@ class GymVectorEnv(gym.vector.VectorEnv):
 
         if self.autoreset_mode == AutoresetMode.SAME_STEP:
             if done.any():
+                assert final_obs is not None  # read above when any env is done
                 infos["final_obs"] = np.full(self.num_envs, None, dtype=object)
                 for i in np.flatnonzero(done):
                     infos["final_obs"][i] = final_obs[i]
@@ -117,6 +118,7 @@ class GymVectorEnv(gym.vector.VectorEnv):
             rewards[pending] = 0.0
             terminated[pending] = truncated[pending] = done[pending] = False
         if done.any():
+            assert final_obs is not None  # read above, before reset_envs, when any env is done
             observations[done] = final_obs[done]
             infos.update(_masked(metrics, done))
         self._reset_pending = done

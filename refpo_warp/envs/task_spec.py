@@ -11,7 +11,10 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from refpo_warp.envs.env_cfg import EnvCfg
 
 
 @dataclass(frozen=True)
@@ -22,7 +25,7 @@ class TaskSpec:
     task_id: str
     entry_point: str
     """``"module.path:ClassName"`` of a ``WarpVecEnv`` subclass, imported only when an env is built."""
-    cfg_class: type
+    cfg_class: type[EnvCfg]
     """Its env cfg dataclass (an ``EnvCfg`` subclass from a module that does not import Warp)."""
     cfg_overrides: dict[str, Any] = field(default_factory=dict)
     """Env cfg fields this id fixes (e.g. the DMC suite task)."""

@@ -21,7 +21,7 @@ after a warm-up step (a CUDA graph on GPU, a Warp CPU graph on CPU).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import torch
 from rsl_rl.env import VecEnv
@@ -190,7 +190,7 @@ class WarpVecEnv(VecEnv):
         self._actions.copy_(actions)
         self._run_step()
         dones = self._done.clone()
-        extras = {"time_outs": self._truncated.clone()}
+        extras: dict[str, Any] = {"time_outs": self._truncated.clone()}
         if (self._metrics or self.reward_terms) and bool(dones.any()):
             extras["log"] = {f"Episode/{name}": buf[dones] for name, buf in self._metrics.items()}
             if self.reward_terms:

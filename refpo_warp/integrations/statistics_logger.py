@@ -65,6 +65,11 @@ class StatisticsRunnerMixin:
     """Put first in the bases of an ``OnPolicyRunner`` subclass: swaps its ``Logger`` for a ``StatisticsLogger``
     once the runner is built (before training starts its writer)."""
 
+    # Set by OnPolicyRunner.__init__ (the class this mixes into).
+    is_distributed: bool
+    gpu_global_rank: int
+    logger: Logger
+
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.logger = StatisticsLogger.replacing(self.logger, self.is_distributed, self.gpu_global_rank)

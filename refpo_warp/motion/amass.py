@@ -14,6 +14,7 @@ from __future__ import annotations
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -149,9 +150,12 @@ def write_amass(
     """
     path = Path(path)
     num_frames = trans.shape[0]
-    zeros = lambda *shape: np.zeros(shape, dtype=dtype)  # noqa: E731
+
+    def zeros(*shape: int) -> np.ndarray:
+        return np.zeros(shape, dtype=dtype)
+
     root_orient, body_pose, trans = (np.asarray(a, dtype=dtype) for a in (root_orient, body_pose, trans))
-    common = {"trans": trans, "gender": np.array(gender), "betas": zeros(16)}
+    common: dict[str, Any] = {"trans": trans, "gender": np.array(gender), "betas": zeros(16)}
     if schema == "smplh":
         poses = np.concatenate([root_orient, body_pose, zeros(num_frames, SMPLH_POSE_DIM - 66)], axis=1)
         arrays = {**common, "poses": poses, "mocap_framerate": np.array(float(fps)), "dmpls": zeros(num_frames, 8)}

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -58,7 +59,7 @@ def save_library(
         "body_names": list(BODY_NAMES),
         "sources": list(sources),
     }
-    arrays = {key: np.asarray(frames[key], dtype=np.float32) for key in FRAME_ARRAYS}
+    arrays: dict[str, Any] = {key: np.asarray(frames[key], dtype=np.float32) for key in FRAME_ARRAYS}
     arrays["clip_frames"] = clip_frames
     arrays["clip_start"] = np.concatenate([[0], np.cumsum(clip_frames)[:-1]]).astype(np.int64)
     arrays["metadata"] = np.array(json.dumps(metadata))

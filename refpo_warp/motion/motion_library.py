@@ -75,9 +75,9 @@ class MotionLibrary:
         self.frames = {key: np.ascontiguousarray(frames[key], dtype=np.float32) for key in FRAME_ARRAYS}
         start = np.concatenate([[0], np.cumsum(self.clip_num_frames)[:-1]])
         dev = self.device
-        self.clip_start = wp.array(start.astype(np.int32), dtype=int, device=dev)
-        self.clip_frames = wp.array(self.clip_num_frames.astype(np.int32), dtype=int, device=dev)
-        self.clip_duration_device = wp.array(self.clip_duration.astype(np.float32), dtype=float, device=dev)
+        self.clip_start: wp.array = wp.array(start.astype(np.int32), dtype=int, device=dev)
+        self.clip_frames: wp.array = wp.array(self.clip_num_frames.astype(np.int32), dtype=int, device=dev)
+        self.clip_duration_device: wp.array = wp.array(self.clip_duration.astype(np.float32), dtype=float, device=dev)
         self.frames_device = MotionFrames()
         for key, dtype in _WARP_DTYPES.items():
             setattr(self.frames_device, key, wp.array(self.frames[key], dtype=dtype, device=dev))

@@ -10,6 +10,7 @@ foot sole point stays fixed horizontally and sits on the ground, so the feet do 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TypedDict
 
 import numpy as np
 
@@ -105,7 +106,16 @@ def generate_motion(spec: ClipSpec) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return _anchor_root(root_rot, local_rot), root_rot, local_rot
 
 
-def generate_amass(spec: ClipSpec) -> dict[str, np.ndarray | float]:
+class AmassClip(TypedDict):
+    """``generate_amass``'s clip: the arguments ``write_amass`` takes after the path."""
+
+    root_orient: np.ndarray
+    body_pose: np.ndarray
+    trans: np.ndarray
+    fps: float
+
+
+def generate_amass(spec: ClipSpec) -> AmassClip:
     """The clip as AMASS quantities: root_orient (T, 3), body_pose (T, 63), trans (T, 3), fps."""
     root_pos, root_rot, local_rot = generate_motion(spec)
     root_orient, body_pose, trans = kin.model_to_amass(root_pos, root_rot, local_rot)

@@ -27,6 +27,12 @@ REQUIRED_KEYS = ("actor_state_dict", "critic_state_dict", "optimizer_state_dict"
 META_KEY = "refpo_warp"  # {"task", "algo", "env_steps", "time_s"}, written by refpo_warp.runner.Runner.save
 
 
+def _meta(data: dict) -> dict:
+    """The refpo_warp entry of a checkpoint (``META_KEY``); empty when another writer's checkpoint has none."""
+    meta = data.get(META_KEY)
+    return meta if isinstance(meta, dict) else {}
+
+
 def list_checkpoints(run_dir: str | Path) -> list[Path]:
     """``model_<it>.pt`` files in ``run_dir``, newest (highest iteration) first; temp files are not listed."""
     found = [(int(m.group(1)), p) for p in Path(run_dir).glob("model_*.pt") if (m := CHECKPOINT_PATTERN.match(p.name))]
@@ -95,7 +101,7 @@ def _check_contents(path: Path, data: Any) -> None:
 
 def check_fits(path: str | Path, data: dict, alg, task: str | None = None, algo: str | None = None) -> None:
     """Refuse a checkpoint written by another task or algorithm, or whose tensors do not fit ``alg``'s models."""
-    meta = data.get(META_KEY) if isinstance(data.get(META_KEY), dict) else {}
+    meta = _meta(data)
     for name, expected in (("task", task), ("algo", algo)):
         if expected is not None and meta.get(name) is not None and meta[name] != expected:
             raise CheckpointError(f"{path}: written by a run with {name}={meta[name]}; this run has {name}={expected}")
@@ -165,8 +171,10 @@ def load_latest(runner, run_dir: str | Path, task: str | None = None, algo: str 
 
 def checkpoint_progress(data: dict) -> tuple[int | None, float | None]:
     """(env steps, training seconds) recorded in a checkpoint by refpo_warp, or (None, None) for other writers."""
-    meta = data.get(META_KEY) if isinstance(data.get(META_KEY), dict) else {}
+    meta = _meta(data)
     steps, seconds = meta.get("env_steps"), meta.get("time_s")
-    valid_steps = isinstance(steps, int) and steps >= 0
-    valid_time = isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds >= 0
-    return (steps if valid_steps else None), (float(seconds) if valid_time else None)
+    valid_steps = steps if isinstance(steps, int) and steps >= 0 else None
+    valid_time = (
+        float(seconds) if isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds >= 0 else None
+    )
+    return valid_steps, valid_time

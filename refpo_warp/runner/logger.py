@@ -125,6 +125,7 @@ class ProgressLogger(Logger):
         append_row(self.log_dir, row)
         if not self.log_full:
             total = self.run_iterations or self._learn_total
+            assert total is not None  # log() sets _learn_total before it writes or holds a row
             print(self._progress_line(row["iteration"], total, row), flush=True)
 
     @staticmethod

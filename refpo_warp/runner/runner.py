@@ -51,7 +51,7 @@ class Runner(OnPolicyRunner):
         with quiet_stdout(not verbose):  # rsl_rl prints the observation sets and the models
             super().__init__(env, train_cfg, log_dir=log_dir, device=device)
         old = self.logger
-        self.logger = ProgressLogger(
+        self.logger: ProgressLogger = ProgressLogger(
             log_dir=log_dir,
             cfg=self.cfg,
             env_cfg=env.cfg,

@@ -43,7 +43,7 @@ def make_world_views(model, state, control) -> WorldViews:
     """Build the views for ``state``/``control`` of a model made of identical worlds."""
     w = model.world_count
     coords, dofs, bodies = model.joint_coord_count // w, model.joint_dof_count // w, model.body_count // w
-    coord_ref = None
+    coord_ref: wp.array | None = None
     if coords == dofs:  # MuJoCo qpos = joint_q + ref holds coordinate-wise only without free/ball joints
         dof_ref = getattr(getattr(model, "mujoco", None), "dof_ref", None)
         ref = dof_ref.numpy()[:coords] if dof_ref is not None else np.zeros(coords, np.float32)

@@ -83,6 +83,7 @@ def train_run(task: TrainTask) -> dict:
 
     ctx = ray.get_runtime_context()
     host, task_id = hostname(), ctx.get_task_id()
+    assert task_id is not None  # None only outside a Ray task (the driver)
     result = {"exit_code": None, "seconds": 0.0, "host": host, "node_id": ctx.get_node_id(), "reruns": 0, "error": ""}
     missing = missing_paths([task.cwd])
     if missing:

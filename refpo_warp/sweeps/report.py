@@ -84,7 +84,7 @@ def load_spec(sweep_dir: Path) -> dict:
 
 
 def _missing(record: RunRecord, status: dict) -> RunRecord:
-    state = status.get("state")
+    state = status.get("state", "")
     if state == "failed":
         record.status = "failed"
         record.note = f"exit codes {status.get('exit_codes')}; log {status.get('log')}"
@@ -152,6 +152,8 @@ def ratio_data(records: list[RunRecord], methods: list[tuple[str, str]], tasks: 
     seeds = sorted({s for _, _, s in have})
     if seed is None:
         seed = next((s for s in seeds if all((t, lb, s) in have for t, lb in pairs)), seeds[0] if seeds else None)
+    if seed is None:  # no run has ratio statistics
+        return seed, {}
     names = dict(methods)
     panels: dict = {}
     for task, label in pairs:

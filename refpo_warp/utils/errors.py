@@ -20,6 +20,11 @@ class ConfigError(ValueError):
 class NonFiniteLossError(FloatingPointError):
     """A training loss or statistic became NaN or infinite; training stops before the bad step is applied."""
 
+    # Set by refpo_warp.training.train_run when it stops a run (unset before: read them with getattr):
+    checkpoint: Path | None  # the run's latest checkpoint
+    run_dir: Path
+    learning_rate: float  # the rate the run had
+
 
 class DataFileError(ValueError):
     """An input file (checkpoint, motion, saved config, progress log) is unreadable or invalid; names the file."""

@@ -14,6 +14,7 @@ one ``MjData`` per world. Physics only: no observation or reward work on the C s
 from __future__ import annotations
 
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -24,12 +25,15 @@ from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.timing import env_steps_per_second, print_table
 
+if TYPE_CHECKING:
+    from refpo_warp.tasks.dmc.env import DmcEnv
+
 
 def _timed_steps(seconds: float, steps_per_second_guess: float, minimum: int = 10) -> int:
     return max(minimum, int(seconds * steps_per_second_guess))
 
 
-def ours(task: str, num_envs: int, device: str, seconds: float) -> tuple[float, object]:
+def ours(task: str, num_envs: int, device: str, seconds: float) -> tuple[float, DmcEnv]:
     env = make_env(f"dmc_{task}", num_envs=num_envs, device=device, seed=0)
     probe = env_steps_per_second(env, steps=5, warmup=3)  # also warms up (compile, graph capture)
     steps = _timed_steps(seconds, probe / num_envs)

@@ -9,8 +9,9 @@ simulation through ``self.views`` (per-world views of joint coordinates, body po
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -20,11 +21,13 @@ from refpo_warp.utils.warp_setup import wp
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 
 
-def reset_kernel(draw: wp.Function, params_type) -> wp.Kernel:
+def reset_kernel(draw: Callable[..., Any], params_type) -> wp.Kernel:
     """The reset kernel of a task: in each env i where ``mask[i]`` is set, ``draw(i, state, params, joint_q,
     joint_qd) -> state`` writes the initial joint coordinates and velocities (and any task state that ``params``
     holds), drawing from env i's random stream ``state``, and returns the advanced stream. ``params`` is one
     argument of Warp type ``params_type`` (a ``wp.struct`` for several)."""
+    # Warp types @wp.func as returning the decorated Python function; the object it returns is a wp.Function.
+    assert isinstance(draw, wp.Function) and draw.func is not None
 
     def reset(
         mask: wp.array(dtype=wp.bool),

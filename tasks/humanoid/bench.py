@@ -19,6 +19,7 @@ from __future__ import annotations
 import ast
 import json
 import time
+from typing import Any
 
 import numpy as np
 import torch
@@ -131,7 +132,7 @@ def main(argv: list[str]) -> None:
     cpu = device == "cpu"
     num_envs = args.num_envs or (64 if cpu else 4096)
     steps = args.steps or (30 if cpu else 300)
-    env_cfg = {key.removeprefix("env."): _literal(value) for key, value in given.items()}
+    env_cfg: dict[str, Any] = {key.removeprefix("env."): _literal(value) for key, value in given.items()}
     result = measure(args.task, num_envs, device, steps, args.warmup, with_c=not args.no_mujoco_c, **env_cfg)
     if args.json:
         print(json.dumps(result))

@@ -183,6 +183,7 @@ class HumanoidTrackingEnv(WarpVecEnv):
         """Reference frames of every env at ``times`` (default: the current reference time); for tests and tools."""
         out = self.motion.allocate_frames(self.num_envs)
         t = self.ref_time if times is None else wp.from_torch(times.to(self.device, torch.float32).contiguous())
+        assert isinstance(t, wp.array)  # from_torch returns a ctypes array_t only with return_ctype=True
         self.motion.sample(self.clip_id, t, out)
         return out
 

@@ -84,7 +84,7 @@ class HumanoidSim(MuJoCoWorlds):
         self.joint_q, self.joint_qd, self.body_q, self.body_qd = v.joint_q, v.joint_qd, v.body_q, v.body_qd
         self.joint_target = v.joint_target
         body_com = self.model.body_com.numpy()[: sk.NUM_BODIES]
-        self.body_com = wp.array(body_com, dtype=wp.vec3, device=device)
+        self.body_com: wp.array = wp.array(body_com, dtype=wp.vec3, device=device)
         self.root_com = wp.vec3(*body_com[0])  # the root's COM offset in its frame (a kernel argument)
 
     def constraint_usage(self) -> tuple[int, int]:
