@@ -34,6 +34,7 @@ from torch import nn
 
 from refpo_warp.algorithms.flow_sde import gaussian_log_prob, sample_sde_chain, sde_grid, sde_means
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm
+from refpo_warp.models.flow_actor import FlowActor
 from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real
 from refpo_warp.utils.options import choices, option
 
@@ -104,7 +105,7 @@ class FlowGRPO(OnPolicyAlgorithm):
         "the feathered action replaces x_N in the chain (FPO's denoising_mdp); else it stays outside the likelihood",
     )
     kl_coef: float = option(5e-3, Real(0, 1e6), "beta of the KL term (table (c): 5e-3); 0 turns it off")
-    kl_reference: KlReference = option(
+    kl_reference: str = option(
         "rollout",
         OneOf(KlReference),
         "rollout: the policy that collected the batch; initial: a frozen copy of the policy at construction",
@@ -112,7 +113,7 @@ class FlowGRPO(OnPolicyAlgorithm):
     group_size: int | None = option(
         None, Int(2, 1_000_000, optional=True), "envs per group; null: the env's reset_group_size"
     )
-    group_std: GroupStd = option(
+    group_std: str = option(
         "global",
         OneOf(GroupStd),
         "advantage std over all envs at a time step (global, Flow-GRPO's default) or within the group",
@@ -138,7 +139,7 @@ class FlowGRPO(OnPolicyAlgorithm):
         if not (hasattr(actor, "velocity") and hasattr(actor, "encode") and hasattr(actor, "num_flow_steps")):
             raise TypeError("FlowGRPO needs a flow actor; set actor.class_name to refpo_warp.models:FlowActor")
 
-    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
+    def __init__(self, actor: FlowActor, critic: nn.Module, storage, **kwargs) -> None:
         super().__init__(actor, critic, storage, **kwargs)
         if self.bound_coef > 0:
             warnings.warn("FlowGRPO ignores bound_coef: its policy predicts no clean action to bound.")

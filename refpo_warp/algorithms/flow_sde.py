@@ -81,7 +81,7 @@ def sample_sde_chain(
     grid: SdeGrid,
     feather_std: float = 0.0,
     feather_in_chain: bool = True,
-) -> tuple[torch.Tensor, ...]:
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
     """Sample the SDE from x_0 ~ N(0, I) and add the feather noise to the last state.
 
     Returns (action, chain (B, N + 1, A), step means (B, N, A), step log-probs (B, N)). With ``feather_in_chain``
@@ -91,17 +91,17 @@ def sample_sde_chain(
     n = obs_feat.shape[0]
     h = 1.0 / grid.num_steps
     x = torch.randn(n, action_dim, device=obs_feat.device)
-    chain, means, log_probs = [x], [], []
+    states, step_means = [x], []
     for k in range(grid.num_steps):
         tau = grid.tau[k].expand(n)
         mean = sde_mean(x, velocity_field(obs_feat, x, tau), tau, grid.scale[k].expand(n), h)
         x = mean + grid.std[k] * torch.randn_like(mean)
-        chain.append(x)
-        means.append(mean)
+        states.append(x)
+        step_means.append(mean)
     action = x + feather_std * torch.randn_like(x) if feather_std > 0 else x
     if feather_in_chain:
-        chain[-1] = action
-    chain = torch.stack(chain, dim=1)
-    means = torch.stack(means, dim=1)
+        states[-1] = action
+    chain = torch.stack(states, dim=1)
+    means = torch.stack(step_means, dim=1)
     log_probs = gaussian_log_prob(chain[:, 1:], means, grid.std.expand(n, -1))
     return action, chain, means, log_probs

@@ -48,7 +48,7 @@ class FPOPlusPlus(ReFPO):
     """FPO++ on ReFPO's machinery; its defaults are FPO++'s algorithm (module docstring)."""
 
     # Options (refpo_warp/utils/options.py): FPO++'s own, and its defaults for ReFPO's.
-    cfm_reduction: CfmReduction = option(
+    cfm_reduction: str = option(
         "sqrt_dim",
         OneOf(CfmReduction),
         "sqrt_dim: the CFM loss summed over action dimensions / sqrt(D) (FPO++); mean: ReFPO's mean over them",

@@ -324,26 +324,33 @@ class OnPolicyAlgorithm(RslPPO):
         self._set_learning_rate(lr)
 
     # ---------------------------------------------------------------------------------------------- policy, checkpoints
+    def started_ema(self) -> ActorEMA | None:
+        """The EMA actor once it has started (after ``ema_warmup`` updates), else None."""
+        return self.ema if self.ema is not None and self.ema.started(self.num_updates) else None
+
     def ema_started(self) -> bool:
-        return self.ema is not None and self.ema.started(self.num_updates)
+        return self.started_ema() is not None
 
     def get_policy(self) -> nn.Module:
         """The policy evaluation, inference and export use: the EMA actor once it has started, else the live one."""
-        return self.ema.model if self.ema_started() else uncompiled(self, "actor")
+        ema = self.started_ema()
+        return ema.model if ema is not None else uncompiled(self, "actor")
 
     def save(self) -> dict:
         saved = super().save()  # actor_state_dict: the live weights, which a resume trains on from
         saved["num_updates"] = self.num_updates
-        if self.ema_started():
-            saved["ema_actor_state_dict"] = self.ema.state_dict()
+        ema = self.started_ema()
+        if ema is not None:
+            saved["ema_actor_state_dict"] = ema.state_dict()
         return saved
 
     def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
         out = super().load(loaded_dict, load_cfg, strict)
         self.num_updates = int(loaded_dict.get("num_updates", 0))
-        if self.ema_started():
+        ema = self.started_ema()
+        if ema is not None:
             if "ema_actor_state_dict" in loaded_dict:
-                self.ema.load_state_dict(loaded_dict["ema_actor_state_dict"])
+                ema.load_state_dict(loaded_dict["ema_actor_state_dict"])
             else:  # a checkpoint past the warm-up without an average (a run without the EMA): start it here
-                self.ema.reset(uncompiled(self, "actor"))
+                ema.reset(uncompiled(self, "actor"))
         return out

@@ -45,7 +45,7 @@ from torch import nn
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm, soft_bound_loss
 from refpo_warp.algorithms.reflow_schedule import ReflowSchedule, ScheduleMode, coefficient_range
 from refpo_warp.algorithms.trust_region import TrustRegion, surrogate
-from refpo_warp.models.flow_actor import OUTPUT_MODES, cfm_loss
+from refpo_warp.models.flow_actor import OUTPUT_MODES, FlowActor, cfm_loss
 from refpo_warp.models.flow_diagnostics import one_step_consistency
 from refpo_warp.utils.option_rules import Check, Int, OneOf, Real
 from refpo_warp.utils.options import choices, option
@@ -114,7 +114,7 @@ class ReFPO(OnPolicyAlgorithm):
     output_mode: str | None = option(
         None, OneOf(None, OUTPUT_MODES), "the CFM loss mode (u, eps, data); null: the actor's output_mode"
     )
-    tau_sampling: TauSampling = option(
+    tau_sampling: str = option(
         "uniform",
         OneOf(TauSampling),
         "flow times of the pairs: uniform "
@@ -123,7 +123,7 @@ class ReFPO(OnPolicyAlgorithm):
     )
     tau_logit_mean: float = option(-1.2, Real(-10, 10), "mean of the logit-normal tau (Puffer-PHC: -1.2)")
     tau_logit_std: float = option(1.2, Real(0, 10, lo_open=True), "std of the logit-normal tau (Puffer-PHC: 1.2)")
-    ratio_mode: RatioMode = option(
+    ratio_mode: str = option(
         "mean", OneOf(RatioMode), "mean: average the K losses before the exp; per_sample: one ratio per pair"
     )
     log_ratio_clip: float | None = option(
@@ -134,12 +134,12 @@ class ReFPO(OnPolicyAlgorithm):
     explosion_threshold: float = option(
         3.0, Real(0, None, lo_open=True), "|log-ratio| above which an action (or pair) counts in the Explosion Rate"
     )
-    reflow_pairs: ReflowPairs = option(
+    reflow_pairs: str = option(
         "independent",
         OneOf(ReflowPairs),
         "independent: the Reflow term on the ratio's pairs (the paper's); coupled: on the rollout's (eps_0, a)",
     )
-    reflow_schedule: ScheduleMode = option(
+    reflow_schedule: str = option(
         "fixed",
         OneOf(ScheduleMode),
         "fixed lambda (the paper's), or adaptive to the one-step ratio (reflow_schedule.py)",
@@ -157,13 +157,13 @@ class ReFPO(OnPolicyAlgorithm):
         Int(0, 1_000_000),
         "rollout states of the per-update one-step diagnostic; 0 turns it off (the adaptive schedule needs it)",
     )
-    trust_region: TrustRegion = option(
+    trust_region: str = option(
         "ppo",
         OneOf(TrustRegion),
         "ppo: PPO's clip (the paper's); spo: SPO's "
         "penalty; aspo: clip for A > 0, penalty otherwise (FPO++; trust_region.py)",
     )
-    reflow_tau_weight: ReflowTauWeight = option(
+    reflow_tau_weight: str = option(
         "uniform",
         OneOf(ReflowTauWeight),
         "uniform (the paper's), or towards_zero: Reflow pairs weighted by 1 - tau (ours)",
@@ -190,7 +190,7 @@ class ReFPO(OnPolicyAlgorithm):
                     f"ReFPO needs a flow actor with {method}(); set actor.class_name to refpo_warp.models:FlowActor"
                 )
 
-    def __init__(self, actor: nn.Module, critic: nn.Module, storage, **kwargs) -> None:
+    def __init__(self, actor: FlowActor, critic: nn.Module, storage, **kwargs) -> None:
         super().__init__(actor, critic, storage, **kwargs)
         if self.entropy_coef:
             warnings.warn("ReFPO ignores entropy_coef: a flow policy has no closed-form entropy.")
@@ -201,9 +201,9 @@ class ReFPO(OnPolicyAlgorithm):
                 "iteration (measured: 1e-3 -> 2e-5). Use schedule='fixed' (ReFPO's default)."
             )
         self.output_mode = self.output_mode or actor.output_mode
-        self.reflow_schedule = ReflowSchedule(self.reflow_schedule, self.one_step_target, self.reflow_coef_range)
-        self.reflow_coef = self.reflow_schedule.start(self.reflow_coef)
-        if self.reflow_schedule.mode == "adaptive" and not self.one_step_states:
+        self.coef_schedule = ReflowSchedule(self.reflow_schedule, self.one_step_target, self.reflow_coef_range)
+        self.reflow_coef = self.coef_schedule.start(self.reflow_coef)
+        if self.coef_schedule.mode == "adaptive" and not self.one_step_states:
             raise ValueError("reflow_schedule='adaptive' needs the one-step diagnostic: set one_step_states > 0")
         self.action_transform: str | None = None  # the env's (construct_algorithm): the diagnostic's action space
         self.diagnostic_generator = torch.Generator().manual_seed(torch.initial_seed() + DIAGNOSTIC_SEED_OFFSET)
@@ -244,6 +244,7 @@ class ReFPO(OnPolicyAlgorithm):
     def cfm_losses(self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor):
         """(CFM loss per pair in ``output_mode``, the actor's CfmTerms), losses (B, K)."""
         terms = self.actor.cfm_terms(obs, actions, tau, eps)
+        assert self.output_mode is not None  # the actor's when the option is null (__init__)
         return cfm_loss(terms, tau, self.output_mode, self.actor.loss_scale), terms
 
     def pair_log_ratios(
@@ -303,7 +304,7 @@ class ReFPO(OnPolicyAlgorithm):
         self.one_step = one_step_consistency(
             actor, obs[rows], actor.num_flow_steps, self.action_transform, generator=gen
         )
-        self.reflow_coef = self.reflow_schedule.step(self.reflow_coef, self.one_step["one_step_ratio"])
+        self.reflow_coef = self.coef_schedule.step(self.reflow_coef, self.one_step["one_step_ratio"])
 
     def before_update(self, chunk: int = 65536) -> None:
         """Store the old CFM losses under the current (= rollout) parameters, before any gradient step."""
@@ -373,7 +374,7 @@ class ReFPO(OnPolicyAlgorithm):
 
     def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
         out = super().load(loaded_dict, load_cfg, strict)
-        if "reflow_coef" in loaded_dict and self.reflow_schedule.mode == "adaptive":
+        if "reflow_coef" in loaded_dict and self.coef_schedule.mode == "adaptive":
             self.reflow_coef = float(loaded_dict["reflow_coef"])
         if isinstance(loaded_dict.get("diagnostic_rng"), torch.Tensor):
             self.diagnostic_generator.set_state(loaded_dict["diagnostic_rng"])

@@ -68,7 +68,7 @@ def segment_returns(rewards: torch.Tensor, dones: torch.Tensor) -> torch.Tensor:
 class AdvantageWeightedReFPO(ReFPO):
     """ReFPO with the Reflow term weighted by the advantage (``reflow_weighting``, see the module docstring)."""
 
-    reflow_weighting: ReflowWeighting = option(
+    reflow_weighting: str = option(
         "positive",
         OneOf(ReflowWeighting),
         "which actions' CFM loss the Reflow term weights, and how (module docstring)",

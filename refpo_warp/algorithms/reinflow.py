@@ -88,7 +88,7 @@ class ReinFlow(OnPolicyAlgorithm):
         super().__init__(actor, critic, storage, **kwargs)
         if self.bound_coef > 0:
             warnings.warn("ReinFlow ignores bound_coef: its chain already clamps the action to [-1, 1].")
-        self.initial_sigma_max = float(actor.sigma_max)
+        self.initial_sigma_max = float(actor.get_buffer("sigma_max"))
 
     # ---------------------------------------------------------------------------------------------- rollout
     def act(self, obs: TensorDict) -> torch.Tensor:

@@ -40,7 +40,7 @@ class ActorEMA:
         if num_updates == self.warmup:
             self.reset(actor)
             return
-        ema = list(self.model.parameters())
+        ema: list[torch.Tensor] = list(self.model.parameters())
         live = [p.detach() for p in actor.parameters()]
         torch._foreach_lerp_(ema, live, 1.0 - self.decay)
         for mine, theirs in zip(self.model.buffers(), actor.buffers()):

@@ -79,7 +79,7 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
             Int(2, 1024, multiple_of=2),
             "channels of the time embedding: 2^k sinusoid (concat) or DiT sinusoid (adaln; Puffer-PHC: 256)",
         )
-        output_mode: OutputMode = option(
+        output_mode: str = option(
             "u",
             OneOf(OutputMode),
             "the CFM loss: u |e_v|^2, eps tau^2 |e_v|^2 "
@@ -91,12 +91,12 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
             Real(0, 1e3, fixed=False),
             "Gaussian perturbation of rollout actions, stored with the action (Puffer-PHC: 0.05)",
         )
-        parameterization: Parameterization = option(
+        parameterization: str = option(
             "velocity",
             OneOf(Parameterization),
             "the head predicts v, or the clean action a_hat with v = (a_hat - x) / (1 - tau) (Puffer-PHC)",
         )
-        time_conditioning: TimeConditioning = option(
+        time_conditioning: str = option(
             "concat",
             OneOf(TimeConditioning),
             "tau enters the first layer "

@@ -67,16 +67,16 @@ def jacobian_statistics(actor, obs, num_steps: int = 10, threshold: float = JACO
     obs_feat = field.project_obs(actor.encode(obs))
     x = torch.randn(obs_feat.shape[0], actor.action_dim, device=obs_feat.device)
     dt = 1.0 / num_steps
-    spectral, frobenius = [], []
+    spectral_steps, frobenius_steps = [], []
     for k in range(num_steps):
         tau = torch.full((x.shape[0],), k * dt, device=x.device)
         with torch.enable_grad():
             s, f = spectral_norms(field.forward, obs_feat, x, tau)
-        spectral.append(s)
-        frobenius.append(f)
+        spectral_steps.append(s)
+        frobenius_steps.append(f)
         x = x + dt * field(obs_feat, x, tau)
-    spectral = torch.stack(spectral)  # (N, M)
-    frobenius = torch.stack(frobenius)
+    spectral = torch.stack(spectral_steps)  # (N, M)
+    frobenius = torch.stack(frobenius_steps)
     flat = spectral.flatten()
     return {
         "jacobian_norm_mean": float(flat.mean()),

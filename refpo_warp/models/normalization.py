@@ -25,8 +25,15 @@ class ClippedNormalization(nn.Module):
 
     @torch.jit.unused
     def update(self, x: torch.Tensor) -> None:
-        if hasattr(self.normalizer, "update"):
-            self.normalizer.update(x)
+        update_normalizer(self.normalizer, x)
+
+
+def update_normalizer(normalizer: nn.Module, x: torch.Tensor) -> None:
+    """``normalizer.update(x)`` when the normaliser has an ``update`` (rsl_rl's EmpiricalNormalization, clamped or
+    not); an ``nn.Module``'s attribute is untyped to mypy, hence the look-up."""
+    update = getattr(normalizer, "update", None)
+    if update is not None:
+        update(x)
 
 
 def with_clip(normalizer: nn.Module, clip: float | None) -> nn.Module:

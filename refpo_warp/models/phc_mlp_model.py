@@ -48,7 +48,7 @@ class PhcMLPModel(MLPModel):
         super().__init__(*args, **kwargs)
         if not learn_std:  # rsl-rl-lib < 5.2: its GaussianDistribution has no learn_std, so fix the std here
             self.distribution.requires_grad_(False)
-        self.obs_normalizer = with_clip(self.obs_normalizer, obs_clip)
+        self.obs_normalizer: nn.Module = with_clip(self.obs_normalizer, obs_clip)
         if head_init_gain is not None:
             head = [m for m in self.mlp.modules() if isinstance(m, nn.Linear)][-1]
             rows = self.distribution.output_dim if self.distribution is not None else head.out_features

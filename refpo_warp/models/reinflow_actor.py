@@ -83,9 +83,7 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         noise_hidden_dims: tuple[int, ...] | list[int] = option(
             (64, 64), HIDDEN_DIMS, "hidden layer sizes of the noise network (ReinFlow gym configs: [64, 64])"
         )
-        noise_activation: Activation = option(
-            "tanh", OneOf(Activation), "activation of the noise network (ReinFlow: Tanh)"
-        )
+        noise_activation: str = option("tanh", OneOf(Activation), "activation of the noise network (ReinFlow: Tanh)")
         ft_denoising_steps: int = option(2, Int(0, 1000), "the last steps, whose noise is learned (table (d): 2)")
         sigma_min: float = option(
             0.08, Real(0, 100, lo_open=True, fixed=False), "lower bound of sigma (table (d): 0.08)"
@@ -93,7 +91,7 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         sigma_max: float = option(
             0.16, Real(0, 100, lo_open=True, fixed=False), "upper bound of sigma (table (d): 0.16)"
         )
-        noise_schedule: NoiseSchedule = option(
+        noise_schedule: str = option(
             "lin",
             OneOf(NoiseSchedule, fixed=False),
             'fixed sigma of the other steps: lin 0.1 t (table (d) "Linear"), vp sqrt(0.2 t (1 - t)), const sigma_min',
@@ -141,6 +139,7 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         self.num_flow_steps = int(o.num_flow_steps)
         self.ft_denoising_steps = int(o.ft_denoising_steps)
         self.sigma_min = float(o.sigma_min)
+        self.sigma_max: torch.Tensor  # the buffer's type (a class-level annotation would be TorchScript's to read)
         self.register_buffer("sigma_max", torch.tensor(float(o.sigma_max)))  # decayed by the algorithm, checkpointed
         self.noise_schedule = o.noise_schedule
         self.min_sampling_std = float(o.min_sampling_std)
@@ -215,7 +214,11 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         if noise is None:
             first = next(iter(obs.values()))
             shape = (first.shape[0], self.action_dim)
-            noise = torch.randn(shape, device=first.device) if initial_noise == "random" else first.new_zeros(shape)
+            noise = (
+                torch.randn(shape, device=first.device)
+                if initial_noise == "random"
+                else first.new_zeros(torch.Size(shape))
+            )
         actions = self.run_chain(obs, n, perturbation, noise)[:, -1]
         self._last_actions = actions.detach()
         return actions

@@ -15,7 +15,7 @@ from rsl_rl.modules import EmpiricalNormalization
 from tensordict import TensorDict
 from torch import nn
 
-from refpo_warp.models.normalization import with_clip
+from refpo_warp.models.normalization import update_normalizer, with_clip
 from refpo_warp.models.stateless import Stateless
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, mapping_or_none
@@ -32,7 +32,7 @@ class SampledPolicyOptions:
     hidden_dims: tuple[int, ...] | list[int] = option(
         (256, 256, 256), HIDDEN_DIMS, "hidden layer sizes of the velocity MLP"
     )
-    activation: Activation = option("elu", OneOf(Activation), "activation of the velocity MLP")
+    activation: str = option("elu", OneOf(Activation), "activation of the velocity MLP")
     obs_normalization: bool = option(False, Flag(), "normalise the observation (rsl_rl's EmpiricalNormalization)")
     distribution_cfg: dict | None = option(
         None,
@@ -83,7 +83,8 @@ class SampledPolicyProtocol(Stateless):
         self.obs_dim = sum(obs[g].shape[-1] for g in self.obs_groups)
         self.action_dim = int(output_dim)
         self.obs_normalization = obs_normalization
-        self.obs_normalizer = with_clip(
+        self.num_flow_steps: int  # the sampler's default number of steps, each actor's (declared for the type only)
+        self.obs_normalizer: nn.Module = with_clip(
             EmpiricalNormalization(self.obs_dim) if obs_normalization else nn.Identity(), obs_clip
         )
         self._last_actions = torch.zeros(1, self.action_dim)
@@ -102,7 +103,7 @@ class SampledPolicyProtocol(Stateless):
 
     def update_normalization(self, obs: TensorDict) -> None:
         if self.obs_normalization:
-            self.obs_normalizer.update(self._flat_obs(obs))
+            update_normalizer(self.obs_normalizer, self._flat_obs(obs))
 
     @property
     def output_mean(self) -> torch.Tensor:

@@ -18,6 +18,7 @@ CFM samples and N Euler steps per action reuse the observation projection.
 
 from __future__ import annotations
 
+import itertools
 import math
 from enum import Enum
 
@@ -50,6 +51,7 @@ class SinusoidalEmbedding(nn.Module):
         super().__init__()
         if dim < 2 or dim % 2:
             raise ValueError(f"time_embed_dim must be an even number >= 2, got {dim}")
+        self.freqs: torch.Tensor  # the buffer's type (a class-level annotation would be TorchScript's to read)
         self.register_buffer("freqs", 2.0 ** torch.arange(dim // 2, dtype=torch.float32))
 
     def forward(self, tau: torch.Tensor) -> torch.Tensor:
@@ -65,6 +67,7 @@ class TimestepEmbedding(nn.Module):
         if dim < 2 or dim % 2:
             raise ValueError(f"time_embed_dim must be an even number >= 2, got {dim}")
         half = dim // 2
+        self.freqs: torch.Tensor  # the buffer's type (a class-level annotation would be TorchScript's to read)
         self.register_buffer("freqs", torch.exp(-math.log(max_period) * torch.arange(half, dtype=torch.float32) / half))
         self.mlp = nn.Sequential(nn.Linear(dim, width), nn.SiLU(), nn.Linear(width, width))
 
@@ -79,9 +82,10 @@ class AdaLN(nn.Module):
     def __init__(self, width: int) -> None:
         super().__init__()
         self.norm = nn.LayerNorm(width, elementwise_affine=False, eps=1e-6)
-        self.modulation = nn.Sequential(nn.SiLU(), nn.Linear(width, 2 * width))
-        nn.init.zeros_(self.modulation[-1].weight)
-        nn.init.zeros_(self.modulation[-1].bias)
+        head = nn.Linear(width, 2 * width)
+        nn.init.zeros_(head.weight)
+        nn.init.zeros_(head.bias)
+        self.modulation = nn.Sequential(nn.SiLU(), head)
 
     def forward(self, h: torch.Tensor, cond: torch.Tensor) -> torch.Tensor:
         shift, scale = self.modulation(cond).chunk(2, dim=-1)
@@ -119,7 +123,7 @@ class VelocityField(nn.Module):
         self.obs_proj = nn.Linear(obs_dim, hidden_dims[0])
         self.sample_proj = nn.Linear(action_dim + (time_embed_dim if concat else 0), hidden_dims[0], bias=False)
         layers: list[nn.Module] = []
-        for d_in, d_out in zip(hidden_dims[:-1], hidden_dims[1:]):
+        for d_in, d_out in itertools.pairwise(hidden_dims):
             layers += [resolve_nn_activation(activation), nn.Linear(d_in, d_out)]
         self.hidden = nn.Sequential(*layers)  # the last hidden layer's pre-activation comes out
         self.adaln = None if concat else AdaLN(hidden_dims[-1])

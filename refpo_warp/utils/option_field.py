@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 from enum import Enum
-from typing import Any
+from typing import Any, TypeVar, overload
 
 from refpo_warp.utils.option_rules import Rule
 
@@ -18,6 +18,17 @@ class _Unset:
 
 UNSET: Any = _Unset()  # a field's default is elsewhere: the constructor's (rsl_rl) or configs/default.yaml's
 MARK = "refpo_option"  # in a field's metadata: the field is an option
+T = TypeVar("T")
+
+
+# Typed as ``dataclasses.field`` is: the field is of its default's type (``reflow_coef: float = option(0.04, ...)``);
+# one without a default of its own (``option(rule=...)``) is of any type.
+@overload
+def option(default: T, rule: Rule | None = None, doc: str = "") -> T: ...
+
+
+@overload
+def option(*, rule: Rule | None = None, doc: str = "") -> Any: ...
 
 
 def option(default: Any = UNSET, rule: Rule | None = None, doc: str = "") -> Any:

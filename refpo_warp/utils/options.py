@@ -26,7 +26,9 @@ the constructor (``option_values``, ``constructor_options``, ``check_fields``). 
 every class in its MRO, a subclass's field replacing its base's; a field without a rule of its own
 (``option(0.05, doc=...)``: another default for a base's option) keeps the base's rule, and a field without a doc keeps
 the base's doc. A fixed set of choices is an ``enum.Enum`` of strings: ``OneOf(MyEnum)`` accepts its values, which stay
-plain strings in a config. ``tests/utils/test_option_rules.py`` fails for an option without a rule.
+plain strings in a config and in the field (``mode: str = option("fast", OneOf(Mode), ...)``: ``option`` is typed as
+``dataclasses.field`` is, the field has its default's type). ``tests/utils/test_option_rules.py`` fails for an option
+without a rule.
 """
 
 from __future__ import annotations

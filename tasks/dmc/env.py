@@ -45,6 +45,7 @@ def end_diverged_worlds(
 class DmcEnv(WarpVecEnv):
     """A DMC task (``cfg.task``) over ``num_envs`` Newton worlds; see the module docstring for the step."""
 
+    cfg: DmcCfg
     cfg_class = DmcCfg
     episode_metrics = ("nonfinite_resets",)
     supports_final_observations = True
@@ -119,7 +120,7 @@ class DmcEnv(WarpVecEnv):
         v = self.sim.views
         qpos = torch.as_tensor(qpos, dtype=torch.float32, device=self.device).reshape(v.joint_q.shape)
         qvel = torch.as_tensor(qvel, dtype=torch.float32, device=self.device).reshape(v.joint_qd.shape)
-        self.joint_q.copy_(qpos - wp.to_torch(v.coord_ref))
+        self.joint_q.copy_(qpos - self._coord_ref())
         self.joint_qd.copy_(qvel)
         with wp.ScopedDevice(self.wp_device):
             self.sim.reset_mask.fill_(True)
@@ -130,7 +131,15 @@ class DmcEnv(WarpVecEnv):
     @property
     def qpos(self) -> torch.Tensor:
         """MuJoCo generalized positions per env (joint ``ref`` included), shape (num_envs, nq); a copy."""
-        return self.joint_q + wp.to_torch(self.sim.views.coord_ref)
+        return self.joint_q + self._coord_ref()
+
+    def _coord_ref(self) -> torch.Tensor:
+        """The MJCF joint ``ref`` per coordinate (MuJoCo qpos = joint_q + ref), which a model without free or ball
+        joints has (every DMC task's)."""
+        ref = self.sim.views.coord_ref
+        if ref is None:
+            raise ValueError(f"{self.cfg.task}: a model with free or ball joints has no per-coordinate qpos")
+        return wp.to_torch(ref)
 
     def compute_rewards(self, actions: torch.Tensor) -> torch.Tensor:
         """Rewards of the current states under ``actions`` (transformed as in a step), without stepping.
@@ -140,8 +149,8 @@ class DmcEnv(WarpVecEnv):
         out = torch.zeros(self.num_envs, device=self.device)
         actions = actions.to(self.device, torch.float32).reshape(self.num_envs, self.num_actions).contiguous()
         with wp.ScopedDevice(self.wp_device):
-            actions = wp.from_torch(actions.clone())
-            self.transform_actions(actions)
-            wp.launch(apply_actions, dim=(self.num_envs, self.num_actions), inputs=[actions, self.sim.views.ctrl])
+            wp_actions = wp.from_torch(actions.clone())
+            self.transform_actions(wp_actions)
+            wp.launch(apply_actions, dim=(self.num_envs, self.num_actions), inputs=[wp_actions, self.sim.views.ctrl])
             self.task.reward(wp.from_torch(out))
         return out

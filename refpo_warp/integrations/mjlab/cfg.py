@@ -8,6 +8,7 @@ needs no edit here. A choice enum is a plain string flag (a config holds the str
 
 from __future__ import annotations
 
+import inspect
 import sys
 import typing
 from dataclasses import field, fields, make_dataclass, replace
@@ -45,7 +46,7 @@ def _hint(owner: type, name: str) -> typing.Any:
         if hint is None:  # a field inherited by a model's Options
             hint = typing.get_type_hints(declared)[name]
     else:
-        hint = typing.get_type_hints(owner.__init__)[name]
+        hint = typing.get_type_hints(inspect.getattr_static(owner, "__init__"))[name]  # owner.__init__, unbound
     args = typing.get_args(hint)
     if isinstance(hint, type) and issubclass(hint, Enum):
         return str

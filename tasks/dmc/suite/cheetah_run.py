@@ -82,6 +82,7 @@ class CheetahRun(DmcTask):
         lower, upper = self.joint_limits()  # the six leg joints within their limits, the root at zero
         lower[:NUM_ROOT], upper[:NUM_ROOT] = 0.0, 0.0
         leg_ranges = self.uniform_ranges(lower, upper)
+        assert v.ctrl is not None  # DmcEnv checked the actuators
         wp.to_torch(v.ctrl).zero_()
         for r in range(rounds):
             self.reset_uniform_joints(everyone, leg_ranges)

@@ -70,7 +70,7 @@ class WalkerWalk(DmcTask):
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)
-        self.bodies = wp.array([self.views.body_index(b) for b in BODIES], dtype=int, device=self.device)
+        self.bodies: wp.array = wp.array([self.views.body_index(b) for b in BODIES], dtype=int, device=self.device)
         self.torso = self.views.body_index("torso")
         lower, upper = self.joint_limits()  # the six leg hinges within their limits
         lower[:ROOT_PITCH], upper[:ROOT_PITCH] = 0.0, 0.0  # root height and x offsets at the model's origin
