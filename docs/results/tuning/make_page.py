@@ -184,7 +184,10 @@ def _why(row: dict) -> str:
 def budget_table() -> str:
     spec = yaml.safe_load(TUNING_FILE.read_text())
     rows = trials()
-    head = "| method | trials spent | complete / pruned / failed | wall time (min) | best score (trial) | own values' score |"
+    head = (
+        "| method | trials spent | complete / pruned / failed | wall time (min) | best score (trial) "
+        "| own values' score |"
+    )
     lines = [head, "|---|---|---|---|---|---|"]
     for m in spec["methods"]:
         mine = [r for r in rows if r["method"] == m["label"]]
@@ -263,7 +266,7 @@ def fresh_table() -> str:
         )
     lines.append("")
     ppo = next(((k, p) for k, _, p in rows if k == "ppo/tuned"), None)
-    for key, runs, per_task in rows:
+    for key, _, per_task in rows:
         if key.endswith("/tuned") and ppo is not None and key != ppo[0]:
             reach = sum(e.overlaps_or_above(q) for e, q in zip(per_task, ppo[1]))
             poi = improvement(scores[key], scores[ppo[0]])
