@@ -40,13 +40,13 @@ def policy_latency(
     task: str, algo: str, device: str, batches: list[int], flow_steps: list[int], repeats: int = 50
 ) -> list[dict]:
     """Latency rows (``latency_ms`` per call) of ``algo``'s actor on ``task`` for every batch size and N."""
-    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.config.resolve import resolve
     from refpo_warp.evaluation.evaluate_policy import is_flow, make_policy
     from refpo_warp.runner.build import build_runner
 
-    cfg = resolve_config([f"task={task}", f"algo={algo}", f"device={device}", f"num_envs={max(batches)}"])
+    run = resolve([f"task={task}", f"algo={algo}", f"device={device}", f"num_envs={max(batches)}"])
     with contextlib.redirect_stdout(io.StringIO()):  # rsl_rl prints the model structure
-        env, runner = build_runner(cfg, None)
+        env, runner = build_runner(run, None)
     actor = runner.get_inference_policy(device=device)
     obs = env.get_observations().to(device)
     rows = []

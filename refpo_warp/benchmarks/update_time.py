@@ -66,11 +66,11 @@ def algorithms() -> list[str]:
 
 
 def build(algo: str, task: str, device: str, envs: int, steps: int, minibatches: int, passes: int):
-    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.config.resolve import resolve
     from refpo_warp.runner.build import build_runner
 
     algo, overrides = VARIANTS.get(algo, (algo, []))
-    cfg = resolve_config(
+    run = resolve(
         [
             f"task={task}",
             f"algo={algo}",
@@ -84,8 +84,8 @@ def build(algo: str, task: str, device: str, envs: int, steps: int, minibatches:
         ]
     )
     with contextlib.redirect_stdout(io.StringIO()):  # rsl_rl prints the model structure
-        env, runner = build_runner(cfg, None)
-    return env, runner.alg, cfg
+        env, runner = build_runner(run, None)
+    return env, runner.alg, run.cfg
 
 
 def fill_rollout(env, alg) -> None:

@@ -73,7 +73,7 @@ def split_arguments(args: list[str]) -> tuple[dict[str, Any], VideoOptions, dict
     video = VideoOptions.from_dict({k[6:]: flat.pop(k) for k in list(flat) if k.startswith("video.")})
     picked = {k: flat.pop(k) for k in list(flat) if k in own}
     if has_run:
-        return picked, video, flat  # run options: checked over the saved config (load_run_config)
+        return picked, video, flat  # run options: checked over the saved config (load_run)
     agent = picked.get("agent")
     if agent not in AGENTS:
         raise ConfigError(
@@ -118,8 +118,7 @@ def play(args: list[str]) -> list[Path]:
 
 
 def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -> list[Path]:
-    from refpo_warp.config.config_set import task_spec
-    from refpo_warp.config.saved import load_run_config
+    from refpo_warp.config.saved import load_run
     from refpo_warp.evaluation.videos import VIDEO_DIR, policy_panels, record
     from refpo_warp.runner.build import build_runner
     from refpo_warp.runner.checkpoints import load_latest
@@ -127,15 +126,15 @@ def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -
 
     if checkpoint is not None and not isinstance(checkpoint, str):
         raise ConfigError(f"checkpoint={checkpoint!r} is invalid; expected a path to a model_<iteration>.pt file")
-    cfg = load_run_config(run_dir, overrides)
+    run = load_run(run_dir, overrides)
+    cfg, task = run.cfg, run.task
     env_options = {**cfg["env"], **cfg["eval"]["env"]}
     from refpo_warp.envs.registry import make_env
 
-    task = task_spec(cfg)
     host = make_env(
         task, num_envs=video.num_envs, device=resolve_device(cfg["device"]), seed=cfg["seed"], **env_options
     )
-    _, runner = build_runner(cfg, None, env=host)
+    _, runner = build_runner(run, None, env=host)
     if checkpoint is not None:
         runner.load(checkpoint, map_location=runner.device)
     else:

@@ -12,9 +12,9 @@ that task's::
     env: {max_episode_length: 100}
 
 A file whose name is a registered id is that task's config (a task registered by code without a config file). The
-variants live in the set that found them: nothing is registered, so ``ConfigSet.task`` (or ``task_spec`` of a
-resolved config) is where their spec is looked up. A run's files are read when the run takes them
-(``task_chain``, ``algo_chain``: each file with its ``base`` chain, bases first, each read once).
+variants live in the set that found them: nothing is registered, so ``ConfigSet.task`` is where their spec is looked
+up, once, when a run's config is resolved (``Resolution.task``, handed down with the config). A run's files are read
+when the run takes them (``run_files``: each file with its ``base`` chain, bases first, each read once).
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
 
 from refpo_warp.config.config_path import DEFAULT_FILE, ConfigPath, config_path
 from refpo_warp.config.yaml_files import key_comments, load_yaml
@@ -107,6 +106,18 @@ class ConfigSet:
         if task_id not in list_tasks():
             raise unknown("task", task_id, self.task_ids())
         return get_task(task_id)
+
+    def identity(self, task_id: str, algo: str) -> TaskSpec:
+        """The spec of a run's task, its task id and algo checked by name (an unknown one names the closest)."""
+        spec = self.task(task_id)
+        if algo not in self.algo_names():
+            raise unknown("algo", algo, self.algo_names())
+        return spec
+
+    def run_files(self, task_id: str, algo: str) -> tuple[TaskSpec, Chain, Chain]:
+        """What a run of ``task_id`` with ``algo`` is made of: the task's spec (``identity``), its file's ``base``
+        chain and the algorithm's (``task_chain``, ``algo_chain``)."""
+        return self.identity(task_id, algo), self.task_chain(task_id), self.algo_chain(algo)
 
     def algo_names(self) -> list[str]:
         """Every ``algo=`` choice: the files ``algo/<algo>.yaml`` (names not starting with ``_``)."""
@@ -199,9 +210,3 @@ def _variant(name: str, file: Path, tasks: Mapping[str, Path], registered: list[
 def config_set(config_dir: str | Path | None = None) -> ConfigSet:
     """The config files of the ``config_dir`` option's folder, those of ``REFPO_CONFIG_PATH`` and the shipped ones."""
     return ConfigSet.read(config_path(config_dir))
-
-
-def task_spec(cfg: Mapping[str, Any]) -> TaskSpec:
-    """The spec of a resolved config's task: a registered task's, or the variant its config folders add."""
-    task = str(cfg["task"])
-    return get_task(task) if task in list_tasks() else config_set(cfg.get("config_dir")).task(task)

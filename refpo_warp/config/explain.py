@@ -16,6 +16,7 @@ from typing import Any
 from refpo_warp.config.classes import CLASS_SECTIONS, POSITIONAL, class_defaults, resolve_class
 from refpo_warp.config.dotted import LEAF_KEYS, flatten
 from refpo_warp.config.resolve import Resolution
+from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import unknown
 from refpo_warp.utils.options import docs_for
 from refpo_warp.utils.paths import shown
@@ -30,12 +31,9 @@ def _class_default(cfg: dict, section: str, name: str) -> tuple[Any, str] | None
     return default, f"the default of {owner.__module__}.{owner.__qualname__}" + (f" ({shown(where)})" if where else "")
 
 
-def _env_default(cfg: dict, section: str, name: str) -> tuple[Any, str] | None:
-    from refpo_warp.config.config_set import task_spec
-
-    spec = task_spec(cfg)
+def _env_default(spec: TaskSpec, name: str) -> tuple[Any, str] | None:
     if name in spec.cfg_overrides:
-        return spec.cfg_overrides[name], f"the task id {cfg['task']} (its TaskSpec)"
+        return spec.cfg_overrides[name], f"the task id {spec.task_id} (its TaskSpec)"
     defaults = spec.cfg_class.defaults()
     if name not in defaults:
         return None
@@ -49,36 +47,37 @@ def _video_default(name: str) -> tuple[Any, str] | None:
     return (defaults[name], "the default of refpo_warp.render.options.VideoOptions") if name in defaults else None
 
 
-def _fallback(cfg: dict, key: str) -> tuple[Any, str] | None:
+def _fallback(res: Resolution, key: str) -> tuple[Any, str] | None:
     """The value a key has when no layer sets it (a constructor's, an env cfg's or the video options' default)."""
+    cfg = res.cfg
     section, _, name = key.partition(".")
     if section == "video" and name and "." not in name:
         return _video_default(name)
     if section in CLASS_SECTIONS and name and "." not in name:
         return _class_default(cfg, section, name)
     if section == "env" and name and "." not in name:
-        return _env_default(cfg, section, name)
+        return _env_default(res.task, name)
     if key.startswith("eval.env.") and key.count(".") == 2:
-        return _env_default(cfg, "eval.env", key.rsplit(".", 1)[1])
+        return _env_default(res.task, key.rsplit(".", 1)[1])
     return None
 
 
-def all_keys(cfg: dict) -> list[str]:
+def all_keys(res: Resolution) -> list[str]:
     """Every option of a resolved config, the ones set only by a constructor or env cfg default included."""
+    cfg = res.cfg
     keys = list(flatten(cfg))
     for section in CLASS_SECTIONS:
         keys += [f"{section}.{n}" for n in class_defaults(cfg[section]["class_name"]) if n not in POSITIONAL[section]]
-    from refpo_warp.config.config_set import task_spec
-
-    keys += [f"env.{n}" for n in task_spec(cfg).cfg_class.defaults()]
+    keys += [f"env.{n}" for n in res.task.cfg_class.defaults()]
     from refpo_warp.render.options import VideoOptions
 
     keys += [f"video.{n}" for n in VideoOptions.__dataclass_fields__]
     return list(dict.fromkeys(k for k in keys if not k.endswith(".") and k not in ("env", "eval.env", "video")))
 
 
-def _meaning(cfg: dict, key: str) -> str:
+def _meaning(res: Resolution, key: str) -> str:
     """The one-line doc of an option's field, or ``""``."""
+    cfg = res.cfg
     from refpo_warp.config.run_options import RUN_DOCS
 
     section, _, name = key.partition(".")
@@ -87,9 +86,7 @@ def _meaning(cfg: dict, key: str) -> str:
     if section in CLASS_SECTIONS and name and "." not in name:
         return docs_for(resolve_class(cfg[section]["class_name"])).get(name, "")
     if section == "env" and name:
-        from refpo_warp.config.config_set import task_spec
-
-        return docs_for(task_spec(cfg).cfg_class).get(name, "")
+        return docs_for(res.task.cfg_class).get(name, "")
     if section == "video" and name:
         from refpo_warp.render.options import VideoOptions
 
@@ -111,7 +108,7 @@ def explain_key(res: Resolution, key: str) -> list[str]:
     cfg = res.cfg
     found, value = _value(cfg, key)
     history = list(res.sources.get(key, []))
-    fallback = _fallback(cfg, key)
+    fallback = _fallback(res, key)
     if fallback is not None:
         history.insert(0, (fallback[1], fallback[0]))
     if not found and fallback is not None:
@@ -124,7 +121,7 @@ def explain_key(res: Resolution, key: str) -> list[str]:
             lines.append(f"  why     {res.notes[key]}")
         for earlier, old in reversed(history[:-1]):
             lines.append(f"  over    {old!r} from {earlier}")
-    meaning = _meaning(cfg, key)
+    meaning = _meaning(res, key)
     if meaning:
         lines.append(f"  means   {meaning}")
     return lines
@@ -132,7 +129,7 @@ def explain_key(res: Resolution, key: str) -> list[str]:
 
 def explain(res: Resolution, keys: list[str] | None = None) -> str:
     """The lines for each of ``keys`` (a section stands for all of its options; None: every option)."""
-    everything = all_keys(res.cfg)
+    everything = all_keys(res)
     chosen = []
     for key in keys or everything:
         below = [k for k in everything if k.startswith(f"{key}.")]

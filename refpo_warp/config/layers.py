@@ -1,7 +1,7 @@
 """The layers a run's config is merged from, generic to specific, each named by the file (and section) it comes from.
 
 Their order and what each holds is described once, in ``docs/cli.md`` ("The layers, generic to specific");
-``generic_layers`` and ``specific_layers`` below build them in that order from files already read: ``default.yaml``,
+``run_layers`` below builds them in that order from files already read: ``default.yaml``,
 the task's and the algorithm's ``base`` chains (``refpo_warp/config/config_set.py``, which finds them along the config
 path: the user's folders, then the shipped ``configs/``).
 """
@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from refpo_warp.config.config_set import DEVICE_TYPES, PROFILE_KEYS, Chain, ConfigFile
 from refpo_warp.utils.paths import shown
 
-__all__ = ["DEVICE_TYPES", "PROFILE_KEYS", "Layer", "generic_layers", "specific_layers"]
+__all__ = ["DEVICE_TYPES", "PROFILE_KEYS", "Layer", "run_layers"]
 
 
 @dataclass(frozen=True)
@@ -41,13 +41,11 @@ def _whole(file: ConfigFile) -> Layer:
     return Layer(shown(file.path), _without_profiles(file.data), file.comments)
 
 
-def generic_layers(defaults: ConfigFile, task: Chain) -> list[Layer]:
-    """Layers 1 and 2: the defaults and what the task's files set for every algorithm and device."""
-    return [Layer(shown(defaults.path), defaults.data, defaults.comments)] + [_whole(file) for file in task]
-
-
-def specific_layers(task: Chain, algo: Chain, device_type: str) -> list[Layer]:
-    """Layers 3 and 4: the task's device profile, then each algorithm of the chain with the task's settings for it."""
+def run_layers(defaults: ConfigFile, task: Chain, algo: Chain, device_type: str) -> list[Layer]:
+    """The layers of a run, generic to specific: 1 and 2, the defaults and what the task's files set for every
+    algorithm and device; 3 and 4, the task's device profile, then each algorithm of the chain with the task's settings
+    for it (empty layers left out)."""
+    generic = [Layer(shown(defaults.path), defaults.data, defaults.comments)] + [_whole(file) for file in task]
     profiles = [(file, dict((file.data.get("by_device") or {}).get(device_type) or {})) for file in task]
     device = f"by_device.{device_type}"
     layers = [
@@ -78,4 +76,4 @@ def specific_layers(task: Chain, algo: Chain, device_type: str) -> list[Layer]:
             )
             for file, p in profiles
         ]
-    return [layer for layer in layers if layer.values]
+    return generic + [layer for layer in layers if layer.values]

@@ -15,27 +15,28 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from refpo_warp.config.config_set import ConfigSet, config_set
+from refpo_warp.config.config_set import ConfigFile, ConfigSet, config_set
 from refpo_warp.config.dotted import flatten, merge, parse_overrides, set_dotted
-from refpo_warp.config.layers import PROFILE_KEYS, Layer, generic_layers, specific_layers
+from refpo_warp.config.layers import PROFILE_KEYS, Layer, run_layers
 from refpo_warp.config.run_options import check_combinations
 from refpo_warp.config.validate import validate
 from refpo_warp.envs.task_spec import TaskSpec
-from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.errors import ConfigError
 
 COMMAND_LINE = "command line"
 
 
 @dataclass
 class Resolution:
-    """A resolved config and, per dotted key, every layer that set it with the value it gave (in order), the
-    comment the last of them gives it on its line (``notes``), and the spec of its task (``task``)."""
+    """A resolved config and the spec of its task (``task``), resolved once and handed down together to whatever
+    builds, trains, evaluates or records the run; and, per dotted key, every layer that set it with the value it gave
+    (in order) and the comment the last of them gives it on its line (``notes``)."""
 
     cfg: dict
+    task: TaskSpec
     sources: dict[str, list[tuple[str, Any]]] = field(default_factory=dict)
     layers: list[Layer] = field(default_factory=list)
     notes: dict[str, str] = field(default_factory=dict)
-    task: TaskSpec | None = None
 
 
 def run_config_set(flat: dict[str, Any]) -> ConfigSet:
@@ -46,14 +47,9 @@ def run_config_set(flat: dict[str, Any]) -> ConfigSet:
     return config_set(config_dir)
 
 
-def identity(flat: dict[str, Any], configs: ConfigSet) -> tuple[str, str]:
-    """The task and algo a flat override dict asks for (default.yaml's when not given), each checked by name."""
-    defaults = configs.defaults.data
-    task, algo = str(flat.get("task", defaults["task"])), str(flat.get("algo", defaults["algo"]))
-    configs.task(task)
-    if algo not in configs.algo_names():
-        raise unknown("algo", algo, configs.algo_names())
-    return task, algo
+def identity(flat: dict[str, Any], defaults: ConfigFile) -> tuple[str, str]:
+    """The task and algo a flat override dict asks for (default.yaml's when not given)."""
+    return str(flat.get("task", defaults.data["task"])), str(flat.get("algo", defaults.data["algo"]))
 
 
 def _with_env_prefix(flat: dict[str, Any], task: TaskSpec, defaults: dict) -> dict[str, Any]:
@@ -67,6 +63,17 @@ def _with_env_prefix(flat: dict[str, Any], task: TaskSpec, defaults: dict) -> di
     return out
 
 
+def _device_type(flat: dict[str, Any], files: tuple[ConfigFile, ...]) -> str:
+    """``cpu`` or ``cuda``: the type of the device the run asks for (the command line's, else the last of the
+    defaults and the task's files that sets one)."""
+    from refpo_warp.utils.device import resolve_device
+
+    device = "auto"
+    for file in files:
+        device = file.data.get("device", device)
+    return resolve_device(str(flat.get("device", device))).split(":")[0]
+
+
 def resolve(overrides: list[str] | dict[str, Any] | None = None, device_type: str | None = None) -> Resolution:
     """Merge the layers and the overrides, validate, and keep where every key came from.
 
@@ -78,26 +85,21 @@ def resolve(overrides: list[str] | dict[str, Any] | None = None, device_type: st
     configs = run_config_set(flat)
     if flat.get("config_dir"):  # saved with the run as an absolute path: its evaluation finds it from anywhere
         flat["config_dir"] = str(Path(flat["config_dir"]).expanduser().resolve())
-    task, algo = identity(flat, configs)
+    task, algo = identity(flat, configs.defaults)
     flat = {k: v for k, v in flat.items() if k not in ("task", "algo")}
     for key in flat:
         if key.split(".")[0] in PROFILE_KEYS:
             raise ConfigError(f"'{key}' is a config-file key, not a run option")
-    spec, task_files = configs.task(task), configs.task_chain(task)
-    layers = generic_layers(configs.defaults, task_files)
-    defaults = layers[0].values
+    spec, task_files, algo_files = configs.run_files(task, algo)
+    defaults = configs.defaults.data
     flat = _with_env_prefix(flat, spec, defaults)
     if device_type is None:
-        from refpo_warp.utils.device import resolve_device
-
-        device = flat.get("device", _merged(layers).get("device", "auto"))
-        device_type = resolve_device(str(device)).split(":")[0]
-    layers += specific_layers(task_files, configs.algo_chain(algo), device_type)
-    layers.append(Layer(COMMAND_LINE, {}))
+        device_type = _device_type(flat, (configs.defaults, *task_files))
+    layers = run_layers(configs.defaults, task_files, algo_files, device_type)
     cfg: dict = {}
     sources: dict[str, list[tuple[str, Any]]] = {}
     notes: dict[str, str] = {}
-    for layer in layers[:-1]:
+    for layer in layers:
         cfg = merge(cfg, layer.values)
         for key, value in flatten(layer.values).items():
             sources.setdefault(key, []).append((layer.source, value))
@@ -112,14 +114,7 @@ def resolve(overrides: list[str] | dict[str, Any] | None = None, device_type: st
     cfg["task"], cfg["algo"] = task, algo
     cfg = validate(cfg, defaults, spec)
     check_combinations(cfg)
-    return Resolution(cfg, sources, layers, notes, spec)
-
-
-def _merged(layers: list[Layer]) -> dict:
-    out: dict = {}
-    for layer in layers:
-        out = merge(out, layer.values)
-    return out
+    return Resolution(cfg, spec, sources, [*layers, Layer(COMMAND_LINE, {})], notes)
 
 
 def resolve_config(overrides: list[str] | dict[str, Any] | None = None, device_type: str | None = None) -> dict:

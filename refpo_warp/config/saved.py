@@ -1,4 +1,5 @@
-"""A run's saved config (``<run dir>/config.yaml``) with the overrides of a resume or an evaluation, resolved once.
+"""A run's config resolved once, with the spec of its task (``Resolution``): a new run's (``resolve_run``), or the
+saved config (``<run dir>/config.yaml``) with the overrides of a resume or an evaluation (``load_run``).
 
 Resume rule: a resumed run keeps its task, algorithm and model. An option that would change them (``task``,
 ``algo``, every ``class_name``, actor/critic options, and options whose rule says ``fixed=True``, such as
@@ -12,9 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from refpo_warp.config.classes import CLASS_SECTIONS, class_parameters, resolve_class
-from refpo_warp.config.config_set import task_spec
 from refpo_warp.config.dotted import flatten
-from refpo_warp.config.resolve import resolve, resolve_config
+from refpo_warp.config.resolve import Resolution, identity, resolve, run_config_set
 from refpo_warp.config.run_options import RUN_RULES
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.envs.task_spec import TaskSpec
@@ -40,9 +40,35 @@ def read_saved_config(run_dir: Path) -> dict:
     return data
 
 
-def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
-    """The saved config of a run with ``overrides`` applied on top, resolved once (to resume and to evaluate);
-    refuses overrides that would change the run's task, algorithm or model."""
+def default_run_dir(task: str, algo: str, seed: int) -> Path:
+    return Path("runs") / task / f"{algo}_seed{seed}"
+
+
+def resolve_run(flat: dict[str, Any]) -> Resolution:
+    """The config of the run ``flat`` asks for and its task's spec, resolved once: a new one, or a resumed one (its
+    saved config + the overrides, from ``run_dir`` or the default run dir of the task, algo and seed asked for).
+    ``run_dir`` is always set (a new run's default: ``runs/<task>/<algo>_seed<seed>``)."""
+    if RUN_RULES["resume"].check("resume", flat.get("resume", False)):
+        run_dir = flat.get("run_dir") or str(_resumed_run_dir(flat))
+        run = load_run(Path(run_dir), {**flat, "run_dir": run_dir})
+    else:
+        run = resolve(flat)
+    cfg = run.cfg
+    cfg["run_dir"] = str(cfg["run_dir"] or default_run_dir(cfg["task"], cfg["algo"], cfg["seed"]))
+    return run
+
+
+def _resumed_run_dir(flat: dict[str, Any]) -> Path:
+    """The default run dir of the task, algo and seed that ``flat`` asks for (each checked)."""
+    configs = run_config_set(flat)
+    task, algo = identity(flat, configs.defaults)
+    configs.identity(task, algo)
+    return default_run_dir(task, algo, RUN_RULES["seed"].check("seed", flat.get("seed", configs.defaults.data["seed"])))
+
+
+def load_run(run_dir: Path, overrides: dict[str, Any]) -> Resolution:
+    """The saved config of a run with ``overrides`` applied on top, resolved once (to resume, evaluate, record or
+    collect); refuses overrides that would change the run's task, algorithm or model."""
     saved = read_saved_config(run_dir)
     for key in IDENTITY_KEYS:
         if key in overrides and str(overrides[key]) != saved[key]:
@@ -50,29 +76,28 @@ def load_run_config(run_dir: Path, overrides: dict[str, Any]) -> dict:
                 f"{key}={overrides[key]} differs from the run's {key}={saved[key]} ({run_dir}); a run "
                 f"keeps its {key}: choose another run_dir for a new run"
             )
+    flat = flatten(saved)
     try:
-        resolution = resolve({**flatten(saved), **overrides})
+        run = resolve({**flat, **overrides})
     except ConfigError as err:
         try:  # whose fault: the file's (it no longer resolves on its own) or the overrides'
-            resolve_config(flatten(saved))
+            resolve(flat)
         except ConfigError:
             raise DataFileError(f"{Path(run_dir) / RUN_CONFIG}: {err}") from None
         raise
-    cfg = resolution.cfg
-    changed = fixed_changes(saved, cfg, resolution.task)
+    changed = fixed_changes(saved, run.cfg, run.task)
     if changed:
         raise ConfigError(
             f"the run in {run_dir} keeps its task, algorithm and model, but these options differ from "
             f"its config.yaml: {'; '.join(changed)}. Choose another run_dir for a new run"
         )
-    return cfg
+    return run
 
 
-def fixed_changes(saved: dict, cfg: dict, task: TaskSpec | None = None) -> list[str]:
+def fixed_changes(saved: dict, cfg: dict, task: TaskSpec) -> list[str]:
     """``key: saved -> new`` for every option that may not change on resume and does. An option the saved config
     does not list (left at its default, or added to the code since) is compared with its default. ``task``: the spec
-    of ``cfg["task"]`` (found from the config when not given)."""
-    task = task_spec(cfg) if task is None else task
+    of ``cfg["task"]``."""
     old, new = flatten(saved), flatten(cfg)
     changes = []
     for key, value in new.items():

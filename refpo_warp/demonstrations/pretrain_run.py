@@ -21,7 +21,7 @@ from typing import Any
 import torch
 
 from refpo_warp.config.dotted import parse_overrides
-from refpo_warp.config.resolve import resolve_config
+from refpo_warp.config.resolve import Resolution, resolve
 from refpo_warp.config.saved import RUN_CONFIG
 from refpo_warp.config.yaml_files import dump_config
 from refpo_warp.demonstrations.behaviour_cloning import (
@@ -52,8 +52,8 @@ def default_pretrain_dir(task: str, algo: str, seed: int) -> Path:
     return Path("runs") / task / f"pretrain_{algo}_seed{seed}"
 
 
-def pretrain_config(options: list[str] | dict[str, Any]) -> dict:
-    """The resolved config of a pretrain run (``dataset=`` is ``pretrain.dataset``)."""
+def pretrain_config(options: list[str] | dict[str, Any]) -> Resolution:
+    """The resolved config of a pretrain run and its task's spec (``dataset=`` is ``pretrain.dataset``)."""
     flat = parse_overrides(options) if isinstance(options, list) else dict(options)
     if "dataset" in flat:
         if "pretrain.dataset" in flat:
@@ -62,16 +62,18 @@ def pretrain_config(options: list[str] | dict[str, Any]) -> dict:
     for key in ("resume", "init_from"):
         if flat.get(key):
             raise ConfigError(f"{key}= is an option of refpo train; refpo pretrain starts a new run each time")
-    cfg = resolve_config(flat)
+    run = resolve(flat)
+    cfg = run.cfg
     if not cfg["pretrain"]["dataset"]:
         raise ConfigError("refpo pretrain needs dataset=PATH (a Minari dataset folder; refpo collect writes one)")
     cfg["run_dir"] = str(cfg["run_dir"] or default_pretrain_dir(cfg["task"], cfg["algo"], cfg["seed"]))
-    return cfg
+    return run
 
 
 def pretrain(options: list[str] | dict[str, Any]) -> dict:
     """Clone, evaluate and save; returns the evaluation (as written to ``eval.json``) with the cloning summary."""
-    cfg = pretrain_config(options)
+    run = pretrain_config(options)
+    cfg = run.cfg
     run_dir = Path(cfg["run_dir"])
     check_writable(run_dir)
     if run_dir.is_dir() and latest_checkpoint(run_dir) is not None:
@@ -79,7 +81,7 @@ def pretrain(options: list[str] | dict[str, Any]) -> dict:
     check_new_run_dir(run_dir)
     dataset = read_dataset(cfg["pretrain"]["dataset"])
     seed_everything(cfg["seed"])
-    env, runner = build_runner(cfg, None)
+    env, runner = build_runner(run, None)
     actor = uncompiled(runner.alg, "actor")
     check_clonable(actor, cfg["algo"])
     groups = {g: int(env.get_observations()[g].shape[-1]) for g in cfg["runner"]["obs_groups"]["actor"]}
@@ -93,10 +95,20 @@ def pretrain(options: list[str] | dict[str, Any]) -> dict:
         for stale in (progress_path(run_dir), run_dir / "eval.json", run_dir / "eval.prev.json"):
             stale.unlink(missing_ok=True)
         dump_config(cfg, run_dir / RUN_CONFIG)
-        return _clone_and_evaluate(cfg, runner, actor, groups, dataset, train_data, val_data, run_dir)
+        return _clone_and_evaluate(run, runner, actor, groups, dataset, train_data, val_data, run_dir)
 
 
-def _clone_and_evaluate(cfg, runner, actor, groups, dataset, train_data, val_data, run_dir: Path) -> dict:
+def _clone_and_evaluate(
+    run: Resolution,
+    runner: Any,
+    actor: Any,
+    groups: dict[str, int],
+    dataset: Any,
+    train_data: Any,
+    val_data: Any,
+    run_dir: Path,
+) -> dict:
+    cfg = run.cfg
     p = cfg["pretrain"]
     normalised = set_normalizer(actor, train_data[0])
     if cfg["runner"]["obs_groups"]["critic"] == cfg["runner"]["obs_groups"]["actor"]:
@@ -136,7 +148,7 @@ def _clone_and_evaluate(cfg, runner, actor, groups, dataset, train_data, val_dat
         flush=True,
     )
     checkpoint = save_checkpoint(runner, cfg, run_dir / CHECKPOINT, {**summary, "dataset": str(dataset.path)})
-    results = evaluate_clone(cfg, runner, actor, run_dir, summary, dataset)
+    results = evaluate_clone(run, runner, actor, run_dir, summary, dataset)
     if writer is not None:
         for setting, numbers in results["results"].items():
             for key, value in numbers.items():
@@ -176,13 +188,13 @@ def save_checkpoint(runner, cfg: dict, path: Path, pretrain: dict) -> Path:
     return path
 
 
-def evaluate_clone(cfg: dict, runner, actor, run_dir: Path, summary: dict, dataset) -> dict:
+def evaluate_clone(run: Resolution, runner: Any, actor: Any, run_dir: Path, summary: dict, dataset: Any) -> dict:
     """The cloned policy's evaluation (the run's protocol, streams of its own) written to ``eval.json``, with the
     dataset's own success numbers beside it where the task defines them, and the task's figures."""
-    started = time.monotonic()
+    cfg, started = run.cfg, time.monotonic()
     actor.eval()
     with own_random_streams(stream_seed(cfg["seed"], FINAL_EVALUATION, 0), runner.device), torch.inference_mode():
-        results, _ = evaluate_actor(cfg, actor, make_eval_envs(cfg), list(cfg["eval"]["flow_steps"]))
+        results, _ = evaluate_actor(run, actor, make_eval_envs(run), list(cfg["eval"]["flow_steps"]))
     lengths = [e.length for e in dataset.episodes]
     out = {
         "task": cfg["task"],
@@ -207,7 +219,7 @@ def evaluate_clone(cfg: dict, runner, actor, run_dir: Path, summary: dict, datas
         ),
         "results": results,
     }
-    hooks = family_evaluation(cfg["task"])
+    hooks = family_evaluation(run.task)
     if hooks is not None and hasattr(hooks, "dataset_summary"):
         out["dataset"].update(hooks.dataset_summary(dataset))
     if hooks is not None and hasattr(hooks, "figures"):

@@ -92,7 +92,7 @@ def make_env(task: str | TaskSpec, num_envs: int = 64, device: str = "auto", see
 
     Args:
         task: A registered id such as ``"gridworld"``, ``"dmc_cartpole_balance"`` or ``"humanoid_root"``, or the
-            ``TaskSpec`` of a task a config folder adds (``refpo_warp.config.config_set.task_spec``).
+            ``TaskSpec`` of a task a config folder adds (``Resolution.task`` of a resolved config).
         num_envs: Number of parallel environments (one Warp thread / Newton world each).
         device: ``"auto"`` (CUDA when available, else CPU), ``"cpu"`` or ``"cuda:N"``.
         seed: Seed of the per-env random streams.

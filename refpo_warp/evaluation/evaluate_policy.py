@@ -8,21 +8,33 @@ Gaussian actor once, with its mean action. A task family may add ``refpo_warp/ta
 ``summarize(episodes)`` (its own numbers, e.g. GridWorld's top/bottom goal shares), ``REPLACES`` (the generic
 ``<metric>_mean`` entries its numbers stand for, dropped so every metric has one name in ``eval.json``) and
 ``figures(run_dir, actor, cfg)`` (PNG files).
+
+Evaluation during training (``periodic_evaluator``, between the runner's chunks: ``refpo_warp/training/train_run.py``):
+every ``eval.interval`` iterations the returns at ``eval.interval_flow_steps`` under each ``eval.initial_noise``
+protocol (``eval/return_N<n>``, ``eval/return_N<n>_zero``, or ``eval/return`` for a Gaussian actor) and, for flows, the
+Jacobian statistics (``Flow/jacobian_*``) on the visited observations. It draws from random streams of its own, seeded
+from the run's seed and the iteration (``refpo_warp.utils.rng``), and reads the policy without updating its
+normaliser: a run trains the same, bit for bit, with any ``eval.interval``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import partial
+from typing import Any
 
 import torch
 
-from refpo_warp.config.config_set import task_spec
+from refpo_warp.config.resolve import Resolution
 from refpo_warp.envs.registry import family_module, make_env, make_env_cfg
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.evaluation.episodes import run_episodes, summarize
 from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.rng import PERIODIC_EVALUATION, own_random_streams, stream_seed
 
 EVAL_SEED_OFFSET = 10_000  # evaluation envs draw other initial states than the training envs of the same seed
+RECORDED_OBSERVATIONS = 256  # visited observations the periodic evaluation keeps for the Jacobian statistics
+Evaluator = Callable[[int, bool], dict[str, float]]  # (iteration, is_last) -> {name: value}
 
 
 def is_flow(actor) -> bool:
@@ -54,43 +66,46 @@ def make_policy(actor, flow_steps: int | None, initial_noise: str = "random", pe
     return lambda obs: actor.sample(obs, flow_steps, initial_noise, perturbation)
 
 
-def eval_num_envs(cfg: dict, interval: bool = False) -> int:
+def eval_num_envs(run: Resolution, interval: bool = False) -> int:
     """Evaluation env count: ``eval.num_envs``, or what the task's env class asks for when that is null."""
+    cfg = run.cfg
     n = cfg["eval"]["interval_num_envs" if interval else "num_envs"]
     if n:
         return int(n)
-    spec = task_spec(cfg)
-    env_class = spec.env_class()
-    env_cfg = make_env_cfg(spec, **{**cfg["env"], **cfg["eval"]["env"]})
+    env_class = run.task.env_class()
+    env_cfg = make_env_cfg(run.task, **{**cfg["env"], **cfg["eval"]["env"]})
     return int(env_class.eval_num_envs(env_cfg)) if hasattr(env_class, "eval_num_envs") else 64
 
 
-def make_eval_env(cfg: dict, interval: bool = False):
+def make_eval_env(run: Resolution, interval: bool = False) -> Any:
     """The evaluation env of a run's config (its ``eval.env`` options over ``env``)."""
+    cfg = run.cfg
     return make_env(
-        task_spec(cfg),
-        num_envs=eval_num_envs(cfg, interval),
+        run.task,
+        num_envs=eval_num_envs(run, interval),
         device=resolve_device(cfg["device"]),
         seed=cfg["seed"] + EVAL_SEED_OFFSET,
         **{**cfg["env"], **cfg["eval"]["env"]},
     )
 
 
-def make_eval_envs(cfg: dict, interval: bool = False) -> dict:
+def make_eval_envs(run: Resolution, interval: bool = False) -> dict[str, Any]:
     """One evaluation env per ``eval.initial_noise`` protocol, all from the same seed, so that a protocol's numbers
     (and the random stream that training shares with its periodic evaluation) do not depend on which other protocols
     are evaluated beside it."""
-    return {noise: make_eval_env(cfg, interval) for noise in cfg["eval"]["initial_noise"]}
+    return {noise: make_eval_env(run, interval) for noise in run.cfg["eval"]["initial_noise"]}
 
 
-def evaluate_actor(cfg: dict, actor, envs, flow_steps: list[int], record_obs: int = 0) -> tuple[dict, object]:
+def evaluate_actor(
+    run: Resolution, actor: Any, envs: Any, flow_steps: list[int], record_obs: int = 0
+) -> tuple[dict[str, dict], Any]:
     """Summaries per evaluation setting (``{"N=10": {...}, "N=1": {...}, "N=10/zero": ...}`` for flows,
     ``{"mean_action": {...}}`` otherwise) and up to ``record_obs`` observations visited in the first setting (None if
     none were asked for). ``envs``: one env per protocol (``make_eval_envs``), or one env for all of them."""
-    hooks = family_evaluation(task_spec(cfg))
+    cfg, hooks = run.cfg, family_evaluation(run.task)
     protocols = cfg["eval"]["initial_noise"]
     envs = envs if isinstance(envs, dict) else dict.fromkeys(protocols, envs)
-    settings = [("mean_action", None, protocols[0])]
+    settings: list[tuple[str, int | None, str]] = [("mean_action", None, protocols[0])]
     if is_flow(actor):
         settings = [(setting_name(n, noise), n, noise) for noise in protocols for n in flow_steps]
     results, visited = {}, None
@@ -107,6 +122,34 @@ def evaluate_actor(cfg: dict, actor, envs, flow_steps: list[int], record_obs: in
             summary.update(hooks.summarize(episodes))
         results[name] = summary
     return results, visited
+
+
+def periodic_evaluator(run: Resolution, runner: Any) -> Evaluator:
+    """``evaluate(iteration, is_last) -> {name: value}`` for the iterations an evaluation is due at ({} otherwise)."""
+    from refpo_warp.models.flow_diagnostics import jacobian_statistics
+
+    cfg, envs = run.cfg, make_eval_envs(run, interval=True)
+    interval = int(cfg["eval"]["interval"])
+
+    def evaluate(it: int, is_last: bool) -> dict[str, float]:
+        if (it + 1) % interval and not is_last:
+            return {}
+        actor = runner.alg.get_policy()
+        was_training = actor.training
+        actor.eval()
+        flow = is_flow(actor)
+        with own_random_streams(stream_seed(cfg["seed"], PERIODIC_EVALUATION, it), runner.device):
+            results, visited = evaluate_actor(
+                run, actor, envs, cfg["eval"]["interval_flow_steps"], record_obs=RECORDED_OBSERVATIONS if flow else 0
+            )
+            out = {curve_key(name): s.get("return_mean", float("nan")) for name, s in results.items()}
+            if flow and visited is not None and hasattr(actor, "velocity"):
+                stats = jacobian_statistics(actor, visited, num_steps=actor.num_flow_steps)
+                out.update({f"Flow/{k}": v for k, v in stats.items() if isinstance(v, float)})
+        actor.train(was_training)
+        return out
+
+    return evaluate
 
 
 def tau_sampler(alg):

@@ -19,9 +19,10 @@ same numbers, and neither touches the streams of the process it runs in.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
-from refpo_warp.config.config_set import task_spec
-from refpo_warp.config.saved import load_run_config
+from refpo_warp.config.resolve import Resolution
+from refpo_warp.config.saved import load_run
 from refpo_warp.evaluation import curves
 from refpo_warp.evaluation.evaluate_policy import (
     evaluate_actor,
@@ -82,25 +83,27 @@ def write_eval_json(data: dict, run_dir: Path) -> Path | None:
 
 def evaluate_run(
     run_dir: str | Path,
-    cfg: dict | None = None,
-    runner=None,
+    run: Resolution | None = None,
+    runner: Any = None,
     checkpoint: str | Path | None = None,
     overrides: dict | None = None,
 ) -> dict:
     """Evaluate a run's policy (the in-memory one, or a checkpoint) and write ``eval.json`` and the figures.
 
-    Without ``checkpoint`` the newest usable checkpoint of the run is evaluated (newer unusable ones are skipped
-    with a warning); a given ``checkpoint`` must be usable. Overrides may not change the run's task or model.
+    ``run``: the run's resolved config (training's), else the run dir's saved one with ``overrides``. Without
+    ``checkpoint`` the newest usable checkpoint of the run is evaluated (newer unusable ones are skipped with a
+    warning); a given ``checkpoint`` must be usable. Overrides may not change the run's task or model.
     """
     run_dir = Path(run_dir)
-    if cfg is None:
-        cfg = load_run_config(run_dir, overrides or {})
+    if run is None:
+        run = load_run(run_dir, overrides or {})
+    cfg = run.cfg
     if runner is None and checkpoint is None and latest_checkpoint(run_dir) is None:
         raise ConfigError(f"run_dir={run_dir} holds no checkpoint (model_<iteration>.pt) to evaluate")
-    envs = make_eval_envs(cfg)
+    envs = make_eval_envs(run)
     env = next(iter(envs.values()))
     if runner is None:
-        _, runner = build_runner(cfg, None, env=env)
+        _, runner = build_runner(run, None, env=env)
         if checkpoint is not None:
             runner.load(str(checkpoint), map_location=runner.device)
         else:
@@ -110,7 +113,7 @@ def evaluate_run(
     iteration = runner.current_learning_iteration
     with own_random_streams(stream_seed(cfg["seed"], FINAL_EVALUATION, iteration), runner.device):
         results, visited = evaluate_actor(
-            cfg, actor, envs, cfg["eval"]["flow_steps"], record_obs=DIAGNOSTIC_OBSERVATIONS if flow else 0
+            run, actor, envs, cfg["eval"]["flow_steps"], record_obs=DIAGNOSTIC_OBSERVATIONS if flow else 0
         )
         on_policy = flow_diagnostics(runner.alg, actor, visited, env.cfg.action_transform, cfg["seed"]) if flow else {}
     out = {
@@ -131,7 +134,7 @@ def evaluate_run(
         "health": run_health(read_rows(run_dir)) if progress_path(run_dir).exists() else {},
         "diagnostics": {**training_diagnostics(run_dir), **on_policy} if flow else {},
     }
-    out["figures"] = [str(p) for p in run_figures(run_dir, actor, cfg)]
+    out["figures"] = [str(p) for p in run_figures(run_dir, actor, run)]
     kept = write_eval_json(out, run_dir)
     runner.alg.train_mode()
     if kept is not None:
@@ -139,17 +142,17 @@ def evaluate_run(
     return out
 
 
-def run_figures(run_dir: Path, actor, cfg: dict) -> list[Path]:
+def run_figures(run_dir: Path, actor: Any, run: Resolution) -> list[Path]:
     """Every run's training curves (``curves.png``, and ``curves_diagnostics.png`` for flows) plus the task family's
     own figures."""
-    figures = []
+    cfg, figures = run.cfg, []
     if progress_path(run_dir).exists():
         rows = read_rows(run_dir)
         label = f"{cfg['task']} {cfg['algo']}"
         figures.append(curves.training_curves({label: rows}, run_dir / "curves.png"))
         if any(key in row for row in rows for key, _ in curves.DIAGNOSTICS):
             figures.append(curves.diagnostic_curves({label: rows}, run_dir / "curves_diagnostics.png"))
-    hooks = family_evaluation(task_spec(cfg))
+    hooks = family_evaluation(run.task)
     if hooks is not None and hasattr(hooks, "figures"):
         figures += hooks.figures(run_dir, actor, cfg)
     return figures

@@ -12,11 +12,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
 
-from refpo_warp.config.config_set import task_spec
+from refpo_warp.config.resolve import Resolution
 from refpo_warp.envs.registry import family_module, make_env
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.render.frames import overlay, tile
@@ -86,9 +87,10 @@ def record_panel(
             if options.length is None and bool(finished.all()):
                 break
         for i in range(n):  # the last frame of each env shows its final return
-            if last[i] is not None:
+            frame = last[i]
+            if frame is not None:
                 lines = [f"{label}  return {float(returns[i]):.1f}"]
-                last[i] = overlay(last[i], lines)
+                last[i] = overlay(frame, lines)
         frames.append(tile([f for f in last if f is not None]))
         return frames, step_hz / every
     finally:
@@ -123,7 +125,7 @@ def record(
     return [write_video(frames, Path(out_dir) / f"{name}.{fmt}", fps) for fmt in options.formats()]
 
 
-def policy_panels(cfg: dict, actor, options: VideoOptions) -> tuple[dict[str, Callable], str]:
+def policy_panels(cfg: dict, actor: Any, options: VideoOptions) -> tuple[dict[str, Callable], str]:
     """The panels of a run's policy under its evaluation protocol (label -> env -> policy) and a name tag: one per
     flow-step count N (``options.flow_steps``, else the first of ``eval.flow_steps``) and initial-noise protocol
     (``eval.initial_noise``), or the Gaussian's mean action."""
@@ -155,9 +157,10 @@ def agent_policy(agent: str, seed: int) -> Callable:
     return make
 
 
-def run_video(cfg: dict, runner, run_dir: Path, name: str) -> list[Path]:
+def run_video(run: Resolution, runner: Any, run_dir: Path, name: str) -> list[Path]:
     """Record the runner's current policy under the run's evaluation protocol into ``<run dir>/videos/<name>.*``
     (the ``video`` options of the run's config)."""
+    cfg = run.cfg
     options = VideoOptions.from_dict(cfg["video"])
     actor = runner.alg.get_policy()
     was_training = actor.training
@@ -166,7 +169,7 @@ def run_video(cfg: dict, runner, run_dir: Path, name: str) -> list[Path]:
         panels, _ = policy_panels(cfg, actor, options)
         seed = cfg["seed"] if options.seed is None else options.seed
         return record(
-            task_spec(cfg),
+            run.task,
             {**cfg["env"], **cfg["eval"]["env"]},
             runner.device,
             panels,

@@ -10,11 +10,12 @@ import copy
 import math
 import random
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
 
-from refpo_warp.config.config_set import task_spec
+from refpo_warp.config.resolve import Resolution
 from refpo_warp.envs.registry import make_env
 from refpo_warp.runner.distributed import process_rank, rank_device
 from refpo_warp.runner.runner import Runner
@@ -81,18 +82,17 @@ def check_obs_groups(cfg: dict, env) -> None:
             )
 
 
-def build_runner(cfg: dict, log_dir: Path | None, env=None):
-    """Env + rsl_rl runner (with our extensions) for a resolved config; ``env`` hosts the runner instead of a new one.
+def build_runner(run: Resolution, log_dir: Path | None, env: Any = None) -> tuple[Any, Runner]:
+    """Env + rsl_rl runner (with our extensions) for a resolved config (``run.cfg``, the env of ``run.task``); ``env``
+    hosts the runner instead of a new one.
 
     Nothing is written to ``log_dir`` until training starts. Under torchrun: this rank's device and env seed
     (``seed + RANK``), and a run dir for rank 0 only.
     """
-    rank = process_rank()
+    cfg, rank = run.cfg, process_rank()
     device = rank_device(cfg["device"], rank)
     if env is None:
-        env = make_env(
-            task_spec(cfg), num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank, **cfg["env"]
-        )
+        env = make_env(run.task, num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank, **cfg["env"])
     check_obs_groups(cfg, env)
     log_dir = log_dir if rank.is_main else None
     run_info = {"task": cfg["task"], "algo": cfg["algo"]}  # written into and checked against every checkpoint

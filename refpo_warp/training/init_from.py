@@ -11,8 +11,10 @@ initialisation, except its observation normaliser, which the clone set from the 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from refpo_warp.config.saved import fixed_changes, read_saved_config
+from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.runner.checkpoints import latest_checkpoint, read_checkpoint
 from refpo_warp.utils.errors import CheckpointError, ConfigError, DataFileError
 from refpo_warp.utils.rsl_rl_versions import uncompiled
@@ -20,15 +22,16 @@ from refpo_warp.utils.rsl_rl_versions import uncompiled
 COMPARED = ("task", "actor.", "env.", "runner.obs_groups")  # what a clone must share with the run it starts
 
 
-def init_differences(saved: dict, cfg: dict) -> list[str]:
-    """``key: clone's -> run's`` for every option the clone and the run must share and do not."""
-    changes = [c for c in fixed_changes(saved, cfg) if c.startswith(COMPARED)]
+def init_differences(saved: dict, cfg: dict, task: TaskSpec) -> list[str]:
+    """``key: clone's -> run's`` for every option the clone and the run must share and do not (``task``: the spec of
+    the run's task)."""
+    changes = [c for c in fixed_changes(saved, cfg, task) if c.startswith(COMPARED)]
     if saved.get("task") != cfg["task"]:
         changes.insert(0, f"task: {saved.get('task')!r} -> {cfg['task']!r}")
     return list(dict.fromkeys(changes))
 
 
-def load_init_from(runner, cfg: dict) -> Path:
+def load_init_from(runner: Any, cfg: dict, task: TaskSpec) -> Path:
     """Load the cloned actor of ``cfg['init_from']`` into ``runner`` (and the critic's normaliser); returns the
     checkpoint read. Raises ``DataFileError``/``CheckpointError`` naming what does not fit."""
     source = Path(cfg["init_from"])
@@ -36,7 +39,7 @@ def load_init_from(runner, cfg: dict) -> Path:
         saved = read_saved_config(source)
     except ConfigError as err:
         raise DataFileError(f"init_from={source}: {err}") from None
-    differences = init_differences(saved, cfg)
+    differences = init_differences(saved, cfg, task)
     if differences:
         raise DataFileError(
             f"init_from={source}: the cloned actor does not fit this run; these differ (clone -> "

@@ -19,12 +19,11 @@ from pathlib import Path
 from typing import Any
 
 from refpo_warp.config.dotted import parse_overrides
-from refpo_warp.config.resolve import identity, resolve_config, run_config_set
-from refpo_warp.config.run_options import RUN_RULES
-from refpo_warp.config.saved import RUN_CONFIG, load_run_config
+from refpo_warp.config.resolve import Resolution
+from refpo_warp.config.saved import RUN_CONFIG, resolve_run
 from refpo_warp.config.yaml_files import dump_config
+from refpo_warp.evaluation.evaluate_policy import Evaluator, periodic_evaluator
 from refpo_warp.evaluation.evaluate_run import evaluate_run
-from refpo_warp.evaluation.periodic import periodic_evaluator
 from refpo_warp.evaluation.videos import run_video, wants_video
 from refpo_warp.render.gl import select_gl_platform
 from refpo_warp.runner.build import build_runner, env_steps_per_iteration, num_iterations, seed_everything
@@ -39,26 +38,6 @@ from refpo_warp.utils.atomic_files import remove_stale_temp_files
 from refpo_warp.utils.errors import ConfigError, NonFiniteLossError, tag_run_dir
 
 
-def default_run_dir(task: str, algo: str, seed: int) -> Path:
-    return Path("runs") / task / f"{algo}_seed{seed}"
-
-
-def resolve_run(flat: dict[str, Any]) -> dict:
-    """The config of the run ``flat`` asks for, resolved once: a new one, or a resumed one (its saved config + the
-    overrides, from ``run_dir`` or the default run dir of the task, algo and seed asked for)."""
-    if not RUN_RULES["resume"].check("resume", flat.get("resume", False)):
-        cfg = resolve_config(flat)
-    elif flat.get("run_dir"):
-        cfg = load_run_config(Path(flat["run_dir"]), flat)
-    else:
-        configs = run_config_set(flat)
-        seed = RUN_RULES["seed"].check("seed", flat.get("seed", configs.defaults.data["seed"]))
-        run_dir = default_run_dir(*identity(flat, configs), seed)
-        cfg = load_run_config(run_dir, {**flat, "run_dir": str(run_dir)})
-    cfg["run_dir"] = str(cfg["run_dir"] or default_run_dir(cfg["task"], cfg["algo"], cfg["seed"]))
-    return cfg
-
-
 def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
     """Train (or resume) a run and evaluate it; returns the evaluation results (``{}`` if ``eval.at_end`` is off).
 
@@ -67,7 +46,8 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
     checkpoints is refused.
     """
     flat = parse_overrides(overrides) if isinstance(overrides, list) else dict(overrides or {})
-    cfg = resolve_run(flat)
+    run = resolve_run(flat)
+    cfg = run.cfg
     run_dir, resume = Path(cfg["run_dir"]), cfg["resume"]
     check_writable(run_dir)
     checkpoint = latest_checkpoint(run_dir) if run_dir.is_dir() else None
@@ -91,12 +71,12 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
         if wants_video(cfg) and rank.is_main:
             select_gl_platform()  # before the envs import MuJoCo
         seed_everything(cfg["seed"] + rank.rank)
-        env, runner = build_runner(cfg, run_dir)
+        env, runner = build_runner(run, run_dir)
         start = 0
         if resume:  # every rank loads the checkpoint
             start = _resume(runner, cfg, run_dir, flat, rank.world_size)
         elif cfg["init_from"]:  # a cloned actor that does not fit is refused here, before anything is written
-            clone, warmup = load_init_from(runner, cfg), cfg["critic_warmup_iterations"]
+            clone, warmup = load_init_from(runner, cfg, run.task), cfg["critic_warmup_iterations"]
             critic = f"; iterations 0..{warmup - 1} train the critic alone (critic_warmup_iterations)" if warmup else ""
             print(f"[refpo_warp] starting from the cloned actor {clone}{critic}", flush=True)
         # --- everything below writes (rank 0 only); everything above could refuse the run without touching the disk
@@ -114,7 +94,7 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
                 truncate_after(run_dir, start - 1)
             dump_config(cfg, run_dir / RUN_CONFIG)
         with tag_run_dir(run_dir):
-            return _train_and_evaluate(cfg, env, runner, run_dir, start)
+            return _train_and_evaluate(run, env, runner, run_dir, start)
 
 
 def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: int = 1) -> int:
@@ -146,7 +126,8 @@ def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: in
     return runner.continue_after(iteration, env_steps, time_s or 0.0)
 
 
-def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
+def _train_and_evaluate(run: Resolution, env: Any, runner: Runner, run_dir: Path, start: int) -> dict:
+    cfg = run.cfg
     rank = process_rank()
     total = num_iterations(cfg, rank.world_size)
     notice = cfg["notice"].format(task=cfg["task"], algo=cfg["algo"]) if cfg["notice"] else None
@@ -162,9 +143,9 @@ def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
     if cfg["eval"]["interval"] is None:  # periodic evaluation on by default: 10 evaluations per run
         cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
     interval = int(cfg["eval"]["interval"])
-    evaluate = periodic_evaluator(cfg, runner) if interval > 0 and rank.is_main else None  # rank 0 evaluates
+    evaluate = periodic_evaluator(run, runner) if interval > 0 and rank.is_main else None  # rank 0 evaluates
     if evaluate is not None and cfg["video"].get("interval"):
-        evaluate = with_videos(evaluate, cfg, runner, run_dir, interval)
+        evaluate = with_videos(evaluate, run, runner, run_dir, interval)
     if total > start:
         try:
             warmup = int(cfg["critic_warmup_iterations"]) if cfg["init_from"] else 0
@@ -181,10 +162,10 @@ def _train_and_evaluate(cfg, env, runner, run_dir, start) -> dict:
         )
     results = {}
     if cfg["eval"]["at_end"] and rank.is_main:
-        results = evaluate_run(run_dir, cfg=cfg, runner=runner)
+        results = evaluate_run(run_dir, run, runner=runner)
         log_final_evaluation(runner, results)
     if cfg["video"].get("at_end") and rank.is_main:
-        results["videos"] = [str(p) for p in run_video(cfg, runner, run_dir, "final")]
+        results["videos"] = [str(p) for p in run_video(run, runner, run_dir, "final")]
     if rank.is_main:
         print(training_summary(cfg, runner, run_dir, results), flush=True)
     if notice:
@@ -203,15 +184,15 @@ def training_summary(cfg: dict, runner, run_dir: Path, results: dict) -> str:
     return summary_block(title, run_outputs(run_dir, checkpoint, results), spent + headline_numbers(results))
 
 
-def with_videos(evaluate, cfg: dict, runner, run_dir: Path, interval: int):
+def with_videos(evaluate: Evaluator, run: Resolution, runner: Runner, run_dir: Path, interval: int) -> Evaluator:
     """The periodic evaluator, also recording a video (``videos/it<iteration>``) at every ``video.interval``-th
     evaluation; the recording leaves the training's random streams as they were."""
-    every = int(cfg["video"]["interval"])
+    every = int(run.cfg["video"]["interval"])
 
     def evaluate_and_record(it: int, is_last: bool) -> dict[str, float]:
         out = evaluate(it, is_last)
         if out and ((it + 1) // interval) % every == 0 and not is_last:
-            run_video(cfg, runner, run_dir, f"it{it}")
+            run_video(run, runner, run_dir, f"it{it}")
         return out
 
     return evaluate_and_record

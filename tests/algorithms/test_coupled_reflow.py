@@ -47,10 +47,10 @@ def test_every_rollout_action_is_the_flow_of_its_stored_noise_with_chunks_and_re
     """GridWorld with 2-move action chunks and 3-step episodes (resets inside the rollout): each stored action is the
     N-step Euler sample of its observation from its stored eps_0 (no post-sample perturbation here)."""
     from refpo_warp.benchmarks.update_time import fill_rollout
-    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.config.resolve import resolve
     from refpo_warp.runner.build import build_runner
 
-    cfg = resolve_config(
+    run = resolve(
         [
             "task=gridworld",
             "algo=refpo",
@@ -64,7 +64,7 @@ def test_every_rollout_action_is_the_flow_of_its_stored_noise_with_chunks_and_re
             "eval.interval=0",
         ]
     )
-    env, runner = build_runner(cfg, None)
+    env, runner = build_runner(run, None)
     alg = runner.alg
     fill_rollout(env, alg)
     obs, actions = alg.storage.observations.flatten(0, 1), alg.storage.actions.flatten(0, 1)

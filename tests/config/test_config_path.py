@@ -100,7 +100,7 @@ def test_mistakes_name_the_file_or_option(user_configs, tmp_path, case, match):
 
 
 def test_a_user_task_is_never_registered_and_trains_from_the_spec_its_folder_gives(user_configs, tmp_path):
-    from refpo_warp.config.saved import load_run_config
+    from refpo_warp.config.saved import load_run
     from refpo_warp.envs.registry import list_tasks
     from refpo_warp.training import train
 
@@ -110,5 +110,5 @@ def test_a_user_task_is_never_registered_and_trains_from_the_spec_its_folder_giv
     options += ["runner.num_steps_per_env=8", "eval.flow_steps=[1]", "algorithm.num_mc_samples=4"]
     results = train(["task=grid_small", "algo=my_refpo", f"run_dir={run_dir}", *options])
     assert set(results["results"]) == {"N=1"} and (run_dir / "model_0.pt").is_file()
-    assert load_run_config(run_dir, {})["task"] == "grid_small"  # the saved config_dir finds the task again
+    assert load_run(run_dir, {}).cfg["task"] == "grid_small"  # the saved config_dir finds the task again
     assert list_tasks() == before and "grid_small" not in before  # resolving and training registered nothing

@@ -86,7 +86,7 @@ def test_collect_from_a_trained_run_with_noise(workflow, tmp_path):
 def test_pretrain_writes_a_run_that_rsl_rl_loads(workflow):
     from rsl_rl.runners import OnPolicyRunner
 
-    from refpo_warp.config.saved import load_run_config
+    from refpo_warp.config.saved import load_run
     from refpo_warp.envs.registry import make_env
     from refpo_warp.runner.build import rsl_rl_config
 
@@ -96,7 +96,7 @@ def test_pretrain_writes_a_run_that_rsl_rl_loads(workflow):
     results = json.loads((clone / "eval.json").read_text())
     assert set(results["results"]) == {"N=1", "N=2"} and results["dataset"]["episodes"] == 40
     assert list(clone.glob("events.out.tfevents.*"))
-    cfg = load_run_config(clone, {})
+    cfg = load_run(clone, {}).cfg
     env = make_env("gridworld", num_envs=4, device="cpu")
     runner = OnPolicyRunner(env, rsl_rl_config(cfg), log_dir=None, device="cpu")
     runner.load(str(clone / "model_0.pt"))  # rsl_rl's own loader

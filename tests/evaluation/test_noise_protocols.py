@@ -74,12 +74,13 @@ def test_a_run_with_the_ema_checkpoints_both_and_evaluates_the_ema(tmp_run_dir, 
 def inference_policy(run_dir, overrides):
     from tensordict import TensorDict
 
-    from refpo_warp.config.saved import load_run_config
+    from refpo_warp.config.saved import load_run
     from refpo_warp.runner.build import build_runner
     from refpo_warp.runner.checkpoints import load_latest
 
-    cfg = load_run_config(run_dir, overrides)
-    _, runner = build_runner(cfg, None)
+    run = load_run(run_dir, overrides)
+    cfg = run.cfg
+    _, runner = build_runner(run, None)
     load_latest(runner, run_dir, cfg["task"], cfg["algo"])
     policy = runner.get_inference_policy()
     return lambda obs: policy(TensorDict(obs, batch_size=[5]))

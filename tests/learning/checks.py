@@ -323,16 +323,16 @@ def overrides_of(check: LearningCheck, seed: int, run_dir: Path, null: bool) -> 
 def initial_results(overrides: list[str]) -> dict[str, dict]:
     """The final evaluation's results for the policy training with ``overrides`` starts from (same seed, same
     construction, the run's own evaluation protocol)."""
-    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.config.resolve import resolve
     from refpo_warp.evaluation.evaluate_policy import evaluate_actor, make_eval_env
     from refpo_warp.runner.build import build_runner, seed_everything
 
-    cfg = resolve_config(overrides)
-    seed_everything(cfg["seed"])
+    run = resolve(overrides)
+    seed_everything(run.cfg["seed"])
     with contextlib.redirect_stdout(io.StringIO()):
-        _, runner = build_runner(cfg, None)
+        _, runner = build_runner(run, None)
     actor = runner.alg.get_policy().eval()
-    results, _ = evaluate_actor(cfg, actor, make_eval_env(cfg), list(cfg["eval"]["flow_steps"]))
+    results, _ = evaluate_actor(run, actor, make_eval_env(run), list(run.cfg["eval"]["flow_steps"]))
     return results
 
 

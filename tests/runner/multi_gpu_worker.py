@@ -11,15 +11,15 @@ from pathlib import Path
 import torch
 
 from refpo_warp.config.dotted import parse_overrides
-from refpo_warp.config.resolve import resolve_config
+from refpo_warp.config.resolve import Resolution, resolve
 from refpo_warp.runner.build import build_runner, seed_everything
 from refpo_warp.runner.distributed import close_process_group, process_rank
 
 
-def run(cfg: dict, reduce_gradients: bool) -> dict:
-    rank = process_rank()
+def run(resolved: Resolution, reduce_gradients: bool) -> dict:
+    cfg, rank = resolved.cfg, process_rank()
     seed_everything(cfg["seed"] + rank.rank)
-    env, runner = build_runner(cfg, None)
+    env, runner = build_runner(resolved, None)
     if not reduce_gradients:
         runner.alg.reduce_parameters = lambda: None  # every rank steps on its own gradients
     runner.learn(cfg["max_iterations"])
@@ -44,10 +44,10 @@ def run(cfg: dict, reduce_gradients: bool) -> dict:
 
 
 def main(out_dir: Path, overrides: list[str]) -> None:
-    cfg = resolve_config(parse_overrides(overrides))
+    resolved = resolve(parse_overrides(overrides))
     rank = process_rank().rank
     for mode, reduce_gradients in (("reduced", True), ("unreduced", False)):
-        torch.save(run(cfg, reduce_gradients), out_dir / f"{mode}_rank{rank}.pt")
+        torch.save(run(resolved, reduce_gradients), out_dir / f"{mode}_rank{rank}.pt")
     close_process_group()
 
 

@@ -153,14 +153,14 @@ def test_nan_loss_stops_training_and_keeps_last_good_checkpoint(tmp_run_dir, mon
 def test_dmc_learner_stores_the_pre_tanh_action_the_env_squashes():
     """With the DMC default action transform, rollout storage keeps the sampled (unbounded) flow action and the
     physics receives tanh of it."""
-    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.config.resolve import resolve
     from refpo_warp.runner.build import build_runner
     from refpo_warp.utils.warp_setup import wp
 
-    cfg = resolve_config(
+    run = resolve(
         ["task=dmc_cartpole_balance", "algo=refpo", "device=cpu", "num_envs=64", "runner.num_steps_per_env=4"]
     )
-    env, runner = build_runner(cfg, None)
+    env, runner = build_runner(run, None)
     alg = runner.alg
     obs = env.get_observations()
     with torch.inference_mode():

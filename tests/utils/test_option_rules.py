@@ -163,5 +163,8 @@ def test_resume_fixes_the_networks_but_frees_sampling_and_training_options():
             "critic.activation=tanh",
         ]
     )
-    assert [c.split(":")[0] for c in fixed_changes(saved, changed)] == ["actor.hidden_dims", "critic.activation"]
-    assert fixed_changes(saved, resolve_config(["task=gridworld"])) == []
+    assert [c.split(":")[0] for c in fixed_changes(saved, changed, get_task("gridworld"))] == [
+        "actor.hidden_dims",
+        "critic.activation",
+    ]
+    assert fixed_changes(saved, resolve_config(["task=gridworld"]), get_task("gridworld")) == []

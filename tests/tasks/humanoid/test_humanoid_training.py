@@ -8,7 +8,7 @@ import pytest
 import torch
 from constructor_config import effective_config  # tests/ is on sys.path under pytest
 
-from refpo_warp.config.resolve import resolve_config
+from refpo_warp.config.resolve import resolve, resolve_config
 from refpo_warp.envs.registry import make_env
 from refpo_warp.runner.build import build_runner, rsl_rl_config
 from refpo_warp.training import train
@@ -49,10 +49,11 @@ def test_first_actions_are_small_like_the_references(algo):
     """Built from the paper-sized configs and fed real observations, the untrained policy's rollout actions have a
     spread of about the 0.05 perturbation (flow) or fixed std (Gaussian), and none reaches the +-1 action bound."""
     torch.manual_seed(0)
-    cfg = resolve_config(["task=humanoid_root", f"algo={algo}", "device=cpu"], device_type="cuda")
+    run = resolve(["task=humanoid_root", f"algo={algo}", "device=cpu"], device_type="cuda")
+    cfg = run.cfg
     cfg["num_envs"] = 32
     env = make_env("humanoid_root", num_envs=32, device="cpu", seed=3)
-    _, runner = build_runner(cfg, None, env=env)
+    _, runner = build_runner(run, None, env=env)
     obs = env.get_observations()
     runner.alg.actor.update_normalization(obs)
     with torch.inference_mode():
