@@ -2,22 +2,17 @@
 
 from __future__ import annotations
 
+from refpo_warp.demonstrations.collect_options import options_usage
 from refpo_warp.utils.command_line import Arguments
 
 SUMMARY = "roll out a trained policy (or a scripted demonstrator) and write a Minari demonstration dataset"
-USAGE = """Collect demonstrations: refpo collect run_dir=<trained run> episodes=K out=PATH [key=value ...]
+USAGE = f"""Collect demonstrations: refpo collect run_dir=<trained run> episodes=K out=PATH [key=value ...]
                         refpo collect task=<task> demonstrator=scripted episodes=K out=PATH [demonstrator.<opt>=...]
 
 Rolls the policy out on num_envs vectorised envs and writes the K whole episodes (observations, actions, rewards,
 terminations, truncations; the spaces, task and policy in metadata.json) as a Minari dataset folder at out
-(docs/finetuning.md). Options:
-    noise=0.0            std of Gaussian noise added to every action (the noisy action is stepped and stored)
-    sample=stochastic    stochastic: a flow from random initial noise, a Gaussian's sample; mean: zero noise / mean
-    flow_steps=N         Euler steps of a flow policy (default: its num_flow_steps)
-    checkpoint=PATH      a checkpoint of the run (default: its newest usable one)
-    num_envs=64          envs stepped together (default: min(K, 64)); seed=S (default: the run's seed + 20000)
-    overwrite=false      an existing out is refused unless overwrite=true (the old dataset is replaced whole)
-    device=cpu
+(docs/finetuning.md). Options (refpo_warp/demonstrations/collect_options.py):
+{options_usage()}
 GridWorld's scripted demonstrator: demonstrator.up_share=0.7 demonstrator.band=3 (tasks/gridworld/demonstrator.py).
 
 Examples:

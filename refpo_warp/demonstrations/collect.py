@@ -1,9 +1,9 @@
 """``refpo collect``: roll out a trained run's policy (any method, any task), or a task family's scripted demonstrator,
 with optional Gaussian action noise, and write the episodes as a Minari dataset (``dataset_file``).
 
-Every option is checked and the policy loaded before the dataset is written; an existing ``out`` is refused unless
-``overwrite=true``. The dataset's metadata records the task, its env options, the observation groups and the policy
-that made it (run dir, checkpoint, algorithm, flow steps, sampling, noise, seed).
+Every option (``collect_options.CollectOptions``) is checked and the policy loaded before the dataset is written; an
+existing ``out`` is refused unless ``overwrite=true``. The dataset's metadata records the task, its env options, the
+observation groups and the policy that made it (run dir, checkpoint, algorithm, flow steps, sampling, noise, seed).
 """
 
 from __future__ import annotations
@@ -15,77 +15,17 @@ from typing import Any
 
 import torch
 
-from refpo_warp.config.config_set import task_spec
-from refpo_warp.config.run_options import RUN_RULES
-from refpo_warp.config.saved import load_run_config
+from refpo_warp.config.saved import load_run
+from refpo_warp.demonstrations.collect_options import MAX_DEFAULT_ENVS, collect_options
 from refpo_warp.demonstrations.dataset_file import write_dataset
 from refpo_warp.demonstrations.rollout import collect_episodes
 from refpo_warp.envs.registry import family_module, get_task, make_env, make_env_cfg
 from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.errors import ConfigError, unknown
-from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real, Text, check_options
+from refpo_warp.utils.option_rules import check_options
 from refpo_warp.utils.options import declared_options, rules_for
 
-SAMPLING = ("stochastic", "mean")
-RULES = {
-    "run_dir": Text(optional=True),
-    "checkpoint": Text(optional=True),
-    "task": Text(optional=True),
-    "demonstrator": OneOf(None, "scripted"),
-    "episodes": Int(1, 10**8),
-    "out": Text(),
-    "noise": Real(0, 1e3),
-    "overwrite": Flag(),
-    "num_envs": Int(1, 1 << 22, optional=True),
-    "seed": Int(0, 2**32 - 1, optional=True),
-    "flow_steps": Int(1, 1000, optional=True),
-    "sample": OneOf(*SAMPLING),
-    "device": RUN_RULES["device"],
-}
-DEFAULTS = {
-    "run_dir": None,
-    "checkpoint": None,
-    "task": None,
-    "demonstrator": None,
-    "noise": 0.0,
-    "overwrite": False,
-    "num_envs": None,
-    "seed": None,
-    "flow_steps": None,
-    "sample": "stochastic",
-    "device": "cpu",
-}
-MAX_DEFAULT_ENVS = 64
 COLLECT_SEED_OFFSET = 20_000  # collection envs draw other initial states than the run's training and evaluation
-
-
-def collect_options(flat: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """(checked options, demonstrator options); every problem a ``ConfigError`` naming the key and valid values."""
-    demo = {k.split(".", 1)[1]: v for k, v in flat.items() if k.startswith("demonstrator.")}
-    flat = {k: v for k, v in flat.items() if not k.startswith("demonstrator.")}
-    for key in flat:
-        if key not in RULES:
-            raise unknown("option of refpo collect", key, [*RULES, "demonstrator.<option>"])
-    for key in ("episodes", "out"):
-        if key not in flat:
-            raise ConfigError(f"refpo collect needs {key}=... (refpo collect --help)")
-    options = {**DEFAULTS, **check_options(RULES, flat)}
-    if (options["run_dir"] is None) == (options["demonstrator"] is None):
-        raise ConfigError("refpo collect needs either run_dir=<trained run> or task=<task> demonstrator=scripted")
-    if options["demonstrator"] and not options["task"]:
-        raise ConfigError("demonstrator=scripted needs task=<task id>")
-    if options["run_dir"] and options["task"]:
-        raise ConfigError("task= comes from the run's config.yaml with run_dir=; give one of them")
-    if demo and not options["demonstrator"]:
-        raise ConfigError(
-            f"demonstrator.{next(iter(demo))} is an option of a scripted demonstrator (demonstrator=scripted)"
-        )
-    out = Path(options["out"])
-    if out.exists() and not options["overwrite"]:
-        raise ConfigError(f"out={out} exists; pass overwrite=true to replace it, or choose another out")
-    if out.exists() and not out.is_dir():
-        raise ConfigError(f"out={out} is a file; a dataset is a folder: choose another out")
-    return options, demo
 
 
 def collect(flat: dict[str, Any]) -> dict:
@@ -147,10 +87,11 @@ def _run_policy(options: dict, device: str):
     from refpo_warp.runner.checkpoints import load_latest
 
     run_dir = Path(options["run_dir"])
-    cfg = load_run_config(run_dir, {"device": device})
+    run = load_run(run_dir, {"device": device})
+    cfg = run.cfg
     seed = options["seed"] if options["seed"] is not None else cfg["seed"] + COLLECT_SEED_OFFSET
-    env = make_env(task_spec(cfg), num_envs=_num_envs(options), device=device, seed=seed, **cfg["env"])
-    _, runner = build_runner(cfg, None, env=env)
+    env = make_env(run.task, num_envs=_num_envs(options), device=device, seed=seed, **cfg["env"])
+    _, runner = build_runner(run, None, env=env)
     if options["checkpoint"]:
         runner.load(options["checkpoint"], map_location=device)
         checkpoint = options["checkpoint"]

@@ -1,0 +1,97 @@
+"""The options of ``refpo collect``, each a field with its default, rule and doc (``refpo_warp/utils/options.py``), and
+their checks: ``collect_options`` validates a command line's ``key=value`` options against the fields, the usage of
+``refpo collect --help`` lists them from the fields. Torch-free, so that ``refpo --help`` stays quick."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from refpo_warp.config.option_docs import shown_value
+from refpo_warp.config.run_options import RUN_RULES
+from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real, Text, check_options
+from refpo_warp.utils.options import declared_options, option, rules_for
+
+SAMPLING = ("stochastic", "mean")
+MAX_DEFAULT_ENVS = 64
+REQUIRED = ("episodes", "out")
+SOURCES = ("run_dir", "task", "demonstrator")  # what is rolled out: in the usage's synopsis, not its option list
+
+
+@dataclass(frozen=True)
+class CollectOptions:
+    run_dir: str | None = option(None, Text(optional=True), "a trained run whose policy is rolled out")
+    checkpoint: str | None = option(
+        None, Text(optional=True), "a checkpoint of the run (default: its newest usable one)"
+    )
+    task: str | None = option(None, Text(optional=True), "the task of a scripted demonstrator (demonstrator=scripted)")
+    demonstrator: str | None = option(None, OneOf(None, "scripted"), "scripted: the task family's demonstrator")
+    episodes: int = option(rule=Int(1, 10**8), doc="whole episodes written")
+    out: str = option(rule=Text(), doc="the dataset folder written")
+    noise: float = option(
+        0.0, Real(0, 1e3), "std of Gaussian noise added to every action (the noisy action is stepped and stored)"
+    )
+    overwrite: bool = option(
+        False, Flag(), "an existing out is refused unless overwrite=true (the old dataset is replaced whole)"
+    )
+    num_envs: int | None = option(
+        None, Int(1, 1 << 22, optional=True), f"envs stepped together (default: min(episodes, {MAX_DEFAULT_ENVS}))"
+    )
+    seed: int | None = option(
+        None,
+        Int(0, 2**32 - 1, optional=True),
+        "seed of the envs and the policy's noise (default: the run's seed + 20000; a demonstrator's: 1)",
+    )
+    flow_steps: int | None = option(
+        None, Int(1, 1000, optional=True), "Euler steps of a flow policy (default: its num_flow_steps)"
+    )
+    sample: str = option(
+        "stochastic",
+        OneOf(*SAMPLING),
+        "stochastic: a flow from random initial noise, a Gaussian's sample; mean: zero noise / mean",
+    )
+    device: str = option("cpu", RUN_RULES["device"], "where the policy and the envs run")
+
+
+RULES = rules_for(CollectOptions)
+DEFAULTS = {name: found.default for name, found in declared_options(CollectOptions).items()}
+
+
+def options_usage() -> str:
+    """The usage's option lines: every option outside the synopsis with its default and doc, from the fields."""
+    declared = declared_options(CollectOptions)
+    names = [n for n in declared if n not in SOURCES]
+    given = {n: f"{n}={shown_value(declared[n].default).strip('`')}" for n in names}
+    width = max(len(g) for g in given.values()) + 2
+    return "\n".join(f"    {given[n]:<{width}}{declared[n].doc}" for n in names)
+
+
+def collect_options(flat: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """(checked options, demonstrator options); every problem a ``ConfigError`` naming the key and valid values."""
+    demo = {k.split(".", 1)[1]: v for k, v in flat.items() if k.startswith("demonstrator.")}
+    flat = {k: v for k, v in flat.items() if not k.startswith("demonstrator.")}
+    for key in flat:
+        if key not in RULES:
+            raise unknown("option of refpo collect", key, [*RULES, "demonstrator.<option>"])
+    for key in REQUIRED:
+        if key not in flat:
+            raise ConfigError(f"refpo collect needs {key}=... (refpo collect --help)")
+    options = {**DEFAULTS, **check_options(RULES, flat)}
+    if (options["run_dir"] is None) == (options["demonstrator"] is None):
+        raise ConfigError("refpo collect needs either run_dir=<trained run> or task=<task> demonstrator=scripted")
+    if options["demonstrator"] and not options["task"]:
+        raise ConfigError("demonstrator=scripted needs task=<task id>")
+    if options["run_dir"] and options["task"]:
+        raise ConfigError("task= comes from the run's config.yaml with run_dir=; give one of them")
+    if demo and not options["demonstrator"]:
+        raise ConfigError(
+            f"demonstrator.{next(iter(demo))} is an option of a scripted demonstrator (demonstrator=scripted)"
+        )
+    out = Path(options["out"])
+    if out.exists() and not options["overwrite"]:
+        raise ConfigError(f"out={out} exists; pass overwrite=true to replace it, or choose another out")
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"out={out} is a file; a dataset is a folder: choose another out")
+    return options, demo
