@@ -80,14 +80,14 @@ def family_module(task: str | TaskSpec, name: str):
         return None
 
 
-def make_env_cfg(task: str | TaskSpec, **overrides: Any):
+def make_env_cfg(task: str | TaskSpec, /, **overrides: Any):
     """The env cfg dataclass of ``task`` with ``overrides`` applied (unknown fields raise with a suggestion)."""
     spec = _spec(task)
     spec.cfg_class.check_keys(overrides, f"env option for task '{spec.task_id}'")
     return spec.cfg_class(**{**spec.cfg_overrides, **overrides})
 
 
-def make_env(task: str | TaskSpec, num_envs: int = 64, device: str = "auto", seed: int = 0, **env_cfg: Any):
+def make_env(task: str | TaskSpec, /, num_envs: int = 64, device: str = "auto", seed: int = 0, **env_cfg: Any):
     """Build the rsl_rl ``VecEnv`` of a registered task.
 
     Args:
