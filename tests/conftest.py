@@ -20,7 +20,7 @@ def cuda_available() -> bool:
     """A CUDA device for torch and for Warp (the envs run their kernels through Warp)."""
     if not torch.cuda.is_available():
         return False
-    from refpo_warp.utils.device import init_warp
+    from refpo_warp.utils.warp_setup import init_warp
 
     return init_warp().get_cuda_device_count() > 0
 

@@ -60,14 +60,15 @@ def timeout_rows(run: Path, episodes: int = 200) -> Counter:
     """Where the Gaussian clone's time-outs stand: the row (y) of each episode the 200-step time-out ended."""
     import torch
 
-    from refpo_warp.config.saved import load_run_config
+    from refpo_warp.config.saved import load_run
     from refpo_warp.envs.registry import make_env
     from refpo_warp.runner.build import build_runner
     from refpo_warp.runner.checkpoints import load_latest
 
-    cfg = load_run_config(run, {"device": "cpu"})
-    env = make_env(cfg["task"], num_envs=episodes, device="cpu", seed=cfg["seed"] + 10_000, **cfg["env"])
-    _, runner = build_runner(cfg, None, env=env)
+    resolved = load_run(run, {"device": "cpu"})
+    cfg = resolved.cfg
+    env = make_env(resolved.task, num_envs=episodes, device="cpu", seed=cfg["seed"] + 10_000, **cfg["env"])
+    _, runner = build_runner(resolved, None, env=env)
     load_latest(runner, run, cfg["task"], cfg["algo"])
     actor = runner.get_inference_policy(device="cpu")
     obs, ended, rows = env.reset(), torch.zeros(episodes, dtype=torch.bool), Counter()

@@ -115,17 +115,18 @@ class CheckpointPolicy:
     """One run's actor, loaded from each of its checkpoints in turn (the run's saved config, safe loading)."""
 
     def __init__(self, run_dir: Path, device: str) -> None:
-        from refpo_warp.config.saved import load_run_config
+        from refpo_warp.config.saved import load_run
         from refpo_warp.envs.registry import make_env
         from refpo_warp.evaluation.evaluate_policy import EVAL_SEED_OFFSET
         from refpo_warp.runner.build import build_runner
         from refpo_warp.runner.checkpoints import list_checkpoints
 
-        self.cfg = load_run_config(run_dir, {"device": device})
+        resolved = load_run(run_dir, {"device": device})
+        self.cfg = resolved.cfg
         self.env_options = {**self.cfg["env"], **self.cfg["eval"]["env"]}
         self.seed = self.cfg["seed"] + EVAL_SEED_OFFSET
-        self.env = make_env(self.cfg["task"], num_envs=32, device=device, seed=self.seed, **self.env_options)
-        _, self.runner = build_runner(self.cfg, None, env=self.env)
+        self.env = make_env(resolved.task, num_envs=32, device=device, seed=self.seed, **self.env_options)
+        _, self.runner = build_runner(resolved, None, env=self.env)
         self.checkpoints = list_checkpoints(run_dir)[::-1]  # oldest first
         self.transform = self.env.cfg.action_transform
 
@@ -298,7 +299,7 @@ def intervene(
 
     from one_step_probes import sampler_probe, velocity_error_by_tau
 
-    from refpo_warp.config.saved import load_run_config
+    from refpo_warp.config.saved import load_run
     from refpo_warp.runner.build import build_runner, seed_everything
 
     checkpoint = run / f"model_{iteration}.pt"
@@ -328,9 +329,10 @@ def intervene(
     for name, change in variants.items():
         print(f"[one_step] {run.name} from iteration {iteration}: {iterations} iterations, {name}", flush=True)
         overrides = {"device": device, **{k: v for k, v in change.items() if k != "advantages"}}
-        cfg = load_run_config(run, overrides)
+        resolved = load_run(run, overrides)
+        cfg = resolved.cfg
         with contextlib.redirect_stdout(io.StringIO()):
-            _, runner = build_runner(cfg, None)
+            _, runner = build_runner(resolved, None)
             runner.load(str(checkpoint), map_location=runner.device)
             if "advantages" in change:
                 runner.alg.minibatches = one_sign(runner.alg.minibatches, change["advantages"])
