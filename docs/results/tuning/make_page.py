@@ -219,14 +219,28 @@ def chosen_table() -> str:
 
 # ------------------------------------------------------------------------------------------------ fresh seeds
 def run_returns(path: Path, label: str) -> dict[str, dict[int, tuple[float, float | None]]]:
-    """task -> seed -> (N = 10 return (a Gaussian's mean action), N = 1 return or None) of a method's finished runs."""
+    """task -> seed -> (N = 10 return (a Gaussian's mean action), N = 1 return or None) of a method's runs. A run that
+    failed (its training stopped, e.g. on a non-finite loss) counts as return 0 at both: leaving it out would flatter
+    its method."""
     out: dict[str, dict[int, tuple[float, float | None]]] = {}
     if not path.exists():
         return out
     for r in csv.DictReader(path.open(encoding="utf-8")):
-        if r["label"] == label and r["status"] == "ok" and r["return_multi"]:
+        if r["label"] != label:
+            continue
+        if r["status"] == "ok" and r["return_multi"]:
             out.setdefault(r["task"], {})[int(r["seed"])] = (float(r["return_multi"]), _num(r.get("return_1")))
+        elif r["status"] == "failed":
+            out.setdefault(r["task"], {})[int(r["seed"])] = (0.0, 0.0)
     return out
+
+
+def failed_runs(path: Path) -> list[str]:
+    """'task/label/seed' of the runs that failed (counted as return 0)."""
+    if not path.exists():
+        return []
+    rows = csv.DictReader(path.open(encoding="utf-8"))
+    return [f"{r['task']}/{r['label']}/seed{r['seed']}" for r in rows if r["status"] == "failed"]
 
 
 def fresh_table() -> str:
@@ -275,6 +289,9 @@ def fresh_table() -> str:
                 f"{reach} of {len(TASKS)} tasks; P(improvement) {poi.point:.2f} [{poi.low:.2f}, "
                 f"{poi.high:.2f}]"
             )
+    failed = failed_runs(fresh_csv)
+    if failed:
+        lines.append(f"- Failed runs, counted as return 0 at N = 10 and N = 1: {', '.join(failed)}")
     onestep = run_returns(fresh_csv, "refpo_onestep")
     pairs = [(t, s, v) for t in TASKS for s, v in sorted(onestep.get(t, {}).items())]
     held = sum(v[1] is not None and v[1] >= 0.9 * v[0] for _, _, v in pairs)
