@@ -179,6 +179,13 @@ CARTPOLE = ("task=dmc_cartpole_balance",)
 FINETUNE_COLLECT = ("episodes=500", "num_envs=64")
 FINETUNE_PRETRAIN = ("pretrain.epochs=30", "pretrain.num_pairs=8")
 MJLAB_ITERATIONS = 100
+FPO_PP_OWN_VALUES = (
+    "algorithm.learning_rate=0.0001",
+    "algorithm.clip_param=0.05",
+    "algorithm.num_learning_epochs=16",
+    "actor.output_scale=1.0",
+    "actor.action_noise_std=0.02",
+)
 CHECKS: dict[str, LearningCheck] = {
     check.name: check
     for check in (
@@ -224,7 +231,9 @@ CHECKS: dict[str, LearningCheck] = {
         ),
         LearningCheck(
             "cartpole_fpo_pp",
-            (*CARTPOLE, "algo=fpo_pp"),
+            # FPO++'s own values (configs/algo/fpo_pp.yaml), which the CPU profile replaced by tuned ones after the
+            # check's bound was measured on them
+            (*CARTPOLE, "algo=fpo_pp", *FPO_PP_OWN_VALUES),
             mean_gain("N=10", "N=1", "N=10/zero", "N=1/zero"),
             (Bound("mean_gain", ">=", 1.1),),
             minutes=4.3,
