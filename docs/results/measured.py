@@ -67,6 +67,12 @@ def sweep_rows(relative: str, labels: list[str] | None, seeds: str) -> list[str]
     if not path.exists():
         return []
     rows = list(csv.DictReader(path.open()))
+    runs_csv = path.with_name("runs.csv")
+    failed = (
+        [(r["task"], r["label"]) for r in csv.DictReader(runs_csv.open()) if r["status"] == "failed"]
+        if runs_csv.exists()
+        else []
+    )
     labels = labels or list(dict.fromkeys(r["label"] for r in rows))
     out = []
     for task, title in TASKS.items():
@@ -84,7 +90,9 @@ def sweep_rows(relative: str, labels: list[str] | None, seeds: str) -> list[str]
             cells.append(
                 f"{row['method']} {multi}"
                 + (f" / {one}" if one else "")
-                + (f" ({row['runs_finished']} of {row['runs_total']} seeds)" if partial else "")
+                + (f" ({row['runs_finished']} of {row['runs_total']} seeds" if partial else "")
+                + (f"; {failed.count((task, label))} failed)" if partial and (task, label) in failed else "")
+                + (")" if partial and (task, label) not in failed else "")
             )
         if cells:
             out.append(
