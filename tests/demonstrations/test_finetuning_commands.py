@@ -18,22 +18,13 @@ pytest.importorskip("minari")
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "training"))
 from dataset_helpers import damage, episode, write
+from reliability_helpers import TINY as TINY_RUN
 from reliability_helpers import assert_refused, call_tool, tree_hash
 
 USAGE, BAD_FILE = 2, 4
-TINY = [
-    "task=gridworld",
-    "device=cpu",
-    "num_envs=4",
-    "runner.num_steps_per_env=8",
-    "actor.hidden_dims=[16]",
-    "critic.hidden_dims=[16]",
-    "algorithm.num_mc_samples=2",
-    "algorithm.num_learning_epochs=1",
-    "algorithm.num_mini_batches=1",
-    "eval.num_envs=4",
-    "eval.flow_steps=[1, 2]",
-]
+# The reliability tests' tiny GridWorld run, evaluated at two flow step counts and with the default checkpoints.
+TINY = [o for o in TINY_RUN if not o.startswith(("eval.flow_steps=", "runner.save_interval="))]
+TINY.append("eval.flow_steps=[1, 2]")
 PRETRAIN = [*TINY, "pretrain.epochs=3", "pretrain.batch_size=64"]
 
 
