@@ -99,8 +99,45 @@ def sync_fresh(src: Path) -> None:
     print(f"copied {src / 'report'}'s runs.csv and per_task.csv and {copy_runs(src, FRESH / 'runs')} run(s)")
 
 
+# A console line of a periodic evaluation: "[it  43/263]  steps     675,840 ... return_N10 562.4  return_N1 568.2 ..."
+EVAL_LINE = re.compile(r"^\[it +(\d+)/\d+\] +steps +([\d,]+) .*?((?: +return_N\w+ +[-\d.e+]+)+)\s*$")
+STOP_LINE = "error: training stopped: Non-finite"
+
+
+def stopped_run(run: Path, dst: Path) -> bool:
+    """A run whose training stopped on a non-finite loss (no eval.json): its periodic evaluations read back from its
+    first attempt's console log (a retry from scratch replaces progress.jsonl), and stopped.json with where it stopped.
+    Its curve counts as 0 after that point: the run has no policy to deploy past it."""
+    logs = sorted(run.glob("train.attempt*.log"))
+    if (run / "eval.json").exists() or not logs:
+        return False
+    lines = logs[0].read_text(encoding="utf-8").splitlines()
+    stop = next((line for line in lines if line.startswith(STOP_LINE)), None)
+    if stop is None:
+        return False
+    rows, last = [], None
+    for line in lines:
+        match = EVAL_LINE.match(line)
+        if line.startswith("[it "):
+            last = line
+        if match:
+            pairs = match.group(3).split()
+            row = {"iteration": int(match.group(1)), "env_steps": int(match.group(2).replace(",", ""))}
+            row.update({f"eval/{k}": float(v) for k, v in zip(pairs[::2], pairs[1::2], strict=True)})
+            rows.append(row)
+    stopped_at = re.match(r"^\[it +(\d+)/\d+\] +steps +([\d,]+)", last or "")
+    dst.mkdir(parents=True, exist_ok=True)
+    if (run / "config.yaml").exists():
+        shutil.copy2(run / "config.yaml", dst / "config.yaml")
+    (dst / "progress_eval.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    where = {"iteration": int(stopped_at.group(1)), "env_steps": int(stopped_at.group(2).replace(",", ""))}
+    (dst / "stopped.json").write_text(json.dumps({**where, "reason": stop[len("error: ") :][:160]}) + "\n")
+    return True
+
+
 def sync_budget(src: Path) -> None:
-    print(f"copied {copy_runs(src, BUDGET)} budget run(s) from {src}")
+    stopped = sum(stopped_run(run, BUDGET / run.relative_to(src)) for run in sorted(src.glob("*/*/seed*")))
+    print(f"copied {copy_runs(src, BUDGET)} finished and {stopped} stopped budget run(s) from {src}")
 
 
 # ------------------------------------------------------------------------------------------------ the study
@@ -311,23 +348,37 @@ def budget_curves() -> str:
     import matplotlib.pyplot as plt
 
     curves: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+    stops = []
+    grid = None  # every run evaluates at the same iterations; a stopped run's missing points count as 0
     for path in runs:
         rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
         key = next((k for k in ("eval/return_N10", "eval/return") if k in rows[0]), None)
         if key is None:
             continue
-        curves.setdefault(path.parents[1].name, []).append(
-            (np.array([r["env_steps"] for r in rows]), np.array([r[key] for r in rows]))
-        )
+        steps, values = np.array([r["env_steps"] for r in rows]), np.array([r[key] for r in rows])
+        if (path.parent / "stopped.json").exists():
+            stop = json.loads((path.parent / "stopped.json").read_text())
+            stops.append(f"{path.parents[1].name}/{path.parent.name} at {stop['env_steps'] / 1e6:.2f}M env steps")
+        elif grid is None or len(steps) > len(grid):
+            grid = steps
+        curves.setdefault(path.parents[1].name, []).append((steps, values))
+    if grid is not None:
+        for label, series in curves.items():
+            curves[label] = [(grid, np.concatenate([v, np.zeros(len(grid) - len(v))])) for _, v in series]
     fig, ax = plt.subplots(figsize=(6, 3.6))
-    lines = ["| method | seeds | 1× (1M) | 2× | 4× (4M) |", "|---|---|---|---|---|"]
+    lines = ["| method | seeds | 1× (1M env steps) | 2× | 4× |", "|---|---|---|---|---|"]
     for label, series in sorted(curves.items()):
         steps = series[0][0]
         values = np.array([v[: len(steps)] for _, v in series if len(v) >= len(steps)])
         mean = values.mean(axis=0)
         ax.plot(steps / 1e6, mean, label=NAMES.get(label, label))
         ax.fill_between(steps / 1e6, values.min(axis=0), values.max(axis=0), alpha=0.2)
-        marks = [f"{np.interp(x, steps, mean):.0f}" for x in (1e6, 2e6, 4e6)]
+        # the CPU profile's 66 iterations of 15,360 env steps, and two and four times that
+        marks = [
+            f"{np.interp(x, steps, mean):.0f} ({np.interp(x, steps, values.min(axis=0)):.0f}-"
+            f"{np.interp(x, steps, values.max(axis=0)):.0f})"
+            for x in (k * 1_013_760 for k in (1, 2, 4))
+        ]
         lines.append(f"| {NAMES.get(label, label)} | {len(values)} | " + " | ".join(marks) + " |")
     ax.set_xlabel("env steps (M)")
     ax.set_ylabel("periodic return (N = 10 / mean action)")
@@ -335,6 +386,10 @@ def budget_curves() -> str:
     ax.legend()
     fig.tight_layout()
     fig.savefig(HERE / "budget_curves.png", dpi=120)
+    lines += ["", "Cells: the periodic return's mean over seeds (min-max) at 1×, 2× and 4× the profile's env steps."]
+    if stops:
+        lines.append("")
+        lines.append(f"Stopped on a non-finite loss (counted as 0 from there on): {', '.join(stops)}.")
     return "\n".join(lines) + "\n\n![budget curves](budget_curves.png)"
 
 
