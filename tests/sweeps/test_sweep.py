@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 import torch
 import yaml
+from tiny_runs import TINY  # tests/sweeps/tiny_runs.py
 
 from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.config.resolve import resolve_config
@@ -18,15 +19,6 @@ from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import REPO_ROOT
 
 ROOT = REPO_ROOT
-TINY = {
-    "max_iterations": 2,
-    "num_envs": 4,
-    "runner.num_steps_per_env": 8,
-    "eval.num_envs": 4,
-    "eval.flow_steps": [10, 1],
-    "eval.interval": 1,
-    "eval.interval_num_envs": 4,
-}
 
 
 def write_spec(path: Path, **spec) -> Path:

@@ -9,6 +9,7 @@ import json
 import optuna
 import pytest
 import yaml
+from tiny_runs import TINY  # tests/sweeps/tiny_runs.py
 
 from refpo_warp.sweeps.spec import load_sweep
 from refpo_warp.sweeps.tune import (
@@ -24,15 +25,6 @@ from refpo_warp.sweeps.tune import (
 from refpo_warp.sweeps.tune_spec import Objective, load_tuning
 from refpo_warp.utils.errors import ConfigError
 
-TINY = {
-    "max_iterations": 2,
-    "num_envs": 4,
-    "runner.num_steps_per_env": 8,
-    "eval.num_envs": 4,
-    "eval.flow_steps": [10, 1],
-    "eval.interval": 1,
-    "eval.interval_num_envs": 4,
-}
 LR = {"algorithm.learning_rate": {"low": 1.0e-4, "high": 3.0e-3, "log": True}}
 
 
