@@ -7,6 +7,7 @@ Every command runs through ``refpo_warp/cli/guard.py``: one message and a docume
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 
 from refpo_warp.cli.guard import EXIT_OK, EXIT_USAGE, run_guarded
@@ -39,7 +40,16 @@ def overview() -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Run ``refpo <argv>``; returns the exit code."""
-    argv = sys.argv[1:] if argv is None else list(argv)
+    try:
+        code = _dispatch(sys.argv[1:] if argv is None else list(argv))
+        sys.stdout.flush()  # a reader that stopped early shows here, not in the interpreter's exit
+    except BrokenPipeError:  # `refpo train --help | head -1`: the reader has what it wanted; no traceback
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
+    return code
+
+
+def _dispatch(argv: list[str]) -> int:
     if not argv or argv[0] in HELP:
         print(overview(), file=sys.stdout if argv else sys.stderr)
         return EXIT_OK if argv else EXIT_USAGE
