@@ -42,15 +42,34 @@ def _check_logger(key: str, value: Any) -> str:
     return value
 
 
+NOTICE_FIELDS = ("task", "algo", "num_envs", "env_steps", "actor_hidden_dims", "critic_hidden_dims")
+
+
+def notice_text(template: str, cfg: dict, env_steps: int) -> str:
+    """A run's notice with its own values filled in, so that a command-line override shows in it."""
+
+    def dims(model: str) -> str:
+        return " x ".join(str(d) for d in cfg.get(model, {}).get("hidden_dims") or []) or "-"
+
+    return template.format(
+        task=cfg["task"],
+        algo=cfg["algo"],
+        num_envs=cfg["num_envs"],
+        env_steps=f"{env_steps:,}",
+        actor_hidden_dims=dims("actor"),
+        critic_hidden_dims=dims("critic"),
+    )
+
+
 def _check_notice(key: str, value: Any) -> str:
     if not isinstance(value, str):
         raise ConfigError(f"{key}={value!r} is invalid; expected a text")
     try:
-        value.format(task="task", algo="algo")
+        value.format(**dict.fromkeys(NOTICE_FIELDS, ""))
     except (KeyError, IndexError, ValueError) as err:
         raise ConfigError(
-            f"{key}={value!r} is invalid ({type(err).__name__}: {err}); only {{task}} and {{algo}} are "
-            f"filled in (write {{{{ and }}}} for literal braces)"
+            f"{key}={value!r} is invalid ({type(err).__name__}: {err}); the fields filled in are "
+            f"{', '.join('{' + f + '}' for f in NOTICE_FIELDS)} (write {{{{ and }}}} for literal braces)"
         ) from None
     return value
 
@@ -84,8 +103,11 @@ class RunOptions:
     # the folder itself is checked when the config path is built
     config_dir: str | None = option(rule=Text(optional=True), doc="a folder of config files that replaces configs/")
     notice: str | None = option(
-        rule=Check(_check_notice, "null or a text ({task} and {algo} are filled in)", optional=True),
-        doc="a line printed when the run starts",
+        rule=Check(
+            _check_notice, "null or a text ({task}, {algo}, {num_envs}, {env_steps}, ... filled in)", optional=True
+        ),
+        doc="a line printed when the run starts and ends, the run's values filled in for {task}, {algo}, "
+        "{num_envs}, {env_steps}, {actor_hidden_dims} and {critic_hidden_dims}",
     )
 
 

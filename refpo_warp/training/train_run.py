@@ -20,6 +20,7 @@ from typing import Any
 
 from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.config.resolve import Resolution
+from refpo_warp.config.run_options import notice_text
 from refpo_warp.config.saved import RUN_CONFIG, resolve_run
 from refpo_warp.config.yaml_files import dump_config
 from refpo_warp.evaluation.evaluate_policy import Evaluator, periodic_evaluator
@@ -130,11 +131,11 @@ def _train_and_evaluate(run: Resolution, env: Any, runner: Runner, run_dir: Path
     cfg = run.cfg
     rank = process_rank()
     total = num_iterations(cfg, rank.world_size)
-    notice = cfg["notice"].format(task=cfg["task"], algo=cfg["algo"]) if cfg["notice"] else None
-    if notice:
-        print(f"[refpo_warp] NOTE: {notice}", flush=True)
     ranks = f" x {rank.world_size} ranks" if rank.is_distributed else ""
     steps = total * env_steps_per_iteration(cfg, rank.world_size)
+    notice = notice_text(cfg["notice"], cfg, steps) if cfg["notice"] else None
+    if notice:
+        print(f"[refpo_warp] NOTE: {notice}", flush=True)
     print(
         f"[refpo_warp] {cfg['task']} / {cfg['algo']} on {env.device}: {env.num_envs} envs{ranks}, "
         f"iterations {start}..{total - 1} ({steps:,} env steps), run dir {run_dir}",

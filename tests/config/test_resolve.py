@@ -104,3 +104,14 @@ def test_env_options_need_no_prefix():
     assert cfg["env"] == {"size": 11, "max_episode_length": 50}
     cfg = resolve_config(["task=humanoid_root", "motion_file=clips/"], device_type="cpu")
     assert cfg["env"]["motion_file"] == "clips/"
+
+
+def test_a_notice_states_the_runs_own_sizes_and_refuses_unknown_fields():
+    from refpo_warp.config.run_options import notice_text
+
+    cfg = resolve_config(["task=humanoid_root", "algo=ppo", "num_envs=8", "actor.hidden_dims=[64]"], device_type="cpu")
+    text = notice_text(cfg["notice"], cfg, 4096)
+    assert "(8 envs, hidden layers 64 / 256 x 256 (actor / critic), 4,096 env steps)" in text
+    assert "algo=ppo device=cuda:0" in text
+    with pytest.raises(ConfigError, match=r"notice=.*KeyError.*\{num_envs\}"):
+        resolve_config(["task=gridworld", "algo=ppo", "notice=at {envs} envs"], device_type="cpu")
