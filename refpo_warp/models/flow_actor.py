@@ -113,11 +113,6 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
             Real(0, 1e6, lo_open=True),
             "multiplies the CFM loss, hence the ratio's log and the Reflow term (Puffer-PHC: 200 = 1 / (2 * 0.05^2))",
         )
-        obs_clip: float | None = option(
-            None,
-            Real(0, 1e6, lo_open=True, optional=True),
-            "clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); null: no clamp",
-        )
 
     def __init__(
         self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int, **options

@@ -108,11 +108,6 @@ class ReinFlowActor(SampledPolicyProtocol, nn.Module):
         action_clip: float = option(
             1.0, Real(0, 1e6, lo_open=True, fixed=False), "clamp of the final action (table (d) action range [-1, 1])"
         )
-        obs_clip: float | None = option(
-            None,
-            Real(0, 1e6, lo_open=True, optional=True),
-            "clamp the normalised observation to [-obs_clip, obs_clip]; null: no clamp",
-        )
 
     def __init__(
         self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str, output_dim: int, **options

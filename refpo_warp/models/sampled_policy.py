@@ -18,7 +18,7 @@ from torch import nn
 from refpo_warp.models.normalization import update_normalizer, with_clip
 from refpo_warp.models.stateless import Stateless
 from refpo_warp.utils.errors import ConfigError
-from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, mapping_or_none
+from refpo_warp.utils.option_rules import Check, Flag, Int, OneOf, Real, mapping_or_none
 from refpo_warp.utils.options import option
 from refpo_warp.utils.rsl_rl_options import HIDDEN_DIMS, Activation
 
@@ -34,6 +34,11 @@ class SampledPolicyOptions:
     )
     activation: str = option("elu", OneOf(Activation), "activation of the velocity MLP")
     obs_normalization: bool = option(False, Flag(), "normalise the observation (rsl_rl's EmpiricalNormalization)")
+    obs_clip: float | None = option(
+        None,
+        Real(0, 1e6, lo_open=True, optional=True),
+        "clamp the normalised observation to [-obs_clip, obs_clip] (Puffer-PHC: 10); null: no clamp",
+    )
     distribution_cfg: dict | None = option(
         None,
         Check(mapping_or_none, "a mapping (ignored)", optional=True),
