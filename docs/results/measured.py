@@ -129,27 +129,35 @@ def finetuning_gridworld_row() -> str | None:
     )
 
 
+def _return_range(folder: Path) -> str | None:
+    """'lo-hi (lo-hi at N = 1)' of the final returns of ``folder``'s seed runs, or None if it has none."""
+    runs = [_eval(p) for p in sorted(folder.glob("seed*/eval.json"))]
+    if not runs:
+        return None
+    multi = [r.get("N=10", r.get("mean_action", {})).get("return_mean") for r in runs]
+    one = [r["N=1"]["return_mean"] for r in runs if "N=1" in r]
+    return f"{min(multi):.0f}-{max(multi):.0f}" + (f" ({min(one):.0f}-{max(one):.0f} at N = 1)" if one else "")
+
+
 def finetuning_dmc_rows() -> list[str]:
-    """Per task: each fine-tuned method's final N = 10 (N = 1) return over its seeds."""
+    """Per task: each method's final N = 10 (N = 1) return over its seeds, fine-tuned and from scratch at the same
+    env steps."""
     out = []
+    scratch = RESULTS / "finetuning" / "scratch"
     for task_dir in sorted((RESULTS / "finetuning" / "dmc").glob("dmc_*")):
         cells = []
         for method in ("ppo", "refpo_onestep", "refpo"):
-            runs = [_eval(p) for p in sorted((task_dir / method).glob("seed*/eval.json"))]
-            if not runs:
-                continue
-            multi = [r.get("N=10", r.get("mean_action", {})).get("return_mean") for r in runs]
-            one = [r["N=1"]["return_mean"] for r in runs if "N=1" in r]
-            cells.append(
-                f"{method} {min(multi):.0f}-{max(multi):.0f}"
-                + (f" ({min(one):.0f}-{max(one):.0f} at N = 1)" if one else "")
-            )
+            tuned, fresh = _return_range(task_dir / method), _return_range(scratch / task_dir.name / method)
+            if tuned:
+                cells.append(f"{method} {tuned}" + (f", from scratch {fresh}" if fresh else ""))
         if cells:
             seeds = len(list((task_dir / "ppo").glob("seed*/eval.json")))
             out.append(
                 f"| {task_dir.name.removeprefix('dmc_')} fine-tuned from a half-return PPO's demonstrations, "
-                f"half the CPU profile's env steps, {seeds} seeds (`{task_dir.relative_to(README.parent)}`), "
-                f"final return range | " + "; ".join(cells) + " |"
+                f"half the CPU profile's env steps, {seeds} seeds (`{task_dir.relative_to(README.parent)}`; from "
+                f"scratch at the same env steps: `{scratch.relative_to(README.parent)}`), final return range | "
+                + "; ".join(cells)
+                + " |"
             )
     return out
 

@@ -1,6 +1,11 @@
-"""The GridWorld modes table of docs/results/finetuning/README.md, from the study's files (gridworld.sh).
+"""The tables of docs/results/finetuning/README.md, from the study's files (gridworld.sh, dmc.sh).
 
     python docs/results/finetuning/tables.py [--runs runs/finetuning/gridworld] [--keep]
+    python docs/results/finetuning/tables.py --dmc
+
+``--dmc``: keeps the DMC runs' small files (from runs/finetuning/dmc and runs/sweeps, where present) in dmc/ and
+scratch/, writes the DMC table (fine-tuned and from-scratch runs at the same env steps, mean with a 95 % stratified
+bootstrap interval over seeds) and dmc_curves.png (their evaluation curves side by side).
 
 Reads each run's eval.json (the dataset's own numbers from the clone's eval.json), writes the table between the
 README's markers, and with ``--keep`` copies each run's small files (config.yaml, eval.json, progress.jsonl) and the
@@ -29,12 +34,23 @@ DMC_BEGIN, DMC_END = (
 )
 DMC_KEPT = HERE / "dmc"
 DMC_TASKS = ("dmc_point_mass", "dmc_reacher_easy")
-DMC_METHODS = (
-    ("refpo", "ReFPO from the flow clone"),
-    ("refpo_onestep", "refpo_onestep from the flow clone"),
-    ("ppo", "PPO from the Gaussian clone"),
+SCRATCH_KEPT = HERE / "scratch"
+DMC_METHODS = (  # (sweep label, the method it varies, name); the variants are the remedies tried for ReFPO's collapse
+    ("refpo", "refpo", "ReFPO"),
+    ("refpo_action_noise_std0.02", "refpo", "ReFPO, action noise 0.02"),
+    ("refpo_action_noise_std0.05", "refpo", "ReFPO, action noise 0.05"),
+    ("refpo_lr1e-4", "refpo", "ReFPO, learning rate 1e-4"),
+    ("refpo_adaptive", "refpo", "ReFPO, adaptive lambda"),
+    ("refpo_aspo", "refpo", "ReFPO, ASPO trust region"),
+    ("refpo_onestep", "refpo_onestep", "refpo_onestep"),
+    ("refpo_onestep_action_noise_std0.02", "refpo_onestep", "refpo_onestep, action noise 0.02"),
+    ("refpo_onestep_action_noise_std0.05", "refpo_onestep", "refpo_onestep, action noise 0.05"),
+    ("ppo", "ppo", "PPO"),
+    ("ppo_lr1e-4", "ppo", "PPO, learning rate 1e-4"),
 )
-FROM_SCRATCH = HERE.parent / "cpu_dmc" / "per_task.csv"  # the committed from-scratch runs (1M env steps)
+DMC_SWEEPS = ("finetune_{}", "finetune_floor_{}", "finetune_remedies_{}")  # fine-tuning sweeps, by task name
+DMC_FIGURE, REMEDIES_FIGURE = HERE / "dmc_curves.png", HERE / "dmc_remedies.png"
+FROM_SCRATCH = HERE.parent / "cpu_dmc" / "per_task.csv"  # PPO's final return at the full CPU profile (1M env steps)
 ROWS = [  # (run folder, what it is)
     ("clone_flow", "flow clone (refpo pretrain algo=refpo)"),
     ("clone_gauss", "Gaussian clone (refpo pretrain algo=ppo)"),
@@ -118,30 +134,47 @@ def table(source: Path, runs: Path) -> str:
     return "\n".join(lines) + "\n" + "\n".join(notes)
 
 
-def _returns(path: Path) -> str:
+def _final(path: Path) -> tuple[float, float | None]:
+    """(N = 10 or the Gaussian's mean-action return, N = 1 return or None) of an eval.json."""
     results = json.loads(path.read_text())["results"]
     if "mean_action" in results:
-        return f"{results['mean_action']['return_mean']:.0f} (mean action)"
-    return f"{results['N=10']['return_mean']:.0f} / {results['N=1']['return_mean']:.0f}"
+        return results["mean_action"]["return_mean"], None
+    return results["N=10"]["return_mean"], results["N=1"]["return_mean"]
 
 
-def first_reaching(run: Path, value: float) -> str:
-    """Env steps at the first periodic evaluation (N = 10, or the mean action) whose return reaches ``value``."""
-    for line in (run / "progress.jsonl").read_text().splitlines():
-        row = json.loads(line)
-        got = row.get("eval/return_N10", row.get("eval/return"))
-        if got is not None and got >= value:
-            return f"{row['env_steps']:,}"
-    return "not reached"
+def _returns(path: Path) -> str:
+    multi, one = _final(path)
+    return f"{multi:.0f} (mean action)" if one is None else f"{multi:.0f} / {one:.0f}"
+
+
+def _curve(run: Path) -> tuple[list[float], list[float]]:
+    """(env steps, return) of the periodic evaluations: N = 10 for a flow, the mean action for PPO."""
+    from refpo_warp.evaluation.curves import series
+    from refpo_warp.runner.progress import read_rows
+
+    rows = read_rows(run)
+    steps, values = series(rows, "eval/return_N10")
+    return (steps, values) if steps else series(rows, "eval/return")
+
+
+def first_reaching(run: Path, value: float) -> int | None:
+    """Env steps at the first periodic evaluation whose return (N = 10, or the mean action) reaches ``value``."""
+    return next((s for s, v in zip(*_curve(run)) if v >= value), None)
 
 
 def keep_dmc(runs: Path, sweeps: Path) -> None:
-    """The DMC study's small files: each stage's and each finished fine-tuning run's config, eval.json, progress."""
+    """The DMC study's small files (each stage's and each finished run's config, eval.json and progress rows): the
+    fine-tuning sweeps' (finetune_<task>, finetune_floor_<task>) into dmc/, finetune_scratch's into scratch/."""
     for task in DMC_TASKS:
         stages = [(runs / task / name, DMC_KEPT / task / name) for name in ("demonstrator", "clone_refpo", "clone_ppo")]
+        for sweep, kept in ((f"finetune_{task[4:]}", DMC_KEPT), (f"finetune_floor_{task[4:]}", DMC_KEPT)):
+            stages += [
+                (run, kept / task / run.parent.name / run.name)
+                for run in sorted((sweeps / sweep / task).glob("*/seed*"))
+            ]
         stages += [
-            (run, DMC_KEPT / task / run.parent.name / run.name)
-            for run in sorted((sweeps / f"finetune_{task[4:]}" / task).glob("*/seed*"))
+            (run, SCRATCH_KEPT / task / run.parent.name / run.name)
+            for run in sorted((sweeps / "finetune_scratch" / task).glob("*/seed*"))
         ]
         for src, dst in stages:
             if (src / "eval.json").exists():
@@ -154,50 +187,135 @@ def keep_dmc(runs: Path, sweeps: Path) -> None:
             shutil.copyfile(runs / task / "data" / "metadata.json", DMC_KEPT / task / "data" / "metadata.json")
 
 
-def dmc_table() -> str:
+def _interval(values: list[float]) -> str:
+    """Mean [95 % stratified-bootstrap interval] over seeds (rliable), then each seed's value."""
+    import numpy as np
+
+    from refpo_warp.sweeps.intervals import aggregate
+
+    est = aggregate({"x": np.asarray(values, float).reshape(-1, 1)})["x"]["mean"]
+    return f"{est.point:.0f} [{est.low:.0f}, {est.high:.0f}] ({', '.join(f'{v:.0f}' for v in values)})"
+
+
+def _steps(values: list[int | None]) -> str:
+    return ", ".join("-" if v is None else f"{v / 1000:.0f}k" for v in values)
+
+
+def _groups(task: str):
+    """(start, label, base, what, seed runs) of the task's fine-tuned and from-scratch groups, in the table's order."""
+    for label, base, what in DMC_METHODS:
+        start = "Gaussian clone" if base == "ppo" else "flow clone"
+        runs = sorted((DMC_KEPT / task / label).glob("seed*/eval.json"))
+        if runs:
+            yield f"the {start}", label, base, what, [r.parent for r in runs]
+        scratch = sorted((SCRATCH_KEPT / task / label).glob("seed*/eval.json"))
+        if scratch:
+            yield "scratch", label, base, what, [r.parent for r in scratch]
+
+
+def _targets(task: str) -> tuple[float | None, float]:
+    """The data's return and PPO's from-scratch final return at the full CPU profile (cpu_dmc)."""
     import csv
 
     scratch = {(r["task"], r["label"]): r for r in csv.DictReader(FROM_SCRATCH.open())}
-    header = "| task | policy | env steps | return N = 10 / N = 1 | env steps to the data's return / to PPO's final |"
-    lines = [header, "|---|---|---|---|---|"]
+    clone = DMC_KEPT / task / "clone_refpo" / "eval.json"
+    data = json.loads(clone.read_text())["dataset"]["return_mean"] if clone.exists() else None
+    return data, float(scratch[(task, "ppo")]["return_multi_mean"])
+
+
+def dmc_table() -> str:
+    header = (
+        "| task | method, from | return N = 10 (PPO: mean action), mean [95 % CI] (seeds) | N = 1 | "
+        "env steps to the data's return | to PPO's full-profile final |"
+    )
+    lines = [header, "|---|---|---|---|---|---|"]
     for task in DMC_TASKS:
         root = DMC_KEPT / task
         if not (root / "data" / "metadata.json").exists():
-            lines.append(f"| {task} | not run yet | | | |")
+            lines.append(f"| {task} | not run yet | | | | |")
             continue
         meta = json.loads((root / "data" / "metadata.json").read_text())["refpo"]
-        data = (
-            json.loads((root / "clone_refpo" / "eval.json").read_text())["dataset"]
-            if (root / "clone_refpo" / "eval.json").exists()
-            else None
-        )
+        data, ppo_final = _targets(task)
         demo = Path(meta["policy"]["checkpoint"]).stem
-        shown = f"{data['return_mean']:.0f} over {data['episodes']} episodes" if data else "-"
         lines.append(
-            f"| {task} | demonstrations: PPO's {demo} (mean action + noise {meta['policy']['action_noise_std']:g}) "
-            f"| - | {shown} | |"
+            f"| {task} | demonstrations: PPO's {demo}, mean action + noise {meta['policy']['action_noise_std']:g} "
+            f"| {data:.0f} over the dataset's episodes | | | |"
         )
-        ppo_final = float(scratch[(task, "ppo")]["return_multi_mean"]) if (task, "ppo") in scratch else float("inf")
-        for name, what in (("clone_refpo", "flow clone"), ("clone_ppo", "Gaussian clone")):
+        for name, what in (("clone_refpo", "flow clone (0 env steps)"), ("clone_ppo", "Gaussian clone (0 env steps)")):
             if (root / name / "eval.json").exists():
-                lines.append(f"| {task} | {what} | 0 | {_returns(root / name / 'eval.json')} | |")
-        for label, what in DMC_METHODS:
-            for run in sorted((root / label).glob("seed*")):
-                out = json.loads((run / "eval.json").read_text())
-                reach = (
-                    f"{first_reaching(run, data['return_mean']) if data else '-'} / {first_reaching(run, ppo_final)}"
-                )
-                lines.append(
-                    f"| {task} | {what}, {run.name} | {out['env_steps']:,} | {_returns(run / 'eval.json')} | {reach} |"
-                )
-            ref = scratch.get((task, label))
-            if ref is not None:
-                one = f" / {float(ref['return_1_mean']):.0f}" if ref["return_1_mean"] else ""
-                lines.append(
-                    f"| {task} | {label} from scratch (cpu_dmc, mean of 3 seeds) | 1,013,760 | "
-                    f"{float(ref['return_multi_mean']):.0f}{one} | |"
-                )
+                multi, one = _final(root / name / "eval.json")
+                lines.append(f"| {task} | {what} | {multi:.0f} | {'-' if one is None else f'{one:.0f}'} | | |")
+        for start, _, _, what, runs in _groups(task):
+            finals = [_final(run / "eval.json") for run in runs]
+            one = [f[1] for f in finals if f[1] is not None]
+            reach = [first_reaching(run, data) for run in runs], [first_reaching(run, ppo_final) for run in runs]
+            lines.append(
+                f"| {task} | {what}, from {start} | {_interval([f[0] for f in finals])} | "
+                f"{_interval(one) if one else '-'} | {_steps(reach[0])} | {_steps(reach[1])} |"
+            )
     return "\n".join(lines) + "\n"
+
+
+def dmc_curves(path: Path, remedies: bool = False) -> Path | None:
+    """The periodic evaluation return over env steps, seeds' mean with their range shaded, the data's return and
+    PPO's full-profile final as dotted lines. One panel per (task, method): fine-tuned from the clone (solid) beside
+    from scratch (dashed); with ``remedies``, one panel per task with a variant, ReFPO's fine-tuning beside each
+    variant tried against its collapse."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib import ticker
+
+    from refpo_warp.evaluation.curves import seed_stats
+    from refpo_warp.utils.atomic_files import save_figure
+
+    names = {label: what for label, _, what in DMC_METHODS}
+    if remedies:
+        panels = [(task, [g for g in _groups(task) if g[0] != "scratch" and g[2] == "refpo"]) for task in DMC_TASKS]
+        panels = [
+            (task, groups, "ReFPO from the flow clone, remedies tried") for task, groups in panels if len(groups) > 1
+        ]
+    else:
+        panels = [
+            (task, [g for g in _groups(task) if g[1] == base], names[base])
+            for task in DMC_TASKS
+            for base in ("refpo", "refpo_onestep", "ppo")
+        ]
+    if not panels:
+        return None
+    cols = 3 if not remedies else len(panels)
+    rows = -(-len(panels) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.4 * cols * (1.4 if remedies else 1), 3.3 * rows), squeeze=False)
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, (task, groups, title) in zip(axes.flat, panels):
+        data, ppo_final = _targets(task)
+        for i, (start, _, base, what, runs) in enumerate(groups):
+            curves = [_curve(run) for run in runs]
+            if start != "scratch":  # the clone's own evaluation at 0 env steps starts the curve
+                first = _final(DMC_KEPT / task / ("clone_ppo" if base == "ppo" else "clone_refpo") / "eval.json")[0]
+                curves = [([0, *x], [first, *y]) for x, y in curves]
+            steps, mean, low, high = seed_stats(curves)
+            color = "0.35" if start == "scratch" else colors[i % len(colors)]
+            name = f"{what}, from {start}" if remedies or start == "scratch" else f"from {start}"
+            ax.plot(steps, mean, color=color, ls="--" if start == "scratch" else "-", lw=1.6, label=name)
+            ax.fill_between(steps, low, high, color=color, alpha=0.1, lw=0)
+        if data is not None:
+            ax.axhline(data, color="tab:green", ls=":", lw=1, label="the data's return")
+        ax.axhline(ppo_final, color="black", ls=":", lw=1, label="PPO from scratch, full profile")
+        ax.set_title(f"{task}: {title}", fontsize=9)
+        ax.set_xlabel("env steps")
+        ax.xaxis.set_major_formatter(ticker.FuncFormatter(lambda x, _: f"{x / 1000:.0f}k"))
+        ax.set_ylim(0, 1000)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=6.5, loc="best")
+    for ax in axes.flat[len(panels) :]:
+        ax.set_visible(False)
+    axes[0, 0].set_ylabel("return (N = 10; PPO: mean action)")
+    fig.tight_layout()
+    save_figure(fig, path, dpi=120)
+    plt.close(fig)
+    return path
 
 
 def write_between(begin: str, end: str, text: str) -> None:
@@ -219,6 +337,7 @@ def main() -> None:
         text = dmc_table()
         write_between(DMC_BEGIN, DMC_END, text)
         print(text)
+        print(dmc_curves(DMC_FIGURE), dmc_curves(REMEDIES_FIGURE, remedies=True))
         return
     if args.keep:
         keep(args.runs)
