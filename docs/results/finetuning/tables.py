@@ -164,13 +164,13 @@ def first_reaching(run: Path, value: float) -> int | None:
 
 def keep_dmc(runs: Path, sweeps: Path) -> None:
     """The DMC study's small files (each stage's and each finished run's config, eval.json and progress rows): the
-    fine-tuning sweeps' (finetune_<task>, finetune_floor_<task>) into dmc/, finetune_scratch's into scratch/."""
+    fine-tuning sweeps' (DMC_SWEEPS) into dmc/, finetune_scratch's into scratch/."""
     for task in DMC_TASKS:
         stages = [(runs / task / name, DMC_KEPT / task / name) for name in ("demonstrator", "clone_refpo", "clone_ppo")]
-        for sweep, kept in ((f"finetune_{task[4:]}", DMC_KEPT), (f"finetune_floor_{task[4:]}", DMC_KEPT)):
+        for sweep in DMC_SWEEPS:
             stages += [
-                (run, kept / task / run.parent.name / run.name)
-                for run in sorted((sweeps / sweep / task).glob("*/seed*"))
+                (run, DMC_KEPT / task / run.parent.name / run.name)
+                for run in sorted((sweeps / sweep.format(task[4:]) / task).glob("*/seed*"))
             ]
         stages += [
             (run, SCRATCH_KEPT / task / run.parent.name / run.name)
@@ -286,7 +286,7 @@ def dmc_curves(path: Path, remedies: bool = False) -> Path | None:
         return None
     cols = 3 if not remedies else len(panels)
     rows = -(-len(panels) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.4 * cols * (1.4 if remedies else 1), 3.3 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.4 * cols * (2.0 if remedies else 1), 3.3 * rows), squeeze=False)
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for ax, (task, groups, title) in zip(axes.flat, panels):
         data, ppo_final = _targets(task)
@@ -308,7 +308,10 @@ def dmc_curves(path: Path, remedies: bool = False) -> Path | None:
         ax.xaxis.set_major_formatter(ticker.FuncFormatter(lambda x, _: f"{x / 1000:.0f}k"))
         ax.set_ylim(0, 1000)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6.5, loc="best")
+        if remedies:  # many lines: the legend beside the panel
+            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+        else:
+            ax.legend(fontsize=6.5, loc="best")
     for ax in axes.flat[len(panels) :]:
         ax.set_visible(False)
     axes[0, 0].set_ylabel("return (N = 10; PPO: mean action)")
