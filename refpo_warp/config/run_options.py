@@ -100,6 +100,10 @@ class RunOptions:
     # the run dir itself is checked when training starts (training/init_from.py)
     init_from: str | None = option(rule=Text(optional=True), doc="a run dir whose weights start this run")
     critic_warmup_iterations: int = option(rule=Int(0, 10**8), doc="iterations that train the critic alone first")
+    clone_normalizer: str = option(
+        rule=OneOf(("keep", "update")),
+        doc="with init_from: the observation normalisers keep the data's statistics (as DPPO fine-tunes) or update",
+    )
     # the folder itself is checked when the config path is built
     config_dir: str | None = option(rule=Text(optional=True), doc="a folder of config files that replaces configs/")
     notice: str | None = option(

@@ -44,6 +44,9 @@ REPORT_KEYS = ("curve_methods", "ratio_tasks", "ratio_methods")
 MANAGED = {"task": "tasks=", "algo": "methods=", "seed": "seeds=", "run_dir": "out=", "resume": None}
 # Config keys that do not change what a run computes: a finished run whose config differs only here is kept.
 FINGERPRINT_IGNORED = ("device", "resume", "run_dir", "verbose", "config_dir")
+# Options that act only with init_from: without it a run computes the same whatever they say (and a run saved before
+# one of them existed stays finished).
+FINE_TUNING_ONLY = ("critic_warmup_iterations", "clone_normalizer")
 
 
 @dataclass(frozen=True)
@@ -311,7 +314,8 @@ def _make_run(sweep: Sweep, task: str, method: Method, seed: int) -> Run:
 
 def fingerprint(cfg: dict) -> str:
     """A hash of a resolved run config, without the keys that do not change what the run computes."""
-    data = yaml.safe_load(yaml.safe_dump({k: v for k, v in cfg.items() if k not in FINGERPRINT_IGNORED}))
+    ignored = FINGERPRINT_IGNORED + (() if cfg.get("init_from") else FINE_TUNING_ONLY)
+    data = yaml.safe_load(yaml.safe_dump({k: v for k, v in cfg.items() if k not in ignored}))
     return hashlib.sha1(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 

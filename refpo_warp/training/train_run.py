@@ -33,7 +33,7 @@ from refpo_warp.runner.distributed import process_rank
 from refpo_warp.runner.progress import progress_path, truncate_after
 from refpo_warp.runner.run_dir import RUN_FILES, check_new_run_dir, check_writable, run_lock
 from refpo_warp.runner.runner import Runner
-from refpo_warp.training.critic_warmup import actor_frozen
+from refpo_warp.training.fine_tuning import actor_frozen, clone_statistics_kept
 from refpo_warp.training.init_from import load_init_from
 from refpo_warp.utils.atomic_files import remove_stale_temp_files
 from refpo_warp.utils.errors import ConfigError, NonFiniteLossError, tag_run_dir
@@ -79,7 +79,9 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
         elif cfg["init_from"]:  # a cloned actor that does not fit is refused here, before anything is written
             clone, warmup = load_init_from(runner, cfg, run.task), cfg["critic_warmup_iterations"]
             critic = f"; iterations 0..{warmup - 1} train the critic alone (critic_warmup_iterations)" if warmup else ""
-            print(f"[refpo_warp] starting from the cloned actor {clone}{critic}", flush=True)
+            kept = "; the observation normalisers keep the data's statistics (clone_normalizer=keep)"
+            kept = kept if cfg["clone_normalizer"] == "keep" else ""
+            print(f"[refpo_warp] starting from the cloned actor {clone}{critic}{kept}", flush=True)
         # --- everything below writes (rank 0 only); everything above could refuse the run without touching the disk
         if rank.is_main:
             run_dir.mkdir(parents=True, exist_ok=True)
@@ -150,7 +152,11 @@ def _train_and_evaluate(run: Resolution, env: Any, runner: Runner, run_dir: Path
     if total > start:
         try:
             warmup = int(cfg["critic_warmup_iterations"]) if cfg["init_from"] else 0
-            _learn_in_chunks(runner, start, total, interval, evaluate, cfg["runner"]["init_at_random_ep_len"], warmup)
+            kept = cfg["init_from"] and cfg["clone_normalizer"] == "keep"
+            with clone_statistics_kept(runner.alg) if kept else contextlib.nullcontext():
+                _learn_in_chunks(
+                    runner, start, total, interval, evaluate, cfg["runner"]["init_at_random_ep_len"], warmup
+                )
         except NonFiniteLossError as err:  # the CLI's message says what survives and how to go on
             err.checkpoint, err.run_dir = latest_checkpoint(run_dir), run_dir
             err.learning_rate = float(runner.alg.learning_rate)

@@ -24,7 +24,7 @@ from reliability_helpers import assert_refused, call_tool, tree_hash
 USAGE, BAD_FILE = 2, 4
 # The reliability tests' tiny GridWorld run, evaluated at two flow step counts and with the default checkpoints.
 TINY = [o for o in TINY_RUN if not o.startswith(("eval.flow_steps=", "runner.save_interval="))]
-TINY.append("eval.flow_steps=[1, 2]")
+TINY += ["eval.flow_steps=[1, 2]", "actor.obs_normalization=true", "critic.obs_normalization=true"]
 PRETRAIN = [*TINY, "pretrain.epochs=3", "pretrain.batch_size=64"]
 
 
@@ -119,6 +119,32 @@ def test_fine_tuning_starts_from_the_clone_and_keeps_it_through_the_warmup(workf
     assert any(not torch.equal(warm["critic_state_dict"][k], v) for k, v in clone["critic_state_dict"].items())
     rows = [json.loads(line) for line in (run / "progress.jsonl").read_text().splitlines()]
     assert rows[0]["Flow/clip_fraction"] == 0.0
+    # clone_normalizer=keep (the default): both normalisers hold the data's statistics after the warm-up too
+    assert "keep the data's statistics" in proc.stdout
+    for model in ("actor_state_dict", "critic_state_dict"):
+        kept = {k: v for k, v in clone[model].items() if "obs_normalizer" in k}
+        assert kept and all(torch.equal(moved[model][k], v) for k, v in kept.items()), model
+
+
+def test_fine_tuning_may_update_the_normalisers_from_the_rollouts(workflow, tmp_path):
+    clone = torch.load(workflow / "clone" / "model_0.pt", weights_only=True)
+    run = tmp_path / "tuned"
+    proc = call_tool(
+        "train",
+        *TINY,
+        "algo=refpo",
+        f"init_from={workflow / 'clone'}",
+        "clone_normalizer=update",
+        "max_iterations=1",
+        "critic_warmup_iterations=0",
+        "eval.at_end=false",
+        f"run_dir={run}",
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    moved = torch.load(run / "model_0.pt", weights_only=True)
+    for model in ("actor_state_dict", "critic_state_dict"):
+        counts = [k for k in clone[model] if k.endswith("obs_normalizer.count")]
+        assert counts and all(moved[model][k] > clone[model][k] for k in counts), model
 
 
 @pytest.mark.parametrize(
