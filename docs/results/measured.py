@@ -143,19 +143,24 @@ def finetuning_dmc_rows() -> list[str]:
     """Per task: each method's final N = 10 (N = 1) return over its seeds, fine-tuned and from scratch at the same
     env steps."""
     out = []
-    scratch = RESULTS / "finetuning" / "scratch"
+    scratch, updated = RESULTS / "finetuning" / "scratch", RESULTS / "finetuning" / "normalizers_updated"
     for task_dir in sorted((RESULTS / "finetuning" / "dmc").glob("dmc_*")):
         cells = []
         for method in ("ppo", "refpo_onestep", "refpo"):
-            tuned, fresh = _return_range(task_dir / method), _return_range(scratch / task_dir.name / method)
+            tuned = _return_range(task_dir / method)
+            others = [
+                (what, _return_range(folder / task_dir.name / method))
+                for what, folder in (("normalisers updated", updated), ("from scratch", scratch))
+            ]
             if tuned:
-                cells.append(f"{method} {tuned}" + (f", from scratch {fresh}" if fresh else ""))
+                cells.append(f"{method} {tuned}" + "".join(f", {what} {got}" for what, got in others if got))
         if cells:
             seeds = len(list((task_dir / "ppo").glob("seed*/eval.json")))
             out.append(
                 f"| {task_dir.name.removeprefix('dmc_')} fine-tuned from a half-return PPO's demonstrations, "
-                f"half the CPU profile's env steps, {seeds} seeds (`{task_dir.relative_to(README.parent)}`; from "
-                f"scratch at the same env steps: `{scratch.relative_to(README.parent)}`), final return range | "
+                f"half the CPU profile's env steps, {seeds} seeds (`{task_dir.relative_to(README.parent)}`; with the "
+                f"normalisers updated from the rollouts: `{updated.relative_to(README.parent)}`; from scratch at the "
+                f"same env steps: `{scratch.relative_to(README.parent)}`), final return range | "
                 + "; ".join(cells)
                 + " |"
             )

@@ -35,3 +35,12 @@ for task in ${TASKS[@]}; do
   done
   refpo sweep finetune_${task#dmc_} --jobs 1
 done
+# The comparison runs of README.md, each resumable the same way (skipped where finished), after the loop above:
+#   the normalisers following the rollouts (the behaviour before clone_normalizer=keep), per task:
+#     refpo sweep finetune_<task> clone_normalizer=update out=runs/sweeps/finetune_normupdate_<task> --jobs 2
+#   the remedies tried against ReFPO's collapse with update, on point_mass:
+#     refpo sweep finetune_point_mass 'methods=[refpo,refpo_onestep]' 'actor.action_noise_std=[0.02,0.05]' \
+#       clone_normalizer=update out=runs/sweeps/finetune_floor_point_mass --jobs 2
+#     refpo sweep docs/results/finetuning/remedies.yaml --jobs 2
+#   from scratch at the same env steps: refpo sweep finetune_scratch --jobs 2
+# then: python docs/results/finetuning/tables.py --dmc (the table, dmc_curves.png, dmc_remedies.png)

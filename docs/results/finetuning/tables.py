@@ -32,9 +32,10 @@ DMC_BEGIN, DMC_END = (
     "<!-- dmc table: begin (python docs/results/finetuning/tables.py --dmc) -->",
     "<!-- dmc table: end -->",
 )
-DMC_KEPT = HERE / "dmc"
+DMC_KEPT = HERE / "dmc"  # the demonstrator, data and clones, and the fine-tuning runs (clone_normalizer=keep)
+UPDATED_KEPT = HERE / "normalizers_updated"  # fine-tuning runs whose normalisers followed the rollouts, remedies tried
+SCRATCH_KEPT = HERE / "scratch"  # from scratch at the fine-tuning runs' env steps
 DMC_TASKS = ("dmc_point_mass", "dmc_reacher_easy")
-SCRATCH_KEPT = HERE / "scratch"
 DMC_METHODS = (  # (sweep label, the method it varies, name); the variants are the remedies tried for ReFPO's collapse
     ("refpo", "refpo", "ReFPO"),
     ("refpo_action_noise_std0.02", "refpo", "ReFPO, action noise 0.02"),
@@ -48,7 +49,16 @@ DMC_METHODS = (  # (sweep label, the method it varies, name); the variants are t
     ("ppo", "ppo", "PPO"),
     ("ppo_lr1e-4", "ppo", "PPO, learning rate 1e-4"),
 )
-DMC_SWEEPS = ("finetune_{}", "finetune_floor_{}", "finetune_remedies_{}")  # fine-tuning sweeps, by task name
+# (where the runs are kept, the sweeps they come from by task name, how they started)
+DMC_SOURCES = (
+    (DMC_KEPT, ("finetune_{}", "finetune_remedies_keep_{}"), "the {clone}"),
+    (
+        UPDATED_KEPT,
+        ("finetune_normupdate_{}", "finetune_floor_{}", "finetune_remedies_{}"),
+        "the {clone}, normalisers updated",
+    ),
+    (SCRATCH_KEPT, ("finetune_scratch",), "scratch"),
+)
 DMC_FIGURE, REMEDIES_FIGURE = HERE / "dmc_curves.png", HERE / "dmc_remedies.png"
 FROM_SCRATCH = HERE.parent / "cpu_dmc" / "per_task.csv"  # PPO's final return at the full CPU profile (1M env steps)
 ROWS = [  # (run folder, what it is)
@@ -163,19 +173,16 @@ def first_reaching(run: Path, value: float) -> int | None:
 
 
 def keep_dmc(runs: Path, sweeps: Path) -> None:
-    """The DMC study's small files (each stage's and each finished run's config, eval.json and progress rows): the
-    fine-tuning sweeps' (DMC_SWEEPS) into dmc/, finetune_scratch's into scratch/."""
+    """The DMC study's small files (each stage's and each finished run's config, eval.json and progress rows), from
+    runs/finetuning/dmc and the sweeps of DMC_SOURCES into their folders here."""
     for task in DMC_TASKS:
         stages = [(runs / task / name, DMC_KEPT / task / name) for name in ("demonstrator", "clone_refpo", "clone_ppo")]
-        for sweep in DMC_SWEEPS:
-            stages += [
-                (run, DMC_KEPT / task / run.parent.name / run.name)
-                for run in sorted((sweeps / sweep.format(task[4:]) / task).glob("*/seed*"))
-            ]
-        stages += [
-            (run, SCRATCH_KEPT / task / run.parent.name / run.name)
-            for run in sorted((sweeps / "finetune_scratch" / task).glob("*/seed*"))
-        ]
+        for kept, names, _ in DMC_SOURCES:
+            for name in names:
+                stages += [
+                    (run, kept / task / run.parent.name / run.name)
+                    for run in sorted((sweeps / name.format(task[4:]) / task).glob("*/seed*"))
+                ]
         for src, dst in stages:
             if (src / "eval.json").exists():
                 dst.mkdir(parents=True, exist_ok=True)
@@ -202,15 +209,14 @@ def _steps(values: list[int | None]) -> str:
 
 
 def _groups(task: str):
-    """(start, label, base, what, seed runs) of the task's fine-tuned and from-scratch groups, in the table's order."""
+    """(start, label, base, what, seed runs) of the task's fine-tuned and from-scratch groups, in the table's order:
+    per method, its runs from the clone, with the normalisers updated, its variants, from scratch."""
     for label, base, what in DMC_METHODS:
-        start = "Gaussian clone" if base == "ppo" else "flow clone"
-        runs = sorted((DMC_KEPT / task / label).glob("seed*/eval.json"))
-        if runs:
-            yield f"the {start}", label, base, what, [r.parent for r in runs]
-        scratch = sorted((SCRATCH_KEPT / task / label).glob("seed*/eval.json"))
-        if scratch:
-            yield "scratch", label, base, what, [r.parent for r in scratch]
+        clone = "Gaussian clone" if base == "ppo" else "flow clone"
+        for kept, _, start in DMC_SOURCES:
+            runs = sorted((kept / task / label).glob("seed*/eval.json"))
+            if runs:
+                yield start.format(clone=clone), label, base, what, [r.parent for r in runs]
 
 
 def _targets(task: str) -> tuple[float | None, float]:
