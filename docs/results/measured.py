@@ -155,7 +155,8 @@ def finetuning_dmc_rows() -> list[str]:
             if tuned:
                 cells.append(f"{method} {tuned}" + "".join(f", {what} {got}" for what, got in others if got))
         if cells:
-            seeds = len(list((task_dir / "ppo").glob("seed*/eval.json")))
+            counts = {len(list((task_dir / m).glob("seed*/eval.json"))) for m in ("ppo", "refpo_onestep", "refpo")}
+            seeds = "-".join(str(n) for n in sorted(counts - {0}))
             out.append(
                 f"| {task_dir.name.removeprefix('dmc_')} fine-tuned from a half-return PPO's demonstrations, "
                 f"half the CPU profile's env steps, {seeds} seeds (`{task_dir.relative_to(README.parent)}`; with the "

@@ -42,5 +42,12 @@ done
 #     refpo sweep finetune_point_mass 'methods=[refpo,refpo_onestep]' 'actor.action_noise_std=[0.02,0.05]' \
 #       clone_normalizer=update out=runs/sweeps/finetune_floor_point_mass --jobs 2
 #     refpo sweep docs/results/finetuning/remedies.yaml --jobs 2
+#   the remedies with the normalisers held, and the one that held on fresh seeds and on reacher_easy:
+#     refpo sweep docs/results/finetuning/remedies.yaml 'methods=[refpo_adaptive,refpo_aspo]' clone_normalizer=keep \
+#       out=runs/sweeps/finetune_remedies_keep_point_mass --jobs 2
+#     refpo sweep docs/results/finetuning/remedies.yaml 'methods=[refpo_adaptive]' clone_normalizer=keep \
+#       'seeds=[4,5,6]' out=runs/sweeps/finetune_remedies_keep_point_mass --jobs 2
+#     refpo sweep finetune_point_mass 'methods=[refpo,ppo]' 'seeds=[4,5,6]' --jobs 2
+#     refpo sweep docs/results/finetuning/adaptive_reacher.yaml --jobs 2
 #   from scratch at the same env steps: refpo sweep finetune_scratch --jobs 2
 # then: python docs/results/finetuning/tables.py --dmc (the table, dmc_curves.png, dmc_remedies.png)
