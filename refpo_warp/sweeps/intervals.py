@@ -37,11 +37,18 @@ def _rliable():
 
 
 @contextlib.contextmanager
-def _quiet() -> Iterator[None]:
-    """rliable hands arch a seeded ``RandomState`` (reproducible intervals), which arch 7 warns is deprecated."""
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", category=FutureWarning, module="arch")
-        yield
+def _quiet(seed: int) -> Iterator[None]:
+    """Reproducible intervals: rliable's stratified bootstrap draws its resamples from NumPy's global generator
+    (``StratifiedBootstrap.update_indices``), not from the seeded ``RandomState`` it hands arch (which arch 7 warns
+    is deprecated), so the global generator is seeded here and restored afterwards."""
+    state = np.random.get_state()
+    np.random.seed(seed)
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", category=FutureWarning, module="arch")
+            yield
+    finally:
+        np.random.set_state(state)
 
 
 def _check(scores: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -62,7 +69,7 @@ def aggregate(scores: dict[str, np.ndarray], seed: int = 0, reps: int = REPS) ->
     def both(matrix: np.ndarray) -> np.ndarray:
         return np.array([metrics.aggregate_mean(matrix), metrics.aggregate_iqm(matrix)])
 
-    with _quiet():
+    with _quiet(seed):
         points, intervals = library.get_interval_estimates(
             scores, both, reps=reps, random_state=np.random.RandomState(seed)
         )
@@ -82,7 +89,7 @@ def improvement(x: np.ndarray, y: np.ndarray, seed: int = 0, reps: int = REPS) -
     pair = _check({"x": x, "y": y})
     if pair["x"].shape[1] != pair["y"].shape[1]:
         raise ValueError("x and y must have the same tasks (columns)")
-    with _quiet():
+    with _quiet(seed):
         points, intervals = library.get_interval_estimates(
             {"xy": (pair["x"], pair["y"])},
             metrics.probability_of_improvement,

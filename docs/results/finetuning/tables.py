@@ -290,7 +290,7 @@ def dmc_curves(path: Path, remedies: bool = False) -> Path | None:
         ]
     if not panels:
         return None
-    cols = 3 if not remedies else len(panels)
+    cols = 1 if remedies else 3
     rows = -(-len(panels) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4.4 * cols * (2.0 if remedies else 1), 3.3 * rows), squeeze=False)
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
