@@ -96,21 +96,19 @@ def test_pretrain_writes_a_run_that_rsl_rl_loads(workflow):
         assert torch.equal(tensor, saved[name]), name
 
 
+def fine_tune(workflow, run, *options):
+    """A tiny ReFPO run from the workflow's clone into ``run`` (no final evaluation); its finished process."""
+    proc = call_tool(
+        "train", *TINY, "algo=refpo", f"init_from={workflow / 'clone'}", "eval.at_end=false", f"run_dir={run}", *options
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return proc
+
+
 def test_fine_tuning_starts_from_the_clone_and_keeps_it_through_the_warmup(workflow, tmp_path):
     clone = torch.load(workflow / "clone" / "model_0.pt", weights_only=True)
     run = tmp_path / "tuned"
-    proc = call_tool(
-        "train",
-        *TINY,
-        "algo=refpo",
-        f"init_from={workflow / 'clone'}",
-        "max_iterations=2",
-        "critic_warmup_iterations=1",
-        "runner.save_interval=1",
-        "eval.at_end=false",
-        f"run_dir={run}",
-    )
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    proc = fine_tune(workflow, run, "max_iterations=2", "critic_warmup_iterations=1", "runner.save_interval=1")
     assert "starting from the cloned actor" in proc.stdout and "iterations 0..0 train the critic alone" in proc.stdout
     warm, moved = (torch.load(run / f"model_{i}.pt", weights_only=True) for i in (0, 1))
     for name, tensor in clone["actor_state_dict"].items():
@@ -129,18 +127,7 @@ def test_fine_tuning_starts_from_the_clone_and_keeps_it_through_the_warmup(workf
 def test_fine_tuning_may_update_the_normalisers_from_the_rollouts(workflow, tmp_path):
     clone = torch.load(workflow / "clone" / "model_0.pt", weights_only=True)
     run = tmp_path / "tuned"
-    proc = call_tool(
-        "train",
-        *TINY,
-        "algo=refpo",
-        f"init_from={workflow / 'clone'}",
-        "clone_normalizer=update",
-        "max_iterations=1",
-        "critic_warmup_iterations=0",
-        "eval.at_end=false",
-        f"run_dir={run}",
-    )
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    fine_tune(workflow, run, "clone_normalizer=update", "max_iterations=1", "critic_warmup_iterations=0")
     moved = torch.load(run / "model_0.pt", weights_only=True)
     for model in ("actor_state_dict", "critic_state_dict"):
         counts = [k for k in clone[model] if k.endswith("obs_normalizer.count")]
