@@ -3,9 +3,10 @@
     python docs/results/finetuning/tables.py [--runs runs/finetuning/gridworld] [--keep]
     python docs/results/finetuning/tables.py --dmc
 
-``--dmc``: keeps the DMC runs' small files (from runs/finetuning/dmc and runs/sweeps, where present) in dmc/ and
-scratch/, writes the DMC table (fine-tuned and from-scratch runs at the same env steps, mean with a 95 % stratified
-bootstrap interval over seeds) and dmc_curves.png (their evaluation curves side by side).
+``--dmc``: keeps the DMC runs' small files (from runs/finetuning/dmc and runs/sweeps, where present) in dmc/,
+normalizers_updated/ and scratch/, writes the DMC table (fine-tuned and from-scratch runs at the same env steps, mean
+with a 95 % stratified bootstrap interval over seeds), dmc_curves.png (their evaluation curves side by side) and
+dmc_remedies.png (ReFPO's fine-tuning beside each remedy tried against its collapse).
 
 Reads each run's eval.json (the dataset's own numbers from the clone's eval.json), writes the table between the
 README's markers, and with ``--keep`` copies each run's small files (config.yaml, eval.json, progress.jsonl) and the
@@ -17,6 +18,8 @@ stand when the 200-step time-out ends them (the row, relative to the middle row)
 from __future__ import annotations
 
 import argparse
+import csv
+import functools
 import json
 import shutil
 from collections import Counter
@@ -152,11 +155,6 @@ def _final(path: Path) -> tuple[float, float | None]:
     return results["N=10"]["return_mean"], results["N=1"]["return_mean"]
 
 
-def _returns(path: Path) -> str:
-    multi, one = _final(path)
-    return f"{multi:.0f} (mean action)" if one is None else f"{multi:.0f} / {one:.0f}"
-
-
 def _curve(run: Path) -> tuple[list[float], list[float]]:
     """(env steps, return) of the periodic evaluations: N = 10 for a flow, the mean action for PPO."""
     from refpo_warp.evaluation.curves import series
@@ -167,9 +165,9 @@ def _curve(run: Path) -> tuple[list[float], list[float]]:
     return (steps, values) if steps else series(rows, "eval/return")
 
 
-def first_reaching(run: Path, value: float) -> int | None:
-    """Env steps at the first periodic evaluation whose return (N = 10, or the mean action) reaches ``value``."""
-    return next((s for s, v in zip(*_curve(run)) if v >= value), None)
+def first_reaching(curve: tuple[list[float], list[float]], value: float) -> float | None:
+    """Env steps at the first periodic evaluation of ``curve`` (``_curve``) whose return reaches ``value``."""
+    return next((s for s, v in zip(*curve) if v >= value), None)
 
 
 def keep_dmc(runs: Path, sweeps: Path) -> None:
@@ -204,7 +202,7 @@ def _interval(values: list[float]) -> str:
     return f"{est.point:.0f} [{est.low:.0f}, {est.high:.0f}] ({', '.join(f'{v:.0f}' for v in values)})"
 
 
-def _steps(values: list[int | None]) -> str:
+def _steps(values: list[float | None]) -> str:
     return ", ".join("-" if v is None else f"{v / 1000:.0f}k" for v in values)
 
 
@@ -219,14 +217,17 @@ def _groups(task: str):
                 yield start.format(clone=clone), label, base, what, [r.parent for r in runs]
 
 
+@functools.cache
+def _cpu_dmc() -> dict[tuple[str, str], dict]:
+    """The committed cpu_dmc rows by (task, label)."""
+    return {(r["task"], r["label"]): r for r in csv.DictReader(FROM_SCRATCH.open())}
+
+
 def _targets(task: str) -> tuple[float | None, float]:
     """The data's return and PPO's from-scratch final return at the full CPU profile (cpu_dmc)."""
-    import csv
-
-    scratch = {(r["task"], r["label"]): r for r in csv.DictReader(FROM_SCRATCH.open())}
     clone = DMC_KEPT / task / "clone_refpo" / "eval.json"
     data = json.loads(clone.read_text())["dataset"]["return_mean"] if clone.exists() else None
-    return data, float(scratch[(task, "ppo")]["return_multi_mean"])
+    return data, float(_cpu_dmc()[(task, "ppo")]["return_multi_mean"])
 
 
 def dmc_table() -> str:
@@ -254,10 +255,11 @@ def dmc_table() -> str:
         for start, _, _, what, runs in _groups(task):
             finals = [_final(run / "eval.json") for run in runs]
             one = [f[1] for f in finals if f[1] is not None]
-            reach = [first_reaching(run, data) for run in runs], [first_reaching(run, ppo_final) for run in runs]
+            curves = [_curve(run) for run in runs]
+            reach = [_steps([first_reaching(c, target) for c in curves]) for target in (data, ppo_final)]
             lines.append(
                 f"| {task} | {what}, from {start} | {_interval([f[0] for f in finals])} | "
-                f"{_interval(one) if one else '-'} | {_steps(reach[0])} | {_steps(reach[1])} |"
+                f"{_interval(one) if one else '-'} | {reach[0]} | {reach[1]} |"
             )
     return "\n".join(lines) + "\n"
 
