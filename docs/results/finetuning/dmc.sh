@@ -7,7 +7,8 @@
 # action plus Gaussian noise 0.3), clone_refpo/ and clone_ppo/ (refpo pretrain), then the sweep finetune_<task> (ReFPO and
 # refpo_onestep from the flow clone, PPO from the Gaussian clone, half the CPU profile's env steps, seeds 1-3) into
 # runs/sweeps/finetune_<task>. Every step is skipped when its output exists, so the script resumes where it stopped
-# (a sweep resumes its own runs).
+# (a sweep resumes its own runs). The committed reacher_easy data (dmc/dmc_reacher_easy/) come from a checkpoint other
+# than the one half_return_checkpoint.py picks from the committed progress rows (README.md's demonstrator table).
 set -euo pipefail
 OUT=${OUT:-runs/finetuning/dmc}
 TASKS=("${@:-dmc_point_mass dmc_reacher_easy}")
