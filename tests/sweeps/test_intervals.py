@@ -44,3 +44,17 @@ def test_intervals_are_reproducible_and_leave_numpys_generator_alone():
     assert np.random.random() == expected_next  # the caller's global stream is where it was
     assert aggregate({"m": scores}, seed=3)["m"]["mean"] == first  # same seed, same interval
     assert aggregate({"m": scores}, seed=4)["m"]["mean"] != first
+
+
+def test_probability_of_improvement_is_rliables_exactly():
+    """The NumPy statistic is rliable's (SciPy's Mann-Whitney U over n x m), float for float, ties included."""
+    from rliable import metrics
+
+    from refpo_warp.sweeps.intervals import probability_of_improvement
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        runs_x, runs_y, tasks = rng.integers(1, 7, size=3)
+        x = rng.integers(0, 4, (runs_x, tasks % 3 + 1)).astype(float)
+        y = rng.integers(0, 4, (runs_y, tasks % 3 + 1)).astype(float)
+        assert probability_of_improvement(x, y) == metrics.probability_of_improvement(x, y)
