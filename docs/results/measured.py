@@ -1,49 +1,196 @@
 #!/usr/bin/env python
-"""The README's learning results, written from the committed data files: python docs/results/measured.py
+"""The README's measured parts, written from the committed data files: python docs/results/measured.py [--check]
 
-Rewrites the table between the markers in README.md ("Measured: learning") from
-- docs/results/learning_checks/records/gridworld_refpo.jsonl: ReFPO on GridWorld, the learning check's runs;
-- docs/results/*/per_task.csv of the DMC sweeps below (`refpo report`'s output): the CPU profiles' returns per task,
-  mean ± population std over seeds 1-3 (the tuning study's chosen values: fresh seeds 11-13);
-- docs/results/finetuning/: the GridWorld clones and fine-tuned runs (eval.json each) and the DMC fine-tuning runs
-  from a weaker demonstrator (dmc/<task>/<method>/seed<k>/eval.json).
-Each row names its data file; nothing here is typed in by hand.
+Rewrites each block of README.md between ``<!-- measured: NAME ... -->`` and ``<!-- measured: end -->``:
+
+- ``gif``: the returns of the committed run of the cartpole GIF's command (seed 1 of ``cpu_dmc/runs.csv``) and the
+  env steps and iterations of the CPU profiles the two GIFs' runs train (``configs/``);
+- ``budget``: "which method at your budget", from the equal-budget tuning study's fresh seeds
+  (``tuning/fresh/runs.csv``: each method's per-task interval against tuned PPO's and its probability of
+  improvement) and its budget runs (``tuning/budget/``: each run's last periodic return against its peak, by the fall
+  share of ``tuning/criteria.yaml``, whose one-step share also judges the fine-tuned runs below);
+- ``demonstrations``: the fine-tuning study's GridWorld clones (``finetuning/gridworld/*/eval.json``) and DMC runs
+  (``finetuning/dmc/``, ``finetuning/scratch/``: each run's eval.json);
+- ``table``: what the methods learn at the shipped CPU profiles, from
+  ``learning_checks/records/gridworld_refpo.jsonl`` (ReFPO on GridWorld), the per-run rows (``runs.csv``) of the DMC
+  sweeps listed in ``SWEEPS`` (each cell the mean over the seeds the file holds with its 95 % stratified-bootstrap
+  interval, ``refpo_warp/sweeps/intervals.py``; a failed run counts as return 0, as the tuning page counts it) and
+  the fine-tuning runs.
+
+Nothing in a block is typed in by hand: every number is read from the file the block names, and where a verdict
+depends on the data the words are chosen here from the numbers. ``--check`` writes nothing and exits 1 with the
+difference when README.md is not what the data says (``tests/docs/test_readme_measured.py``).
+
+``docs/results/index_page.py`` imports the helpers of the first section (seeds, intervals, runs.csv rows).
 """
 
 from __future__ import annotations
 
+import argparse
 import csv
+import difflib
+import functools
 import json
-import statistics
+import math
+import re
+import sys
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent
-README = RESULTS.parents[1] / "README.md"
-BEGIN, END = "<!-- measured: begin (python docs/results/measured.py) -->", "<!-- measured: end -->"
-SWEEPS = [  # (per-task CSV, methods in the order shown, seeds)
-    ("cpu_dmc/per_task.csv", ["ppo", "fpo", "refpo"], "1-3"),
-    ("fpo_pp/report/per_task.csv", ["fpo_pp", "refpo_pp"], "1-3"),
-    ("one_step/search/report/per_task.csv", ["onestep_c03"], "1-3"),
-    # each method at its values chosen by the equal-budget tuning study (tuning/README.md: intervals, IQM)
-    ("tuning/fresh/per_task.csv", ["ppo", "refpo", "refpo_onestep", "fpo_pp"], "11-13"),
+ROOT = RESULTS.parents[1]
+README = ROOT / "README.md"
+BLOCK = re.compile(r"(<!--\s+measured:\s+(\w+)[^>]*-->)(.*?)(<!--\s+measured:\s+end\s+-->)", re.DOTALL)
+# (runs.csv of a DMC sweep, the labels shown in this order: None for all, a note on the values)
+SWEEPS = [
+    ("cpu_dmc/runs.csv", ["ppo", "fpo", "refpo"], ""),
+    ("fpo_pp/report/runs.csv", ["fpo_pp", "refpo_pp"], ""),
+    ("one_step/search/report/runs.csv", ["onestep_c03"], ""),
+    (
+        "tuning/fresh/runs.csv",
+        ["ppo", "refpo", "refpo_onestep", "fpo_pp"],
+        "each method at its values chosen by the equal-budget tuning study (`docs/results/tuning/`)",
+    ),
 ]
-TASKS = {
-    "dmc_cartpole_balance": "cartpole_balance (450k env steps)",
-    "dmc_point_mass": "point_mass (1M)",
-    "dmc_reacher_easy": "reacher_easy (1M)",
-}
 
 
-def number(text: str) -> float | None:
+@functools.cache
+def criteria() -> dict:
+    """The tuning study's thresholds (``tuning/criteria.yaml``): definitions its page and these sentences judge by,
+    not measurements."""
+    import yaml
+
+    return yaml.safe_load((RESULTS / "tuning" / "criteria.yaml").read_text(encoding="utf-8"))
+
+
+def one_step_share() -> float:
+    """ "N = 1 keeps the N = 10 return": at least this share of it (the tuning goal's one-step part)."""
+    return float(criteria()["goal"]["one_step"]["share"])
+
+
+def fall_share() -> float:
+    """A budget run falls when its last periodic return is below this share of its peak."""
+    return float(criteria()["report"]["fall"])
+
+
+# ------------------------------------------------------------------------------------------------ shared helpers
+def relative(path: Path) -> str:
+    return str(path.relative_to(ROOT))
+
+
+def number(text: str | None) -> float | None:
     return float(text) if text not in ("", None) else None
 
 
-def cell(mean: float | None, std: float | None) -> str:
-    if mean is None:
-        return "--"
-    return f"{mean:.0f}" if std is None else f"{mean:.0f} ± {std:.0f}"
+def seeds_text(seeds) -> str:
+    """``1-3, 21-22``: the seeds as runs of consecutive numbers."""
+    seeds = sorted({int(s) for s in seeds})
+    if not seeds:
+        return "none"
+    parts, i = [], 0
+    while i < len(seeds):
+        j = i
+        while j + 1 < len(seeds) and seeds[j + 1] == seeds[j] + 1:
+            j += 1
+        parts.append(str(seeds[i]) if i == j else f"{seeds[i]}-{seeds[j]}")
+        i = j + 1
+    return ", ".join(parts)
 
 
+@functools.cache
+def _interval(values: tuple[float, ...]):
+    import numpy as np
+
+    from refpo_warp.sweeps.intervals import aggregate
+
+    return aggregate({"x": np.array([[v] for v in values])})["x"]["mean"]
+
+
+def interval(values) -> object:
+    """The mean over ``values`` (one per seed) with its 95 % stratified-bootstrap interval (``intervals.Estimate``)."""
+    return _interval(tuple(float(v) for v in values))
+
+
+def estimate(values, digits: int = 0) -> str:
+    """``mean [low, high]`` over ``values``: the form every results page compares."""
+    from refpo_warp.sweeps.results_page import estimate_text
+
+    e = interval(values)
+    return estimate_text(e.point, e.low, e.high, digits)
+
+
+def read_csv(path: Path) -> list[dict]:
+    return list(csv.DictReader(path.open(encoding="utf-8"))) if path.exists() else []
+
+
+def method_names(runs_csv: Path) -> dict[str, str]:
+    """label -> the method's name in the report beside ``runs_csv`` (its per_task.csv), or the label."""
+    return {r["label"]: r["method"] for r in read_csv(runs_csv.with_name("per_task.csv"))}
+
+
+def task_runs(rows: list[dict], label: str) -> dict[str, dict[int, dict]]:
+    """task -> seed -> {multi, one, failed} of one method's runs in a runs.csv. A run that failed (its training
+    stopped, e.g. on a non-finite loss) counts as return 0 at every N, as the tuning page counts it: leaving it out
+    would flatter its method. Runs of any other status (not run yet, stale) are left out."""
+    flow = any(r["label"] == label and r["return_1"] for r in rows)
+    out: dict[str, dict[int, dict]] = {}
+    for r in rows:
+        if r["label"] != label:
+            continue
+        if r["status"] == "ok" and r["return_multi"]:
+            run = {"multi": float(r["return_multi"]), "one": number(r["return_1"]), "failed": False}
+        elif r["status"] == "failed":
+            run = {"multi": 0.0, "one": 0.0 if flow else None, "failed": True}
+        else:
+            continue
+        out.setdefault(r["task"], {})[int(r["seed"])] = run
+    return out
+
+
+def short(task: str) -> str:
+    return task.removeprefix("dmc_")
+
+
+def steps_text(steps: float) -> str:
+    """``450k``, ``1M``, ``4.06M``: env steps to three significant digits."""
+    return f"{steps / 1e6:.3g}M" if steps >= 1e6 else f"{steps / 1e3:.3g}k"
+
+
+@functools.cache
+def profile(task: str, algo: str = "ppo", device: str = "cpu") -> dict:
+    """The resolved config of ``task``'s profile for ``device`` (``configs/``, as ``refpo train`` resolves it)."""
+    from refpo_warp.config.resolve import resolve_config
+
+    return resolve_config({"task": task, "algo": algo}, device_type=device)
+
+
+def profile_steps(task: str, algo: str = "ppo", device: str = "cpu") -> int:
+    return int(profile(task, algo, device)["total_env_steps"])
+
+
+def profile_iterations(task: str, algo: str = "ppo", device: str = "cpu") -> int:
+    cfg = profile(task, algo, device)
+    if cfg["max_iterations"]:
+        return int(cfg["max_iterations"])
+    return math.ceil(cfg["total_env_steps"] / (cfg["num_envs"] * cfg["runner"]["num_steps_per_env"]))
+
+
+def _eval(path: Path) -> dict | None:
+    return json.loads(path.read_text())["results"] if path.exists() else None
+
+
+def final_returns(path: Path) -> tuple[float, float | None]:
+    """(N = 10 return, or a Gaussian's mean-action return; N = 1 return or None) of an eval.json."""
+    results = json.loads(path.read_text())["results"]
+    if "mean_action" in results:
+        return results["mean_action"]["return_mean"], None
+    return results["N=10"]["return_mean"], results["N=1"]["return_mean"]
+
+
+def count_text(k: int, n: int) -> str:
+    return f"all {n}" if k == n and n > 2 else f"{k} of {n}"
+
+
+# ------------------------------------------------------------------------------------------------ the table
 def gridworld_row() -> str | None:
     path = RESULTS / "learning_checks" / "records" / "gridworld_refpo.jsonl"
     if not path.exists():
@@ -51,138 +198,392 @@ def gridworld_row() -> str | None:
     runs = [r for r in map(json.loads, path.read_text().splitlines()) if not r["null"] and r["threads"] == 1]
     final = [r["final"] for r in runs]
     success = [min(f[s]["success_rate"] for s in ("N=1", "N=10")) for f in final]
-    length = {s: statistics.fmean(f[s]["length_mean"] for f in final) for s in ("N=1", "N=10")}
+    length = {s: sum(f[s]["length_mean"] for f in final) / len(final) for s in ("N=1", "N=10")}
     share = [min(f[s]["top_share"], f[s]["bottom_share"]) for f in final for s in ("N=1", "N=10")]
-    seeds = ", ".join(str(r["seed"]) for r in sorted(runs, key=lambda r: r["seed"]))
+    steps = max(r["rows"][-1]["env_steps"] for r in runs)
     return (
-        f"| ReFPO on GridWorld, the paper's 260k env steps, seeds {seeds} (`{path.relative_to(README.parent)}`) | "
-        f"success ≥ {min(success):.3f} at N = 1 and 10; episode length {length['N=1']:.1f} / {length['N=10']:.1f} "
-        f"(N = 1 / 10); the smaller goal band's share of successes "
-        f"{min(share):.2f}-{max(share):.2f} |"
+        f"| ReFPO on GridWorld, {steps_text(steps)} env steps, seeds "
+        f"{seeds_text(r['seed'] for r in runs)} (`{relative(path)}`) | success ≥ {min(success):.3f} at N = 1 and 10; "
+        f"episode length {length['N=1']:.1f} / {length['N=10']:.1f} (N = 1 / 10, mean over seeds); the smaller goal "
+        f"band's share of successes {min(share):.2f}-{max(share):.2f} |"
     )
 
 
-def sweep_rows(relative: str, labels: list[str] | None, seeds: str) -> list[str]:
-    path = RESULTS / relative
-    if not path.exists():
+def method_cell(name: str, runs: dict[int, dict], all_seeds: set[int]) -> str:
+    seeds = sorted(runs)
+    cell = f"{name} {estimate([runs[s]['multi'] for s in seeds])}"
+    if all(runs[s]["one"] is not None for s in seeds):
+        cell += f" / {estimate([runs[s]['one'] for s in seeds])}"
+    notes = []
+    if set(seeds) != all_seeds:
+        notes.append(f"seeds {seeds_text(seeds)}")
+    failed = [s for s in seeds if runs[s]["failed"]]
+    if failed:
+        notes.append(f"seed {seeds_text(failed)} failed: counted as return 0")
+    return cell + (f" ({'; '.join(notes)})" if notes else "")
+
+
+def sweep_rows(relative_csv: str, labels: list[str] | None, note: str) -> list[str]:
+    path = RESULTS / relative_csv
+    rows = read_csv(path)
+    if not rows:
         return []
-    rows = list(csv.DictReader(path.open()))
-    runs_csv = path.with_name("runs.csv")
-    failed = (
-        [(r["task"], r["label"]) for r in csv.DictReader(runs_csv.open()) if r["status"] == "failed"]
-        if runs_csv.exists()
-        else []
-    )
+    names = method_names(path)
     labels = labels or list(dict.fromkeys(r["label"] for r in rows))
+    per_label = {label: task_runs(rows, label) for label in labels}
     out = []
-    for task, title in TASKS.items():
-        cells = []
-        for label in labels:
-            row = next((r for r in rows if r["task"] == task and r["label"] == label), None)
-            if row is None or row["runs_finished"] == "0":
-                continue
-            single = row["runs_finished"] == "1"  # no spread to show
-            multi = cell(number(row["return_multi_mean"]), None if single else number(row["return_multi_std"]))
-            one = row.get("return_1_mean") and cell(
-                number(row["return_1_mean"]), None if single else number(row["return_1_std"])
-            )
-            partial = row["runs_finished"] != row["runs_total"]
-            cells.append(
-                f"{row['method']} {multi}"
-                + (f" / {one}" if one else "")
-                + (f" ({row['runs_finished']} of {row['runs_total']} seeds" if partial else "")
-                + (f"; {failed.count((task, label))} failed)" if partial and (task, label) in failed else "")
-                + (")" if partial and (task, label) not in failed else "")
-            )
-        if cells:
-            out.append(
-                f"| {title}, 10-step / 1-step return, seeds {seeds} (`{path.relative_to(README.parent)}`) | "
-                + "; ".join(cells)
-                + " |"
-            )
+    for task in sorted({r["task"] for r in rows}):
+        shown = [(label, per_label[label][task]) for label in labels if per_label[label].get(task)]
+        if not shown:
+            continue
+        seeds = set().union(*(set(runs) for _, runs in shown))
+        cells = [method_cell(names.get(label, label), runs, seeds) for label, runs in shown]
+        out.append(
+            f"| {short(task)} ({steps_text(profile_steps(task))} env steps), N = 10 / N = 1 return, mean [95 % "
+            f"interval] over seeds {seeds_text(seeds)} (`{relative(path)}`{'; ' + note if note else ''}) | "
+            + "; ".join(cells)
+            + " |"
+        )
     return out
-
-
-def _eval(path: Path) -> dict | None:
-    return json.loads(path.read_text())["results"] if path.exists() else None
 
 
 def finetuning_gridworld_row() -> str | None:
     """Success and the bands' shares of the clones and the fine-tuned flows on GridWorld's two-mode demonstrations."""
     folder = RESULTS / "finetuning" / "gridworld"
-    runs = {
-        name: _eval(folder / name / "eval.json")
-        for name in ("clone_flow", "clone_gauss", "refpo_from_flow", "fpo_from_flow", "ppo_from_gauss")
-    }
+    names = ("clone_flow", "clone_gauss", "refpo_from_flow", "fpo_from_flow", "ppo_from_gauss")
+    runs = {name: _eval(folder / name / "eval.json") for name in names}
     if any(r is None for r in runs.values()):
         return None
+    seed = json.loads((folder / "clone_flow" / "eval.json").read_text())["seed"]
 
     def flow(r: dict) -> str:
         return " / ".join(f"{r[s]['success_rate']:.2f} ({r[s]['top_share']:.2f} top)" for s in ("N=10", "N=1"))
 
     gauss, ppo = runs["clone_gauss"]["mean_action"], runs["ppo_from_gauss"]["mean_action"]
     return (
-        f"| GridWorld from scripted two-mode demonstrations, seed 1 (`{folder.relative_to(README.parent)}`), "
-        f"success at N = 10 / N = 1 (the top band's share) | flow clone {flow(runs['clone_flow'])}; Gaussian clone "
+        f"| GridWorld from scripted two-mode demonstrations, seed {seed} (`{relative(folder)}`), success at N = 10 / "
+        f"N = 1 (the top band's share) | flow clone {flow(runs['clone_flow'])}; Gaussian clone "
         f"{gauss['success_rate']:.2f}; fine-tuned: ReFPO {flow(runs['refpo_from_flow'])}, FPO "
         f"{flow(runs['fpo_from_flow'])}, PPO from its clone {ppo['success_rate']:.2f} |"
     )
 
 
-def _return_range(folder: Path) -> str | None:
-    """'lo-hi (lo-hi at N = 1)' of the final returns of ``folder``'s seed runs, or None if it has none."""
-    runs = [_eval(p) for p in sorted(folder.glob("seed*/eval.json"))]
-    if not runs:
-        return None
-    multi = [r.get("N=10", r.get("mean_action", {})).get("return_mean") for r in runs]
-    one = [r["N=1"]["return_mean"] for r in runs if "N=1" in r]
-    return f"{min(multi):.0f}-{max(multi):.0f}" + (f" ({min(one):.0f}-{max(one):.0f} at N = 1)" if one else "")
+def seed_returns(folder: Path) -> dict[int, tuple[float, float | None]]:
+    """seed -> final (N = 10 or mean-action, N = 1) return of ``folder``'s seed runs (seed<k>/eval.json)."""
+    return {int(p.parent.name[4:]): final_returns(p) for p in sorted(folder.glob("seed*/eval.json"))}
+
+
+def returns_cell(runs: dict[int, tuple[float, float | None]]) -> str:
+    cell = estimate([v[0] for v in runs.values()])
+    if all(v[1] is not None for v in runs.values()):
+        cell += f" / {estimate([v[1] for v in runs.values()])}"
+    return cell + f" (seeds {seeds_text(runs)})"
+
+
+FINETUNED = RESULTS / "finetuning" / "dmc"
+SCRATCH = RESULTS / "finetuning" / "scratch"
+UPDATED = RESULTS / "finetuning" / "normalizers_updated"
+FT_METHODS = ("ppo", "refpo_onestep", "refpo")
+
+
+def demonstrator(task_dir: Path) -> tuple[float, int, float]:
+    """(the demonstrations' policy's periodic return at its checkpoint, that iteration, their action noise std)."""
+    meta = json.loads((task_dir / "data" / "metadata.json").read_text())["refpo"]["policy"]
+    rows = [json.loads(line) for line in (task_dir / "demonstrator" / "progress.jsonl").read_text().splitlines()]
+    value = next(r["eval/return"] for r in rows if r.get("iteration") == meta["iteration"] and "eval/return" in r)
+    return value, meta["iteration"], meta["action_noise_std"]
 
 
 def finetuning_dmc_rows() -> list[str]:
-    """Per task: each method's final N = 10 (N = 1) return over its seeds, fine-tuned and from scratch at the same
-    env steps."""
+    """Per task: each method's final N = 10 / N = 1 return over its seeds, fine-tuned, fine-tuned with the
+    normalisers updated, and from scratch at the same env steps."""
     out = []
-    scratch, updated = RESULTS / "finetuning" / "scratch", RESULTS / "finetuning" / "normalizers_updated"
-    for task_dir in sorted((RESULTS / "finetuning" / "dmc").glob("dmc_*")):
+    for task_dir in sorted(FINETUNED.glob("dmc_*")):
         cells = []
-        for method in ("ppo", "refpo_onestep", "refpo"):
-            tuned = _return_range(task_dir / method)
+        for method in FT_METHODS:
+            tuned = seed_returns(task_dir / method)
+            if not tuned:
+                continue
             others = [
-                (what, _return_range(folder / task_dir.name / method))
-                for what, folder in (("normalisers updated", updated), ("from scratch", scratch))
+                (what, seed_returns(folder / task_dir.name / method))
+                for what, folder in (("normalisers updated", UPDATED), ("from scratch", SCRATCH))
             ]
-            if tuned:
-                cells.append(f"{method} {tuned}" + "".join(f", {what} {got}" for what, got in others if got))
+            cells.append(
+                f"{method} {returns_cell(tuned)}" + "".join(f", {what} {returns_cell(r)}" for what, r in others if r)
+            )
         if cells:
-            counts = {len(list((task_dir / m).glob("seed*/eval.json"))) for m in ("ppo", "refpo_onestep", "refpo")}
-            seeds = "-".join(str(n) for n in sorted(counts - {0}))
+            steps = json.loads(next(task_dir.glob("*/seed*/eval.json")).read_text())["env_steps"]
+            value, iteration, noise = demonstrator(task_dir)
             out.append(
-                f"| {task_dir.name.removeprefix('dmc_')} fine-tuned from a half-return PPO's demonstrations, "
-                f"half the CPU profile's env steps, {seeds} seeds (`{task_dir.relative_to(README.parent)}`; with the "
-                f"normalisers updated from the rollouts: `{updated.relative_to(README.parent)}`; from scratch at the "
-                f"same env steps: `{scratch.relative_to(README.parent)}`), final return range | "
-                + "; ".join(cells)
-                + " |"
+                f"| {short(task_dir.name)} fine-tuned for {steps_text(steps)} env steps from the demonstrations "
+                f"(action noise std {noise:g}) of a PPO checkpoint returning {value:.0f} (iteration {iteration}; "
+                f"`{relative(task_dir)}`; with the normalisers updated from the rollouts: `{relative(UPDATED)}`; "
+                f"from scratch at the same env steps: `{relative(SCRATCH)}`), final N = 10 / N = 1 return, mean "
+                "[95 % interval] | " + "; ".join(cells) + " |"
             )
     return out
 
 
 def table() -> str:
     rows = [r for r in [gridworld_row()] if r]
-    for relative, labels, seeds in SWEEPS:
-        rows += sweep_rows(relative, labels, seeds)
+    for relative_csv, labels, note in SWEEPS:
+        rows += sweep_rows(relative_csv, labels, note)
     rows += [r for r in [finetuning_gridworld_row()] if r] + finetuning_dmc_rows()
-    return "\n".join([BEGIN, "| Learning result (data file) | Measured |", "|---|---|", *rows, END])
+    return "\n".join(["", "| Learning result (data file) | Measured |", "|---|---|", *rows, ""])
+
+
+# ------------------------------------------------------------------------------------------------ the GIFs
+def gif() -> str:
+    path = RESULTS / "cpu_dmc" / "runs.csv"
+    run = next(
+        r for r in read_csv(path) if (r["task"], r["label"], r["seed"]) == ("dmc_cartpole_balance", "refpo", "1")
+    )
+    return (
+        f"{steps_text(profile_steps('dmc_cartpole_balance', 'refpo'))} env steps; the same command's committed run, "
+        f"seed 1 of `{relative(path)}`, evaluates at N = 10: {float(run['return_multi']):.0f}, N = 1: "
+        f"{float(run['return_1']):.0f}"
+    )
+
+
+def humanoid_gif() -> str:
+    task = "humanoid_all_residual"
+    return (
+        f"{profile_iterations(task, 'refpo')} iterations, {steps_text(profile_steps(task, 'refpo'))} env steps, "
+        "the task's CPU profile"
+    )
+
+
+# ------------------------------------------------------------------------------------------------ budget
+TUNING = RESULTS / "tuning"
+FLOW_NAMES = {"refpo": "ReFPO", "refpo_onestep": "`refpo_onestep`", "fpo_pp": "FPO++"}
+
+
+def _matrix(runs: dict[str, dict[int, dict]], tasks: list[str]):
+    """(seeds x tasks) final N = 10 returns, the i-th seed of each task in a row (the tuning page's matrix)."""
+    import numpy as np
+
+    n = min(len(runs[t]) for t in tasks)
+    return np.array([[runs[t][sorted(runs[t])[i]]["multi"] for t in tasks] for i in range(n)])
+
+
+def fresh_standing() -> dict | None:
+    """Each tuned flow method against tuned PPO on the fresh seeds: the tasks where its interval reaches PPO's, and
+    P(improvement) with its interval (``intervals.improvement``, as the tuning page computes it)."""
+    from refpo_warp.sweeps.intervals import improvement
+
+    path = TUNING / "fresh" / "runs.csv"
+    rows = read_csv(path)
+    if not rows:
+        return None
+    tasks = sorted({r["task"] for r in rows})
+    ppo = task_runs(rows, "ppo")
+    if not all(ppo.get(t) for t in tasks):
+        return None
+    out = {"path": path, "tasks": tasks, "seeds": set(), "flows": {}}
+    for label in FLOW_NAMES:
+        runs = task_runs(rows, label)
+        if not all(runs.get(t) for t in tasks):
+            continue
+        reach = sum(
+            interval([v["multi"] for v in runs[t].values()]).overlaps_or_above(
+                interval([v["multi"] for v in ppo[t].values()])
+            )
+            for t in tasks
+        )
+        poi = improvement(_matrix(runs, tasks), _matrix(ppo, tasks))
+        out["flows"][label] = {"reach": reach, "poi": poi}
+        out["seeds"] |= {s for t in tasks for s in runs[t]}
+    out["seeds"] |= {s for t in tasks for s in ppo[t]}
+    return out
+
+
+def budget_runs() -> dict[str, list[dict]]:
+    """label -> per seed {seed, peak, last, stopped} of the budget runs' periodic N = 10 (or mean-action) return; a
+    run stopped on a non-finite loss counts as 0 from its stop on (its last return is 0)."""
+    out: dict[str, list[dict]] = {}
+    for path in sorted((TUNING / "budget").glob("*/*/seed*/progress_eval.jsonl")):
+        rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+        key = next((k for k in ("eval/return_N10", "eval/return") if k in rows[0]), None)
+        if key is None:
+            continue
+        stopped = (path.parent / "stopped.json").exists()
+        values = [r[key] for r in rows]
+        out.setdefault(path.parents[1].name, []).append(
+            {
+                "seed": int(path.parent.name[4:]),
+                "task": path.parents[2].name,
+                "peak": max(values),
+                "last": 0.0 if stopped else values[-1],
+                "steps": rows[-1]["env_steps"],
+                "stopped": stopped,
+            }
+        )
+    return out
+
+
+def budget() -> str:
+    fresh = fresh_standing()
+    if fresh is None or not fresh["flows"]:
+        return "the equal-budget study has no fresh-seed runs of every method yet (`docs/results/tuning/`)"
+    flows = fresh["flows"]
+    best = max(flows, key=lambda k: flows[k]["poi"].point)
+    poi = flows[best]["poi"]
+    ntasks = len(fresh["tasks"])
+    steps = sorted({profile_steps(t) for t in fresh["tasks"]})
+    where = (
+        f"Measured on a CPU at the DMC tasks' CPU profiles ({'-'.join(steps_text(s) for s in (steps[0], steps[-1]))} "
+        f"env steps), seeds {seeds_text(fresh['seeds'])} of `{relative(fresh['path'])}`: "
+    )
+    best_text = (
+        f"{FLOW_NAMES[best]}, reaches tuned PPO's 95 % interval on {flows[best]['reach']} of {ntasks} tasks, with a "
+        f"probability of improvement over PPO of {poi.point:.2f} [{poi.low:.2f}, {poi.high:.2f}]"
+    )
+    ppo_leads = all(f["poi"].point < 0.5 for f in flows.values())
+    if all(f["poi"].high < 0.5 for f in flows.values()):
+        verdict = f"with equal tuning, Gaussian PPO leads (the best tuned flow method, {best_text})"
+    elif ppo_leads:
+        verdict = (
+            "with equal tuning, Gaussian PPO leads on the point estimates, not beyond their intervals (the best "
+            f"tuned flow method, {best_text}, an interval that reaches 0.5)"
+        )
+    elif poi.low > 0.5:
+        verdict = f"with equal tuning, a flow method leads PPO ({best_text})"
+    else:
+        verdict = f"with equal tuning, no method leads (the best tuned flow method, {best_text})"
+    runs = budget_runs()
+    parts = []
+    collapse_all, ppo_holds = False, False
+    for label, seeds in sorted(runs.items(), key=lambda kv: kv[0] == "ppo"):
+        fell = [r for r in seeds if r["last"] < fall_share() * r["peak"]]
+        stopped = sum(r["stopped"] for r in seeds)
+        name = "PPO" if label == "ppo" else FLOW_NAMES.get(label, label)
+        parts.append(
+            f"{count_text(len(fell), len(seeds))} seeds of {name}"
+            + (f" ({stopped} stopped on a non-finite loss, counted as 0 from there)" if stopped else "")
+        )
+        if label == "ppo":
+            ppo_holds = len(seeds) - len(fell) > len(seeds) / 2
+        else:
+            collapse_all = len(fell) == len(seeds)
+    budget_text = ""
+    if runs:
+        first = next(iter(runs.values()))[0]
+        longest = max(r["steps"] for seeds in runs.values() for r in seeds)
+        budget_text = (
+            f", and on {short(first['task'])} at {longest / profile_steps(first['task']):.0f}× the CPU "
+            f"profile's env steps, at the tuned values (`{relative(TUNING / 'budget')}`), the periodic return ends "
+            f"below {fall_share():g} × its peak in " + " and in ".join(parts)
+        )
+    advice = (
+        ": pick PPO for a from-scratch run at this budget, a flow policy for one-step multimodal actions"
+        if ppo_leads and collapse_all and ppo_holds
+        else ""
+    )
+    return where + verdict + budget_text + advice
+
+
+# ------------------------------------------------------------------------------------------------ demonstrations
+def and_list(items: list[str]) -> str:
+    items = list(items)
+    return ", ".join(items[:-1]) + " and " + items[-1] if len(items) > 1 else "".join(items)
+
+
+def grouped(by_method: dict[str, list[str]]) -> str:
+    """``refpo_onestep (point_mass, reacher_easy) and refpo (reacher_easy)``."""
+    return and_list([f"{m} ({', '.join(tasks)})" for m, tasks in by_method.items()])
+
+
+def demonstrations() -> str:
+    folder = RESULTS / "finetuning" / "gridworld"
+    flow, gauss = _eval(folder / "clone_flow" / "eval.json"), _eval(folder / "clone_gauss" / "eval.json")
+    if flow is None or gauss is None:
+        return "the fine-tuning study's GridWorld runs are not committed yet"
+    g = gauss["mean_action"]
+    f = flow["N=10"]
+    both = 0 < f["top_share"] < 1
+    grid = (
+        "on GridWorld's two-mode demonstrations the flow clone "
+        + (
+            f"reaches both goals (success {f['success_rate']:.2f} at N = 10, the top band's share {f['top_share']:.2f})"
+            if both
+            else f"reaches one goal only (success {f['success_rate']:.2f} at N = 10)"
+        )
+        + f" and the Gaussian clone reaches neither in {100 * (1 - g['success_rate']):.0f} % of its "
+        f"{g['episodes']} episodes"
+    )
+    above, overlap, holds, highest = {}, {}, {}, {}
+    tasks = []
+    for task_dir in sorted(FINETUNED.glob("dmc_*")):
+        tasks.append(short(task_dir.name))
+        means = {}
+        for method in FT_METHODS:
+            tuned, scratch = seed_returns(task_dir / method), seed_returns(SCRATCH / task_dir.name / method)
+            if not tuned:
+                continue
+            means[method] = interval([v[0] for v in tuned.values()])
+            if scratch:
+                e_t, e_s = means[method], interval([v[0] for v in scratch.values()])
+                (above if e_t.low > e_s.high else overlap).setdefault(method, []).append(short(task_dir.name))
+        for method in ("refpo_adaptive", "refpo_onestep"):
+            runs = seed_returns(task_dir / method)
+            if runs:
+                kept = sum(one is not None and one >= one_step_share() * multi for multi, one in runs.values())
+                holds.setdefault(method, []).append(f"{kept} of {len(runs)} runs on {short(task_dir.name)}")
+        for method in [p.name for p in sorted(task_dir.iterdir()) if list(p.glob("seed*/eval.json"))]:
+            means.setdefault(method, interval([v[0] for v in seed_returns(task_dir / method).values()]))
+        top = max(means, key=lambda m: means[m].point)
+        beaten = [m for m in means if m != top and means[m].high >= means[top].low]  # intervals that overlap
+        highest[short(task_dir.name)] = (top, means[top], beaten)
+    if not tasks:
+        return grid
+    names = {"refpo_adaptive": "ReFPO with adaptive λ", "refpo_onestep": "`refpo_onestep`"}
+    steps = json.loads(next(FINETUNED.glob("dmc_*/*/seed*/eval.json")).read_text())["env_steps"]
+    dmc = (
+        f"; on {' and '.join(tasks)}, from a PPO checkpoint's noisy demonstrations and fine-tuned for "
+        f"{steps_text(steps)} env steps, the final N = 10 return's 95 % interval lies above the same method's from "
+        f"scratch at those env steps for {grouped(above) or 'no method'}"
+        + (f", and overlaps it for {grouped(overlap)}" if overlap else "")
+        + f"; N = 1 keeps at least {one_step_share():g} × the N = 10 return in "
+        + "; in ".join(f"{and_list(where)} for {names[m]}" for m, where in holds.items())
+    )
+    for task, (top, e, beaten) in highest.items():
+        who = "PPO from its Gaussian clone" if top == "ppo" else top
+        dmc += f"; the highest mean on {task}: {who} ({e.point:.0f} [{e.low:.0f}, {e.high:.0f}]" + (
+            f"; its interval overlaps those of {and_list(beaten)})" if beaten else ", above every other method's)"
+        )
+    return grid + dmc
+
+
+# ------------------------------------------------------------------------------------------------ the page
+BLOCKS = {"gif": gif, "humanoid_gif": humanoid_gif, "budget": budget, "demonstrations": demonstrations, "table": table}
+
+
+def render(text: str) -> str:
+    found = [m.group(2) for m in BLOCK.finditer(text)]
+    unknown, missing = sorted(set(found) - set(BLOCKS)), sorted(set(BLOCKS) - set(found))
+    if unknown or missing:
+        raise SystemExit(f"{README}: unknown measured blocks {unknown}, blocks missing {missing}")
+    values = {name: make() for name, make in BLOCKS.items()}
+    return BLOCK.sub(lambda m: m.group(1) + values[m.group(2)] + m.group(4), text)
 
 
 def main() -> None:
-    text = README.read_text(encoding="utf-8")
-    if BEGIN not in text or END not in text:
-        raise SystemExit(f"{README}: no '{BEGIN}' ... '{END}' markers")
-    head, rest = text.split(BEGIN, 1)
-    README.write_text(head + table() + rest.split(END, 1)[1], encoding="utf-8")
-    print(f"{README}: measured table written")
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--check", action="store_true", help="compare README.md with the data; exit 1 if it differs")
+    args = parser.parse_args()
+    old = README.read_text(encoding="utf-8")
+    new = render(old)
+    if args.check:
+        if old != new:
+            diff = difflib.unified_diff(old.splitlines(), new.splitlines(), str(README), "from the data", lineterm="")
+            print("\n".join(diff))
+            sys.exit(1)
+        return
+    if old != new:
+        from refpo_warp.utils.atomic_files import write_text
+
+        write_text(README, new)
+    print(f"{README}: measured blocks {'written' if old != new else 'unchanged'}")
 
 
 if __name__ == "__main__":

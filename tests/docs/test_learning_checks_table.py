@@ -29,4 +29,4 @@ def test_bounds_sit_between_the_null_control_and_the_learning_runs(name):
 def test_the_documented_table_is_the_records_table():
     text = (RESULTS.parent / "learning_checks.md").read_text(encoding="utf-8")
     documented = text[text.index(BEGIN) : text.index(END) + len(END)]
-    assert documented == table_markdown(RECORDS), "run: python tests/learning/measure.py table"
+    assert documented == table_markdown(RECORDS), "run: python docs/results/learning_checks_page.py"
