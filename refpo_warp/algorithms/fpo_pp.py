@@ -18,6 +18,18 @@ Rollouts add FPO++'s 0.02 perturbation to the sampled action (the actor's ``acti
 evaluation and export use an EMA of the actor (decay 0.95), before them the live actor, as FPO++ does. FPO++'s other
 values (64 Euler steps, 16 pairs, AdamW, ...) are in ``configs/algo/fpo_pp.yaml``, each with its place in FPO++'s
 code. Every difference from FPO and from FPO++'s code: ``docs/algorithms.md``, "FPO++".
+
+Two pieces of FPO++'s small-task recipe (its Isaac cartpole, ``configs/algo/fpo_pp_small.yaml``), off by default:
+
+- ``adaptive_kl: noise_prediction``: rsl_rl's adaptive learning rate (``schedule: adaptive``, ``desired_kl``) driven,
+  as in FPO++ (``algorithms/fpo.py:383-409``, ``modules/actor_critic.py:205-206``), by the squared change of each
+  pair's prediction of the NOISE end of its path from the rollout parameters' prediction, per minibatch::
+
+      eps_hat = x_tau - tau v = eps - tau e_v       (FPO++'s x1_pred = x_t + (1 - t) u, with t = 1 - tau and u = -v)
+      kl      = mean over (B, K, D) of (eps_hat_new - eps_hat_old)^2 = mean tau^2 (v_new - v_old)^2
+
+- ``knn_entropy_coef``: minus coef times FPO++'s Kozachenko-Leonenko entropy estimate of the actions the K pairs of a
+  state predict (the clean ends a_hat = x_tau + (1 - tau) v; FPO++'s x0_pred, ``algorithms/fpo.py:374-380, 601-646``).
 """
 
 from __future__ import annotations
@@ -27,10 +39,12 @@ import math
 from enum import Enum
 
 import torch
+from tensordict import TensorDict
 
 from refpo_warp.algorithms.on_policy import Minibatch
 from refpo_warp.algorithms.refpo import ReFPO
-from refpo_warp.utils.option_rules import OneOf, Real
+from refpo_warp.models.flow_actor import CfmTerms
+from refpo_warp.utils.option_rules import Int, OneOf, Real
 from refpo_warp.utils.options import option
 
 
@@ -39,9 +53,52 @@ class CfmReduction(str, Enum):
     SQRT_DIM = "sqrt_dim"  # the sum over them / sqrt(D) (FPO++'s "sqrt")
 
 
+class AdaptiveKl(str, Enum):
+    RATIO = "ratio"  # the proxy ratio's E[(rho - 1) - log rho] (ReFPO's)
+    NOISE_PREDICTION = "noise_prediction"  # the change of the predicted noise end (FPO++'s)
+
+
+KNN_CHUNK_ELEMENTS = 1 << 24  # the neighbour search's distance matrices, in elements per chunk of states
+
+
 def straight_through_max(x: torch.Tensor, cap: float) -> torch.Tensor:
     """min(x, cap) in the forward pass; the gradient of x in the backward pass (FPO++'s ``clamp_ste``)."""
     return x + (x.clamp(max=cap) - x).detach()
+
+
+def noise_end_prediction(tau: torch.Tensor, eps: torch.Tensor, velocity_residual: torch.Tensor) -> torch.Tensor:
+    """The noise end each pair's velocity points back to, eps_hat = x_tau - tau v (B, K, A), from tau (B, K), eps and
+    e_v = v - (a - eps) (B, K, A): x_tau - tau v = (1 - tau) eps + tau a - tau (e_v + a - eps) = eps - tau e_v. FPO++'s
+    ``x1_pred`` (t = 1 - tau is its noise end; ``modules/actor_critic.py:205-206``)."""
+    return eps - tau.unsqueeze(-1) * velocity_residual
+
+
+def knn_entropy(samples: torch.Tensor, k: int = 1) -> torch.Tensor:
+    """FPO++'s Kozachenko-Leonenko entropy estimate (``algorithms/fpo.py:601-646``) of each row's n samples in R^d,
+    averaged over the rows: with rho_i the distance from sample i to its k-th nearest other sample (clamped to
+    [1e-6, 1e9]) and c_d = pi^(d/2) / Gamma(d/2 + 1) the volume of the unit ball,
+
+        H = psi(n) - psi(k) + log c_d + d * mean_i log rho_i              samples (B, n, d), 1 <= k < n
+
+    The neighbours are found without gradient (exact distances, in chunks of states); the gradient flows through the
+    distances to them, as through FPO++'s ``torch.cdist``."""
+    b, n, d = samples.shape
+    if not 1 <= k < n:
+        raise ValueError(f"the kNN entropy needs 1 <= k < n samples, got k={k}, n={n}")
+    with torch.no_grad():
+        step = max(1, KNN_CHUNK_ELEMENTS // (n * n))
+        found = []
+        for i in range(0, b, step):
+            x = samples[i : i + step].detach()
+            dist = torch.cdist(x, x, compute_mode="donot_use_mm_for_euclid_dist")
+            dist.diagonal(dim1=-2, dim2=-1).fill_(math.inf)  # not its own neighbour
+            found.append(dist.topk(k, dim=-1, largest=False).indices[..., -1])
+        neighbour = torch.cat(found)
+    other = torch.gather(samples, 1, neighbour.unsqueeze(-1).expand(-1, -1, d))
+    rho = torch.linalg.vector_norm(samples - other, dim=-1).clamp(1e-6, 1e9)
+    digamma = torch.special.digamma(torch.tensor([float(n), float(k)], dtype=torch.float64))
+    log_unit_ball = (d / 2) * math.log(math.pi) - math.lgamma(d / 2 + 1)
+    return float(digamma[0] - digamma[1]) + log_unit_ball + d * rho.log().mean()
 
 
 class FPOPlusPlus(ReFPO):
@@ -81,12 +138,71 @@ class FPOPlusPlus(ReFPO):
     ema_decay: float | None = option(
         0.95, doc="the EMA actor that evaluation and export use after its warm-up (FPO++: 0.95)"
     )
+    adaptive_kl: str = option(
+        "ratio",
+        OneOf(AdaptiveKl),
+        "what schedule=adaptive reads per minibatch: ratio, the proxy ratio's KL estimate; noise_prediction, FPO++'s "
+        "mean squared change of the predicted noise end x_tau - tau v (algorithms/fpo.py:383-409; its cartpole)",
+    )
+    knn_entropy_coef: float = option(
+        0.0,
+        Real(0, 1e6),
+        "weight of minus FPO++'s kNN entropy estimate of the actions a state's pairs predict (algorithms/fpo.py:"
+        "374-380; its cartpole: 0.005); 0: off",
+    )
+    knn_entropy_k: int = option(
+        1, Int(1, 1023), "the k of that estimate, below num_mc_samples (FPO++ rl_cfg.py:160 knn_entropy_k = 1)"
+    )
+
+    def __init__(self, actor, critic, storage, **kwargs) -> None:
+        super().__init__(actor, critic, storage, **kwargs)
+        if self.knn_entropy_coef > 0 and self.knn_entropy_k >= self.num_mc_samples:
+            raise ValueError(
+                f"knn_entropy_k={self.knn_entropy_k} needs more pairs per action: num_mc_samples="
+                f"{self.num_mc_samples} (the k-th nearest of the other pairs' predicted actions)"
+            )
+
+    def kl_from_ratio(self) -> bool:
+        return self.adaptive_kl == "ratio"
+
+    def noise_prediction_kl(self) -> bool:
+        """Whether the adaptive schedule runs on FPO++'s noise-end prediction (its old values are then stored)."""
+        return self.schedule == "adaptive" and self.adaptive_kl == "noise_prediction"
 
     def cfm_losses(self, obs, actions, tau, eps):
         loss, terms = super().cfm_losses(obs, actions, tau, eps)
         if self.cfm_reduction == "sqrt_dim":  # sum_d / sqrt(D) = sqrt(D) * mean_d
             loss = loss * math.sqrt(actions.shape[-1])
         return loss, terms
+
+    def old_pair_values(
+        self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor
+    ) -> dict[str, torch.Tensor]:
+        if not self.noise_prediction_kl():
+            return super().old_pair_values(obs, actions, tau, eps)
+        loss, terms = self.cfm_losses(obs, actions, tau, eps)
+        assert terms.velocity_residual is not None
+        return {"old_loss": loss, "old_noise_prediction": noise_end_prediction(tau, eps, terms.velocity_residual)}
+
+    def pair_terms_loss(
+        self, batch: Minibatch, tau: torch.Tensor, eps: torch.Tensor, terms: CfmTerms
+    ) -> tuple[torch.Tensor | None, dict[str, torch.Tensor]]:
+        loss, stats = None, {}
+        if self.knn_entropy_coef > 0:
+            stats["entropy"] = knn_entropy(terms.clean_action, self.knn_entropy_k)
+            loss = -self.knn_entropy_coef * stats["entropy"]
+        if self.noise_prediction_kl():
+            assert terms.velocity_residual is not None
+            with torch.no_grad():
+                new = noise_end_prediction(tau, eps, terms.velocity_residual)
+                change = new - batch.field("old_noise_prediction")
+                stats["Flow/noise_prediction_kl"] = change.square().mean()
+        return loss, stats
+
+    def kl_estimate(self, stats: dict[str, torch.Tensor]) -> torch.Tensor | None:
+        if self.adaptive_kl == "noise_prediction":
+            return stats.get("Flow/noise_prediction_kl")
+        return super().kl_estimate(stats)
 
     def pair_log_ratios(self, old_loss, new_loss, advantages=None):
         if self.loss_cap is not None:

@@ -29,7 +29,10 @@ average; rollouts always use the live actor. Checkpoints hold the live weights, 
 a resume trains on from the live weights.
 
 Logged statistics: keys with a ``/`` (e.g. ``Flow/ratio_max``) are logged under that name, others as ``Loss/<key>``;
-a key ending in ``_max`` is the maximum over the update's minibatches, every other key the mean.
+a key ending in ``_max`` is the maximum over the update's minibatches, every other key the mean. Every algorithm logs
+each network's gradient norm before the clip (``grad_norm_actor``, ``grad_norm_critic``; ``clip_gradients``), as
+FPO++ does (``algorithms/fpo.py:511-533``, which logs the joint norm), and one whose learning rate moves (the adaptive
+schedule, ``lr_decay_rate``) the rate after the update (``learning_rate``).
 """
 
 from __future__ import annotations
@@ -81,6 +84,17 @@ def value_regression_loss(
         return (returns - values).pow(2).mean()
     clipped = old_values + (values - old_values).clamp(-clip, clip)
     return torch.max((values - returns).pow(2), (clipped - returns).pow(2)).mean()
+
+
+def gradient_norm(parameters) -> torch.Tensor:
+    """The 2-norm of the gradients of ``parameters`` taken together (those without a gradient left out): the norm
+    ``nn.utils.clip_grad_norm_`` computes and returns, without clipping anything."""
+    grads = [p.grad for p in parameters if p.grad is not None]
+    if hasattr(nn.utils, "get_total_norm"):  # torch >= 2.6: the function clip_grad_norm_ itself calls
+        return nn.utils.get_total_norm(grads)
+    if not grads:
+        return torch.tensor(0.0)
+    return torch.linalg.vector_norm(torch.stack([torch.linalg.vector_norm(g.detach()) for g in grads]))
 
 
 def soft_bound_loss(actions: torch.Tensor, bound: float) -> torch.Tensor:
@@ -233,17 +247,10 @@ class OnPolicyAlgorithm(RslPPO):
             loss.backward()
             if self.is_multi_gpu:
                 self.reduce_parameters()
-            if self.joint_grad_clip:
-                nn.utils.clip_grad_norm_(
-                    list(self.actor.parameters()) + list(self.critic.parameters()), self.max_grad_norm
-                )
-            else:
-                nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)
-                if self.uses_critic:
-                    nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
+            grad_norms = self.clip_gradients()
             self._adapt_learning_rate(self.kl_estimate(stats))
             self.optimizer.step()
-            for key, raw in stats.items():
+            for key, raw in {**stats, **grad_norms}.items():
                 value = raw.detach().float()
                 if key.endswith("_max"):
                     maxima[key] = torch.maximum(maxima[key], value) if key in maxima else value
@@ -282,6 +289,8 @@ class OnPolicyAlgorithm(RslPPO):
         if self.lr_decay_rate > 0:
             decay = max(math.exp(-self.lr_decay_rate * self.num_updates), self.lr_decay_floor)
             self._set_learning_rate(self.base_learning_rate * decay)
+        if self.schedule == "adaptive" or self.lr_decay_rate > 0:  # a rate that moves: logged (Loss/learning_rate)
+            out["learning_rate"] = float(self.learning_rate)
         return out
 
     def _restore_point(self) -> tuple[list[torch.Tensor], dict, float]:
@@ -296,6 +305,23 @@ class OnPolicyAlgorithm(RslPPO):
             p.copy_(saved)
         self.optimizer.load_state_dict(optimizer_state)
         self._set_learning_rate(learning_rate)
+
+    def clip_gradients(self) -> dict[str, torch.Tensor]:
+        """Clip the gradients by ``max_grad_norm``, jointly over actor and critic (``joint_grad_clip``) or each network
+        on its own (rsl_rl), and return each network's gradient norm before clipping (``grad_norm_actor``, and
+        ``grad_norm_critic`` for an algorithm with a critic): logged as ``Loss/grad_norm_*``, the mean over the update's
+        minibatches. The clip is the one it always was; the norms are read with the other statistics."""
+        if self.joint_grad_clip:
+            actor, critic = list(self.actor.parameters()), list(self.critic.parameters())
+            norms = {"grad_norm_actor": gradient_norm(actor)}
+            if self.uses_critic:
+                norms["grad_norm_critic"] = gradient_norm(critic)
+            nn.utils.clip_grad_norm_(actor + critic, self.max_grad_norm)
+        else:  # clip_grad_norm_ returns the norm it clipped from
+            norms = {"grad_norm_actor": nn.utils.clip_grad_norm_(self.actor.parameters(), self.max_grad_norm)}
+            if self.uses_critic:
+                norms["grad_norm_critic"] = nn.utils.clip_grad_norm_(self.critic.parameters(), self.max_grad_norm)
+        return norms
 
     # ------------------------------------------------------------------------------------------------ learning rate
     def _set_learning_rate(self, lr: float) -> None:

@@ -45,7 +45,7 @@ from torch import nn
 from refpo_warp.algorithms.on_policy import Minibatch, OnPolicyAlgorithm, soft_bound_loss
 from refpo_warp.algorithms.reflow_schedule import ReflowSchedule, ScheduleMode, coefficient_range
 from refpo_warp.algorithms.trust_region import TrustRegion, surrogate
-from refpo_warp.models.flow_actor import OUTPUT_MODES, FlowActor, cfm_loss
+from refpo_warp.models.flow_actor import OUTPUT_MODES, CfmTerms, FlowActor, cfm_loss
 from refpo_warp.models.flow_diagnostics import one_step_consistency
 from refpo_warp.utils.option_rules import Check, Int, OneOf, Real
 from refpo_warp.utils.options import choices, option
@@ -194,7 +194,7 @@ class ReFPO(OnPolicyAlgorithm):
         super().__init__(actor, critic, storage, **kwargs)
         if self.entropy_coef:
             warnings.warn("ReFPO ignores entropy_coef: a flow policy has no closed-form entropy.")
-        if self.schedule == "adaptive":
+        if self.schedule == "adaptive" and self.kl_from_ratio():
             warnings.warn(
                 "ReFPO with schedule='adaptive': rsl_rl's schedule would be driven by the CFM proxy ratio's KL "
                 "estimate, which is not the policy's KL and moves the learning rate to its bounds within an "
@@ -306,22 +306,26 @@ class ReFPO(OnPolicyAlgorithm):
         )
         self.reflow_coef = self.coef_schedule.step(self.reflow_coef, self.one_step["one_step_ratio"])
 
+    def old_pair_values(
+        self, obs: TensorDict, actions: torch.Tensor, tau: torch.Tensor, eps: torch.Tensor
+    ) -> dict[str, torch.Tensor]:
+        """What the update keeps of the rollout parameters on the stored pairs, by store field: the old CFM losses
+        (B, K); a subclass may add its own (FPO++'s old noise-end predictions)."""
+        return {"old_loss": self.cfm_losses(obs, actions, tau, eps)[0]}
+
     def before_update(self, chunk: int = 65536) -> None:
-        """Store the old CFM losses under the current (= rollout) parameters, before any gradient step."""
+        """Store the old CFM losses (``old_pair_values``) under the current (= rollout) parameters, before any
+        gradient step."""
         self.measure_one_step()
         obs = self.storage.observations.flatten(0, 1)
         actions = self.storage.actions.flatten(0, 1)
         tau, eps = self.store.flat("tau"), self.store.flat("eps")
         with torch.inference_mode():
-            old = torch.cat(
-                [
-                    self.cfm_losses(obs[i : i + chunk], actions[i : i + chunk], tau[i : i + chunk], eps[i : i + chunk])[
-                        0
-                    ]
-                    for i in range(0, actions.shape[0], chunk)
-                ]
-            )
-            self.store.write_all(old_loss=old)
+            parts = [
+                self.old_pair_values(obs[i : i + chunk], actions[i : i + chunk], tau[i : i + chunk], eps[i : i + chunk])
+                for i in range(0, actions.shape[0], chunk)
+            ]
+            self.store.write_all(**{name: torch.cat([part[name] for part in parts]) for name in parts[0]})
 
     def policy_loss(self, batch: Minibatch) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
         tau, eps, old_loss = batch.field("tau"), batch.field("eps"), batch.field("old_loss")
@@ -338,9 +342,20 @@ class ReFPO(OnPolicyAlgorithm):
         if self.bound_coef > 0:
             stats["bound"] = soft_bound_loss(terms.clean_action, self.bound)
             loss = loss + self.bound_coef * stats["bound"]
+        extra, extra_stats = self.pair_terms_loss(batch, tau, eps, terms)
+        if extra is not None:
+            loss = loss + extra
+        stats.update(extra_stats)
         with torch.no_grad():
             stats.update(self.flow_statistics(old_loss, new_loss, log_rho, terms.velocity_error))
         return loss, stats
+
+    def pair_terms_loss(
+        self, batch: Minibatch, tau: torch.Tensor, eps: torch.Tensor, terms: CfmTerms
+    ) -> tuple[torch.Tensor | None, dict[str, torch.Tensor]]:
+        """A subclass's further loss on the minibatch's pairs (the actor's ``CfmTerms`` under the current
+        parameters) and its statistics; None adds nothing (ReFPO)."""
+        return None, {}
 
     def flow_statistics(self, old_loss, new_loss, log_rho, velocity_error) -> dict[str, torch.Tensor]:
         """Per-minibatch diagnostics (see the module docstring)."""
@@ -358,6 +373,11 @@ class ReFPO(OnPolicyAlgorithm):
 
     def kl_estimate(self, stats: dict[str, torch.Tensor]) -> torch.Tensor | None:
         return stats.get("Flow/approx_kl")
+
+    def kl_from_ratio(self) -> bool:
+        """Whether the adaptive schedule reads the proxy ratio's KL estimate (ReFPO's only choice; FPO++'s
+        ``adaptive_kl`` may pick the noise-end prediction instead)."""
+        return True
 
     def update(self) -> dict[str, float]:
         out = super().update()

@@ -46,6 +46,7 @@ class CfmTerms:
     velocity_error: torch.Tensor  # mean over action dims of |v - (a - eps)|^2: the Straightness Error's summand
     action_error: torch.Tensor  # mean over action dims of |a_hat - a|^2
     clean_action: torch.Tensor  # a_hat (B, K, A), the action the network predicts at (x_tau, tau)
+    velocity_residual: torch.Tensor | None = None  # e_v = v - (a - eps) per action dim (B, K, A)
 
 
 def cfm_loss(terms: CfmTerms, tau: torch.Tensor, output_mode: str, loss_scale: float) -> torch.Tensor:
@@ -192,7 +193,7 @@ class FlowActor(SampledPolicyProtocol, nn.Module):
             clean = prediction
             e_a = prediction - a
             e_v = e_a / (1.0 - t).clamp(min=DATA_GUARD)
-        return CfmTerms(e_v.square().mean(dim=-1), e_a.square().mean(dim=-1), clean)
+        return CfmTerms(e_v.square().mean(dim=-1), e_a.square().mean(dim=-1), clean, e_v)
 
     def cfm_loss(
         self,
