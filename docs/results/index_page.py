@@ -35,7 +35,7 @@ from measured import (  # noqa: E402  (docs/results/measured.py)
     steps_text,
 )
 
-from refpo_warp.sweeps.results_page import estimate_text, main_args, write_page  # noqa: E402
+from refpo_warp.sweeps.results_page import main_args, write_page  # noqa: E402
 
 TEMPLATE = HERE / "README.template.md"
 CPU_DMC = HERE / "cpu_dmc" / "runs.csv"
@@ -170,8 +170,8 @@ def cpu_table(data) -> tuple[str, str]:
         explosion = [r["explosion"] for r in rows if r["explosion"] is not None]
         lines.append(
             f"| **all {len(tasks)}** | {names.get(label, label)} | "
-            f"{estimate_text(multi.point, multi.low, multi.high)} | "
-            + (estimate_text(one.point, one.low, one.high) if one else "--")
+            f"{multi.text()} | "
+            + (one.text() if one else "--")
             + f" | {_diag(_mean(straight)) if straight else '--'} | {_diag(_mean(explosion)) if explosion else '--'} |"
         )
     seeds = sorted({s for by_task in data.values() for runs in by_task.values() for s in runs})

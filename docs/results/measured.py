@@ -112,10 +112,9 @@ def interval(values) -> object:
 
 def estimate(values, digits: int = 0) -> str:
     """``mean [low, high]`` over ``values``: the form every results page compares."""
-    from refpo_warp.sweeps.results_page import estimate_text
 
     e = interval(values)
-    return estimate_text(e.point, e.low, e.high, digits)
+    return e.text(digits)
 
 
 def read_csv(path: Path) -> list[dict]:

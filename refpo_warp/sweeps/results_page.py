@@ -114,11 +114,6 @@ def templates(root: str | Path) -> list[Template]:
     return [load_template(p) for p in sorted(Path(root).rglob("*" + SUFFIX))]
 
 
-def estimate_text(point: float, low: float, high: float, digits: int = 0) -> str:
-    """``point [low, high]`` with ``digits`` decimals: how every page writes an estimate and its 95 % interval."""
-    return f"{point:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
-
-
 def main_args(description: str):
     """The command line every page script takes: ``--check`` compares instead of writing (the pages' test)."""
     import argparse

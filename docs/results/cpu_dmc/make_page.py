@@ -24,7 +24,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.sweeps.intervals import aggregate, improvement
-from refpo_warp.sweeps.results_page import estimate_text, main_args, write_page
+from refpo_warp.sweeps.results_page import main_args, write_page
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
@@ -143,7 +143,7 @@ def table(returns: dict[str, dict[str, dict[int, float]]], setting: str) -> str:
         for task in TASKS:
             scores = np.array(list(runs[task].values()), dtype=float)[:, None]
             mean = aggregate({"m": scores})["m"]["mean"]
-            cells.append(estimate_text(mean.point, mean.low, mean.high))
+            cells.append(mean.text())
         seeds = sorted(set.intersection(*(set(runs[t]) for t in TASKS)))
         lines.append(f"| {NAMES[label]} | {seeds_text(seeds)} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -172,10 +172,8 @@ def values() -> dict[str, object]:
         one_cell = "--"
         if label in FLOWS:
             o = aggregate({"m": matrix(one[label]) / ppo_mean})["m"]["iqm"]
-            one_cell = estimate_text(o.point, o.low, o.high, 2)
-        iqm_rows.append(
-            f"| {NAMES[label]} | {m.size} | {estimate_text(row.point, row.low, row.high, 2)} | {one_cell} |"
-        )
+            one_cell = o.text(2)
+        iqm_rows.append(f"| {NAMES[label]} | {m.size} | {row.text(2)} | {one_cell} |")
     pairs = [(f, "ppo", "return_multi") for f in FLOWS] + [
         ("refpo", "fpo", "return_multi"),
         ("refpo", "fpo", "return_1"),
@@ -186,10 +184,7 @@ def values() -> dict[str, object]:
         source = multi if setting == "return_multi" else one
         p = improvement(matrix(source[x]), matrix(source[y]))
         n = "N = 1" if setting == "return_1" else "N = 10" + (" (PPO: its mean action)" if y == "ppo" else "")
-        poi.append(
-            f"| {NAMES[x]} over {NAMES[y]} | {n} | {estimate_text(p.point, p.low, p.high, 2)} | "
-            f"{verdict(p, NAMES[x], NAMES[y])} |"
-        )
+        poi.append(f"| {NAMES[x]} over {NAMES[y]} | {n} | {p.text(2)} | {verdict(p, NAMES[x], NAMES[y])} |")
     seeds = sorted({s for runs in multi.values() for task in runs.values() for s in task})
     failed = [
         f"{r['task']}/{r['label']}/seed{r['seed']}"

@@ -19,10 +19,7 @@ the sweeps of DMC_SOURCES under runs/sweeps) into dmc/, normalizers_updated/ and
 remedy tried against its collapse). ``--check`` writes nothing: it compares the page with what the files say.
 
 Intervals: the mean over seeds with rliable's 95 % stratified bootstrap interval, and rliable's probability of
-improvement, computed as refpo_warp/sweeps/intervals.py computes them (the same generator seed and resamples, so the
-same numbers) with the statistic written with NumPy (``mean_estimate``, ``improvement_estimate``): the page needs
-about a hundred of them, and rliable's own metrics (SciPy's trimmed mean and Mann-Whitney U per resample) take
-seconds each.
+improvement (refpo_warp/sweeps/intervals.py).
 """
 
 from __future__ import annotations
@@ -41,6 +38,8 @@ from pathlib import Path
 
 import numpy as np
 import yaml
+
+from refpo_warp.sweeps.intervals import Estimate, aggregate, improvement
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[2]
@@ -142,57 +141,16 @@ def seconds(value: float) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ intervals
-@dataclass(frozen=True)
-class Estimate:
-    point: float
-    low: float
-    high: float
-
-    def text(self, digits: int = 0) -> str:
-        from refpo_warp.sweeps.results_page import estimate_text
-
-        return estimate_text(self.point, self.low, self.high, digits)
-
-    @property
-    def separates(self) -> bool:
-        """A probability of improvement whose interval leaves out one half."""
-        return self.low > 0.5 or self.high < 0.5
-
-
-def _bootstrap(scores: dict, statistic) -> tuple:
-    from refpo_warp.sweeps.intervals import REPS, _quiet, _rliable
-
-    library, _ = _rliable()
-    with _quiet(0):
-        return library.get_interval_estimates(scores, statistic, reps=REPS, random_state=np.random.RandomState(0))
-
-
 @functools.cache
 def mean_estimate(values: tuple[float, ...]) -> Estimate:
-    """The mean over seeds with its 95 % stratified-bootstrap interval: ``intervals.aggregate(...)["mean"]``."""
-    points, intervals = _bootstrap({"x": np.asarray(values, float).reshape(-1, 1)}, lambda m: np.array([m.mean()]))
-    return Estimate(float(points["x"][0]), float(intervals["x"][0, 0]), float(intervals["x"][1, 0]))
-
-
-def _probability_of_improvement(x: np.ndarray, y: np.ndarray) -> float:
-    """rliable's ``probability_of_improvement`` (P(X > Y) + P(X = Y) / 2 per task, averaged), without SciPy."""
-    return float(
-        np.mean(
-            [
-                np.greater.outer(x[:, t], y[:, t]).mean() + 0.5 * np.equal.outer(x[:, t], y[:, t]).mean()
-                for t in range(x.shape[1])
-            ]
-        )
-    )
+    """The mean over seeds with its 95 % stratified-bootstrap interval (each score set bootstrapped once)."""
+    return aggregate({"x": np.asarray(values, float).reshape(-1, 1)})["x"]["mean"]
 
 
 @functools.cache
 def improvement_estimate(x: tuple[float, ...], y: tuple[float, ...]) -> Estimate:
-    """P(a run of x ends above a run of y) with its 95 % interval: ``intervals.improvement``."""
-    pair = (np.asarray(x, float).reshape(-1, 1), np.asarray(y, float).reshape(-1, 1))
-    points, intervals = _bootstrap({"xy": pair}, _probability_of_improvement)
-    low, high = np.asarray(intervals["xy"], float).ravel()
-    return Estimate(float(np.asarray(points["xy"]).ravel()[0]), float(low), float(high))
+    """P(a run of x ends above a run of y) with its 95 % interval."""
+    return improvement(np.asarray(x, float).reshape(-1, 1), np.asarray(y, float).reshape(-1, 1))
 
 
 def interval_cell(values: list[float]) -> str:

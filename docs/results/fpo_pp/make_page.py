@@ -19,9 +19,8 @@ What it reads (every seed each file holds):
   values the CPU profile sets for fpo_pp), ``fpo_pp_reference.yaml`` (FPO++'s locomotion run sizes, with their
   places in FPO++'s code), ``../tuning/criteria.yaml`` (the N = 1 share the project tests) and ``gpu_h200/``.
 
-Intervals: rliable's stratified bootstrap (``refpo_warp/sweeps/intervals.py``): the mean's is ``aggregate``'s mean
-(the same resamples and float; ``mean_interval`` leaves out the IQM, which costs eight tenths of the time), the
-probability of improvement is ``improvement``.
+Intervals: rliable's stratified bootstrap (``refpo_warp/sweeps/intervals.py``: ``aggregate``'s mean and
+``improvement``).
 """
 
 from __future__ import annotations
@@ -34,15 +33,14 @@ import re
 import shutil
 import statistics
 import sys
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.sweeps.intervals import REPS, Estimate, improvement
-from refpo_warp.sweeps.results_page import estimate_text, main_args, write_page
+from refpo_warp.sweeps.intervals import Estimate, aggregate, improvement
+from refpo_warp.sweeps.results_page import main_args, write_page
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
@@ -171,27 +169,6 @@ def common_matrix(runs: dict[str, dict[int, float]]) -> np.ndarray | None:
 
 
 # ------------------------------------------------------------------------------------------------ intervals
-def mean_interval(scores: np.ndarray, seed: int = 0) -> Estimate:
-    """``intervals.aggregate(...)["mean"]``: the same seeded resamples and the same floats, without the IQM."""
-    from rliable import library, metrics
-
-    scores = np.asarray(scores, dtype=float)
-    state = np.random.get_state()
-    np.random.seed(seed)
-    try:
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", category=FutureWarning, module="arch")
-            points, intervals = library.get_interval_estimates(
-                {"m": scores},
-                lambda m: np.array([metrics.aggregate_mean(m)]),
-                reps=REPS,
-                random_state=np.random.RandomState(seed),
-            )
-    finally:
-        np.random.set_state(state)
-    return Estimate(float(points["m"][0]), float(intervals["m"][0, 0]), float(intervals["m"][1, 0]))
-
-
 _CELLS: dict[tuple, str] = {}
 
 
@@ -201,8 +178,8 @@ def cell(values: dict[int, float]) -> str:
         return "--"
     key = tuple(values.values())
     if key not in _CELLS:
-        e = mean_interval(np.array(key)[:, None])
-        _CELLS[key] = estimate_text(e.point, e.low, e.high)
+        e = aggregate({"m": np.array(key)[:, None]})["m"]["mean"]
+        _CELLS[key] = e.text()
     return _CELLS[key]
 
 
@@ -444,7 +421,7 @@ def poi_rows(pairs, ms, data, settings=("multi", "headline")) -> tuple[list[str]
             cells = []
             for s in settings:
                 p = ps[s]
-                cells.append("--" if p is None else f"{estimate_text(p.point, p.low, p.high, 2)}")
+                cells.append("--" if p is None else f"{p.text(2)}")
                 if p is not None:
                     kept.append((x, y, task, s, p))
             says = "; ".join(f"{SETTINGS[s][1]}: {short_verdict(ps[s], *label)}" for s in settings if ps[s] is not None)
@@ -760,7 +737,7 @@ def lr_text(data: dict, ms: dict[str, Method]) -> str:
             f"on {short(t)} its N = 10 return is {cell(lr['multi'][t])} against {cell(au['multi'][t])}, higher in "
             f"{higher} of {len(seeds)} seeds ({' / '.join(num(lr['multi'][t][s]) for s in seeds)} against "
             f"{' / '.join(num(au['multi'][t][s]) for s in seeds)}; P(improvement) "
-            f"{estimate_text(p.point, p.low, p.high, 2)}: {short_verdict(p, 'the higher rate', 'its own')})"
+            f"{p.text(2)}: {short_verdict(p, 'the higher rate', 'its own')})"
         )
         if lr["headline"][t] and au["headline"][t]:
             text += f", and its N = 64 zero-noise return {cell(lr['headline'][t])} against {cell(au['headline'][t])}"
@@ -768,7 +745,7 @@ def lr_text(data: dict, ms: dict[str, Method]) -> str:
             q = poi(prof["multi"], lr["multi"], t)
             text += (
                 f"; the first grid's FPO++ reached {cell(prof['multi'][t])} at N = 10 (P(a first-grid run beats one at "
-                f"the higher rate) {estimate_text(q.point, q.low, q.high, 2)}: "
+                f"the higher rate) {q.text(2)}: "
                 f"{short_verdict(q, 'the first grid', 'the higher rate')})"
             )
         parts.append(text)

@@ -31,7 +31,7 @@ RESULTS = HERE.parent
 ROOT = RESULTS.parents[1]
 sys.path.insert(0, str(ROOT))  # refpo_warp, when run from anywhere
 
-from refpo_warp.sweeps.results_page import estimate_text, main_args, write_page  # noqa: E402
+from refpo_warp.sweeps.results_page import main_args, write_page  # noqa: E402
 
 SEARCH_RUNS = HERE / "search" / "report" / "runs.csv"
 CPU_DMC_RUNS = RESULTS / "cpu_dmc" / "runs.csv"
@@ -132,7 +132,7 @@ def intervals(named: dict[str, list[float]]):
 
 
 def interval_text(estimate, digits: int = 0) -> str:
-    return estimate_text(estimate.point, estimate.low, estimate.high, digits)
+    return estimate.text(digits)
 
 
 def separated(a, b) -> bool:

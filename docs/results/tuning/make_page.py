@@ -220,18 +220,6 @@ def big_text(x: float) -> str:
     return f"{x:.0f}" if abs(x) < 1e4 else re.sub(r"e\+?(-?)0*(\d)", r"e\1\2", f"{x:.2g}")
 
 
-def est0(e) -> str:
-    from refpo_warp.sweeps.results_page import estimate_text
-
-    return estimate_text(e.point, e.low, e.high, 0)
-
-
-def est2(e) -> str:
-    from refpo_warp.sweeps.results_page import estimate_text
-
-    return estimate_text(e.point, e.low, e.high, 2)
-
-
 def share_text(x: float) -> str:
     """0.1 -> '10 %'."""
     return f"{100 * x:g} %"
@@ -546,14 +534,14 @@ def fresh_table(fresh: Fresh | None, crit: dict) -> str:
         values = own_name(row.label) if row.kind == "paper" else "tuned"
         lines.append(
             f"| {NAMES[row.label]} | {values}, seeds {seeds_text(row.seeds)} | "
-            + " | ".join(est0(e) for e in row.per_task)
-            + f" | {est2(fresh.iqm[key])} |"
+            + " | ".join(e.text() for e in row.per_task)
+            + f" | {fresh.iqm[key].text(2)} |"
         )
     lines.append("")
     for label, poi in fresh.vs_ppo.items():
         lines.append(
             f"- {NAMES[label]} (tuned) against PPO (tuned): its interval reaches PPO's on {sum(reach(fresh, label))} "
-            f"of {len(TASKS)} tasks, its mean passes PPO's on {sum(passes(fresh, label))}; P(improvement) {est2(poi)}"
+            f"of {len(TASKS)} tasks, its mean passes PPO's on {sum(passes(fresh, label))}; P(improvement) {poi.text(2)}"
         )
     failed = [f"{short(t)}/{row.label}/seed{s}" for row in fresh.rows.values() for (t, s) in row.runs.failed]
     if failed:
@@ -739,7 +727,7 @@ def exit_text(code: int) -> str:
 
 def versus(poi, own: str, above: float) -> str:
     """P(a tuned run beats a run at the method's own values), with the verdict its interval gives."""
-    text = f"P(tuned > {own}) {est2(poi)}"
+    text = f"P(tuned > {own}) {poi.text(2)}"
     if poi.low > above:
         return f"{text}, its interval above {above:g}: the tuned values are better"
     if poi.high < above:
@@ -818,7 +806,7 @@ def goal_text(fresh: Fresh, crit: dict) -> str:
                 failed = sum(f for _, _, _, f in row.values(task))
                 thin.append(
                     f"{CODE_NAMES[label]} on {short(task)} reaches it only through its interval's spread: its mean "
-                    f"{e.point:.0f} lies below PPO's interval {est0(q)}, its own interval is {est0(e)} and its runs "
+                    f"{e.point:.0f} lies below PPO's interval {q.text()}, its own interval is {e.text()} and its runs "
                     f"range {range_text(row, task)}"
                     + (f" ({failed} failed run{'s' if failed > 1 else ''} counted as 0)" if failed else "")
                 )
@@ -842,7 +830,7 @@ def goal_summary(fresh: Fresh, crit: dict) -> str:
 
 def vs_ppo_summary(fresh: Fresh, above: float) -> str:
     pois = fresh.vs_ppo
-    listed = ", ".join(f"{CODE_NAMES[label]} {est2(p)}" for label, p in pois.items())
+    listed = ", ".join(f"{CODE_NAMES[label]} {p.text(2)}" for label, p in pois.items())
     text = f"The probability that a tuned flow run beats a tuned PPO run on the same task: {listed}. "
     reaching = [CODE_NAMES[label] for label, p in pois.items() if p.high >= above]
     seeds = len(fresh.rows["ppo/tuned"].seeds)
@@ -877,7 +865,7 @@ def iqm_summary(fresh: Fresh) -> str:
     narrow = min(flows, key=lambda label: fresh.iqm[f"{label}/tuned"].high - fresh.iqm[f"{label}/tuned"].low)
     return (
         f"{text}; the largest rise is {CODE_NAMES[gain]}'s. The highest tuned flow IQM is {CODE_NAMES[best]}'s, "
-        f"{est2(fresh.iqm[f'{best}/tuned'])}; the narrowest tuned flow interval is {CODE_NAMES[narrow]}'s"
+        f"{fresh.iqm[f'{best}/tuned'].text(2)}; the narrowest tuned flow interval is {CODE_NAMES[narrow]}'s"
     )
 
 
@@ -896,18 +884,20 @@ def adoption(fresh: Fresh, crit: dict, profile: dict[str, dict]) -> tuple[str, s
                 )
                 values = ", ".join(f"{k.rsplit('.', 1)[-1]} {_fmt(v)}" for k, v in now.items())
                 notes.append(
-                    f"{name} passes ({est2(poi)}): its chosen values are now its CPU profile's ({where}: {values})"
+                    f"{name} passes ({poi.text(2)}): its chosen values are now its CPU profile's ({where}: {values})"
                 )
             else:
-                notes.append(f"{name} passes ({est2(poi)}), but its CPU profile does not hold its chosen values yet")
+                notes.append(f"{name} passes ({poi.text(2)}), but its CPU profile does not hold its chosen values yet")
         else:
             kept.append(label)
             own = own_trial(label)
             own_values = {k: float(own[k]) for k in (now or {})} if own and now else None
             if now is not None and own_values is not None and not _same(now, own_values):
-                notes.append(f"{name} does not pass ({est2(poi)}), yet its CPU profile no longer holds its own values")
+                notes.append(
+                    f"{name} does not pass ({poi.text(2)}), yet its CPU profile no longer holds its own values"
+                )
             else:
-                notes.append(f"{name} does not pass ({est2(poi)}) and keeps its {own_name(label)} values")
+                notes.append(f"{name} does not pass ({poi.text(2)}) and keeps its {own_name(label)} values")
     summary = (
         'By the adoption rule (see "Which values became the CPU profile\'s"), '
         + (
@@ -1103,7 +1093,7 @@ def page_values(check: bool) -> dict[str, object]:
         v["summary_adopted"], v["adopt_text"] = adoption(fresh, crit, profile_now)
         row = fresh.rows[f"{goal['method']}/tuned"]
         held, near, total, misses = one_step_counts(row, goal["share"], crit["report"]["within"])
-        v["onestep_iqm"] = est2(fresh.iqm[row.key])
+        v["onestep_iqm"] = fresh.iqm[row.key].text(2)
         v["onestep_held"] = f"{held} of {total}"
         v["onestep_within"] = f"{near} of {total}"
         v["goal_summary"] = goal_summary(fresh, crit)
@@ -1118,8 +1108,8 @@ def page_values(check: bool) -> dict[str, object]:
             f"{goal['share']:g} × N = 10 holds in {r_held} of {r_total} runs"
         )
         v["ppo_vs_paper"] = (
-            f"{against_paper(fresh, 'ppo')}; IQM {est2(fresh.iqm['ppo/tuned'])} against "
-            f"{est2(fresh.iqm['ppo/paper'])}; {versus(fresh.vs_own['ppo'], own_name('ppo'), above)}"
+            f"{against_paper(fresh, 'ppo')}; IQM {fresh.iqm['ppo/tuned'].text(2)} against "
+            f"{fresh.iqm['ppo/paper'].text(2)}; {versus(fresh.vs_own['ppo'], own_name('ppo'), above)}"
         )
         v["ppo_tuning_score"] = f"{picked['ppo']['score']:.3f}"
         v["refpo_vs_paper"] = (
@@ -1127,7 +1117,7 @@ def page_values(check: bool) -> dict[str, object]:
             "N = 10 (N = 1): " + "; ".join(f"{short(t)} {runs_text(refpo, t)}" for t in TASKS)
         )
         v["onestep_text"] = (
-            f"means {means_text(row)}, IQM {est2(fresh.iqm[row.key])}; N = 1 ≥ {goal['share']:g} × N = 10 in "
+            f"means {means_text(row)}, IQM {fresh.iqm[row.key].text(2)}; N = 1 ≥ {goal['share']:g} × N = 10 in "
             f"{held} of {total} runs"
             + (f" (not in {'; '.join(misses)})" if misses else "")
             + f", |N = 1 − N = 10| ≤ {share_text(crit['report']['within'])} of N = 10 in {near} of {total}; tuned "
