@@ -40,7 +40,7 @@ import yaml
 
 from refpo_warp.config.dotted import flatten, parse_overrides
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.sweeps.spec import FINE_TUNING_ONLY, FINGERPRINT_IGNORED, device_type
+from refpo_warp.sweeps.spec import computed_part, device_type
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.paths import REPO_ROOT
 
@@ -160,15 +160,9 @@ def committed_runs(root: Path = RESULTS) -> list[Path]:
 
 # ------------------------------------------------------------------------------------------------ comparing
 def comparable(cfg: dict) -> dict[str, Any]:
-    """A run config as the flat dotted keys that change what the run computes: ``fingerprint``'s view, and also
-    without ``init_from`` when it names no checkpoint (a run from scratch, as every run before the option) and the
-    ``pretrain`` section outside a ``refpo pretrain`` run (one with ``pretrain.dataset``): only ``refpo pretrain``
-    reads it. Both came with ``refpo pretrain``, and a run saved before them lacks them; ``fingerprint`` still
-    counts them (a sweep finds such a run stale)."""
-    ignored = FINGERPRINT_IGNORED + (() if cfg.get("init_from") else (*FINE_TUNING_ONLY, "init_from"))
-    if not (cfg.get("pretrain") or {}).get("dataset"):
-        ignored += ("pretrain",)
-    plain = yaml.dump({k: v for k, v in cfg.items() if k not in ignored}, Dumper=_DUMPER)  # tuples as lists
+    """A run config as the flat dotted keys that change what the run computes (``computed_part``, ``fingerprint``'s
+    view)."""
+    plain = yaml.dump(computed_part(cfg), Dumper=_DUMPER)  # tuples as lists
     return flatten(yaml.load(plain, Loader=_LOADER))
 
 

@@ -44,8 +44,7 @@ REPORT_KEYS = ("curve_methods", "ratio_tasks", "ratio_methods")
 MANAGED = {"task": "tasks=", "algo": "methods=", "seed": "seeds=", "run_dir": "out=", "resume": None}
 # Config keys that do not change what a run computes: a finished run whose config differs only here is kept.
 FINGERPRINT_IGNORED = ("device", "resume", "run_dir", "verbose", "config_dir")
-# Options that act only with init_from: without it a run computes the same whatever they say (and a run saved before
-# one of them existed stays finished).
+# Options that act only with init_from: without it a run computes the same whatever they say.
 FINE_TUNING_ONLY = ("critic_warmup_iterations", "clone_normalizer")
 
 
@@ -312,10 +311,22 @@ def _make_run(sweep: Sweep, task: str, method: Method, seed: int) -> Run:
     return Run(task, method, seed, run_dir, tuple(args))
 
 
+def computed_part(cfg: dict) -> dict:
+    """A resolved run config less what does not change what the run computes: how it runs (``FINGERPRINT_IGNORED``);
+    without a checkpoint to start from, ``init_from`` itself and the options that act only with one; outside a
+    ``refpo pretrain`` run (one with ``pretrain.dataset``), the ``pretrain`` section, which only that command reads.
+    So a run saved before one of these options existed stays finished."""
+    ignored = FINGERPRINT_IGNORED
+    if not cfg.get("init_from"):
+        ignored += (*FINE_TUNING_ONLY, "init_from")
+    if not (cfg.get("pretrain") or {}).get("dataset"):
+        ignored += ("pretrain",)
+    return {k: v for k, v in cfg.items() if k not in ignored}
+
+
 def fingerprint(cfg: dict) -> str:
-    """A hash of a resolved run config, without the keys that do not change what the run computes."""
-    ignored = FINGERPRINT_IGNORED + (() if cfg.get("init_from") else FINE_TUNING_ONLY)
-    data = yaml.safe_load(yaml.safe_dump({k: v for k, v in cfg.items() if k not in ignored}))
+    """A hash of a resolved run config's ``computed_part``."""
+    data = yaml.safe_load(yaml.safe_dump(computed_part(cfg)))
     return hashlib.sha1(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 
