@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib.util
 from dataclasses import dataclass
+from enum import Enum
 from typing import Any
 
 from refpo_warp.models.sampled_policy import NOISE_PROTOCOLS_RULE, NUM_FLOW_STEPS
@@ -133,10 +134,27 @@ class RunnerOptions:
     log_full: bool = option(rule=Flag(), doc="log every statistic rsl_rl has")
 
 
+class DatasetActions(str, Enum):
+    """What a demonstration dataset's actions are (``refpo_warp/demonstrations/dataset_actions.py``)."""
+
+    AUTO = "auto"  # from the dataset: what refpo collect records, else its action space; unsure: refused
+    PRE_SQUASH = "pre_squash"  # the policy's own actions (before the env's tanh): taken as they are
+    ENV_UNITS = "env_units"  # what the env applied, in [-1, 1]: atanh on a tanh task
+
+
 @dataclass(frozen=True)
 class PretrainOptions:
     # read and checked by refpo pretrain (demonstrations/dataset_file.py)
     dataset: str | None = option(rule=Text(optional=True), doc="the demonstration file refpo pretrain reads")
+    dataset_actions: str = option(
+        rule=OneOf(DatasetActions),
+        doc="what the dataset's actions are: pre_squash (the policy's, before a tanh env's squash: taken as they "
+        "are), env_units (the env's, in [-1, 1]: atanh on a tanh task), auto (from the dataset; config.yaml keeps the "
+        "choice)",
+    )
+    squash_margin: float = option(
+        rule=Real(1e-12, 0.5), doc="env_units on a tanh task: |a| clipped to 1 - squash_margin before atanh"
+    )
     epochs: int = option(rule=Int(1, 10**6), doc="passes over the demonstrations")
     batch_size: int = option(rule=Int(1, 1 << 24), doc="demonstrations per gradient step")
     learning_rate: float = option(rule=Real(0, 10, lo_open=True), doc="the pre-training learning rate")

@@ -3,7 +3,9 @@ with optional Gaussian action noise, and write the episodes as a Minari dataset 
 
 Every option (``collect_options.CollectOptions``) is checked and the policy loaded before the dataset is written; an
 existing ``out`` is refused unless ``overwrite=true``. The dataset's metadata records the task, its env options, the
-observation groups and the policy that made it (run dir, checkpoint, algorithm, flow steps, sampling, noise, seed).
+observation groups and the policy that made it (run dir, checkpoint, algorithm, flow steps, sampling, noise, seed),
+the env's ``action_transform`` and that the actions are the policy's own (``action_units: pre_squash``: before the
+env's tanh where it squashes; ``dataset_actions``).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import torch
 
 from refpo_warp.config.saved import load_run
 from refpo_warp.demonstrations.collect_options import MAX_DEFAULT_ENVS, collect_options
+from refpo_warp.demonstrations.dataset_actions import ACTION_TRANSFORM_KEY, ACTION_UNITS_KEY, PRE_SQUASH
 from refpo_warp.demonstrations.dataset_file import write_dataset
 from refpo_warp.demonstrations.rollout import collect_episodes
 from refpo_warp.envs.registry import family_module, get_task, make_env, make_env_cfg
@@ -45,11 +48,14 @@ def collect(flat: dict[str, Any]) -> dict:
     )
     episodes = collect_episodes(policy, env, options["episodes"], groups, options["noise"], generator)
     wall = time.monotonic() - started
-    action_bound = math.inf if getattr(env.cfg, "action_transform", "clip") == "tanh" else 1.0
+    transform = getattr(env.cfg, "action_transform", "clip")
+    action_bound = math.inf if transform == "tanh" else 1.0
     returns = [float(e.rewards.sum()) for e in episodes]
     refpo = {
         "task": task,
         "env": env_options,
+        ACTION_TRANSFORM_KEY: transform,
+        ACTION_UNITS_KEY: PRE_SQUASH,  # the policy's own actions (noise added), as the env received them before tanh
         "obs_groups": groups,
         "obs_group_dims": {g: int(env.get_observations()[g].shape[-1]) for g in groups},
         "policy": {**source, "sample": options["sample"], "action_noise_std": options["noise"]},

@@ -9,8 +9,10 @@ elsewhere (its spaces are checked against the task's by ``check_spaces``).
 
 Reading never runs code from the file: the metadata is JSON and must name both spaces (Minari itself would otherwise
 ``gym.make`` the environment the file names, importing its module), only the ``hdf5`` format is accepted (no pickle
-anywhere in it), and every array is checked (finite, shapes, each episode ending in a termination or a truncation)
-before anything uses it. Every problem is one ``DataFileError`` naming the file (exit 4).
+anywhere in it), and every array is checked (numbers: bool, integer or float; finite; shapes; each episode ending in a
+termination or a truncation) before anything uses it. Every problem is one ``DataFileError`` naming the file (exit 4).
+What the actions are (the policy's own or the env's, on a task that squashes them with tanh) is
+``dataset_actions``'s question.
 """
 
 from __future__ import annotations
@@ -57,6 +59,8 @@ class Dataset:
     obs_dim: int
     action_dim: int
     metadata: dict = field(default_factory=dict)
+    action_low: np.ndarray | None = None  # the bounds of the action space the file records (float64; may be inf)
+    action_high: np.ndarray | None = None
 
     @property
     def refpo(self) -> dict:
@@ -202,7 +206,7 @@ def read_dataset(path: str | Path) -> Dataset:
         storage = storage_class.read(path)
         obs_space, action_space = storage.observation_space, storage.action_space
         total = storage.total_episodes
-        episodes = [_episode(raw) for raw in storage.get_episodes(range(total))] if total else []
+        episodes = [_episode(path, raw) for raw in storage.get_episodes(range(total))] if total else []
     except DataFileError:
         raise
     except Exception as err:  # (h5py and Minari raise many types for a damaged file; one message)
@@ -214,7 +218,10 @@ def read_dataset(path: str | Path) -> Dataset:
         raise DataFileError(f"{path}: the dataset holds no episode")
     for i, e in enumerate(episodes):
         _check_episode(path, i, e, obs_dim, action_dim)
-    return Dataset(path, episodes, obs_dim, action_dim, metadata)
+    low, high = (
+        np.broadcast_to(np.asarray(b, np.float64), (action_dim,)) for b in (action_space.low, action_space.high)
+    )
+    return Dataset(path, episodes, obs_dim, action_dim, metadata, low, high)
 
 
 def _box_dim(path: Path, name: str, space) -> int:
@@ -224,11 +231,11 @@ def _box_dim(path: Path, name: str, space) -> int:
     return int(shape[0])
 
 
-def _episode(raw: dict) -> Episode:
+def _episode(path: Path, raw: dict) -> Episode:
     def array(key: str) -> np.ndarray:
         value = raw.get(key)
         if not isinstance(value, np.ndarray):
-            raise DataFileError(f"episode {raw.get('id')}: '{key}' is {type(value).__name__}, not one array")
+            raise DataFileError(f"{path}: episode {raw.get('id')}: '{key}' is {type(value).__name__}, not one array")
         return value
 
     return Episode(
@@ -236,9 +243,22 @@ def _episode(raw: dict) -> Episode:
     )
 
 
+ARRAYS = ("observations", "actions", "rewards", "terminations", "truncations")
+NUMBER_KINDS = "biuf"  # numpy's kinds of bool, signed and unsigned integer, float: what an array may hold
+
+
 def _check_episode(path: Path, i: int, e: Episode, obs_dim: int, action_dim: int) -> None:
-    t = e.length
     where = f"{path}: episode {i}"
+    for key in ARRAYS:  # before any arithmetic: bytes, text or objects would fail in it
+        dtype = getattr(e, key).dtype
+        if dtype.kind not in NUMBER_KINDS:
+            raise DataFileError(
+                f"{where}: '{key}' holds {dtype} values ({_kind_name(dtype)}); a dataset's arrays hold numbers "
+                f"(bool, integer or float)"
+            )
+    if e.rewards.ndim != 1:
+        raise DataFileError(f"{where}: 'rewards' has shape {e.rewards.shape}, expected one value per step")
+    t = e.length
     if t == 0:
         raise DataFileError(f"{where} has no step")
     expected = {"observations": (t + 1, obs_dim), "actions": (t, action_dim), "terminations": (t,), "truncations": (t,)}
@@ -263,6 +283,11 @@ def _check_episode(path: Path, i: int, e: Episode, obs_dim: int, action_dim: int
         raise DataFileError(
             f"{where}: ends at step {int(np.argmax(ends)) + 1} of {t} and goes on (two episodes in one)"
         )
+
+
+def _kind_name(dtype: np.dtype) -> str:
+    names = {"S": "bytes", "U": "text", "O": "Python objects", "c": "complex numbers", "M": "dates", "m": "time spans"}
+    return names.get(dtype.kind, "not numbers")
 
 
 def check_spaces(dataset: Dataset, task: str, obs_dim: int, action_dim: int) -> None:

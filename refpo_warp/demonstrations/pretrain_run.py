@@ -3,9 +3,11 @@ checkpoint in rsl_rl's layout (``model_0.pt``: actor, critic and optimizer state
 ``refpo train init_from=<this run dir>`` fine-tunes it and a plain rsl_rl ``OnPolicyRunner.load()`` reads it.
 
 Order of work, as ``refpo train``: the config, the run dir and the whole dataset (format, spaces, values, episode
-ends) are checked and the model built before anything is written; a refused run leaves the disk as it was.
+ends, what its actions are: ``dataset_actions``) are checked and the model built before anything is written; a
+refused run leaves the disk as it was.
 
-The run dir holds ``config.yaml`` (the resolved config with its ``pretrain`` section), ``model_0.pt``,
+The run dir holds ``config.yaml`` (the resolved config with its ``pretrain`` section, ``pretrain.dataset_actions``
+being what the actions were taken as: ``auto`` is replaced by its decision), ``model_0.pt``,
 ``progress.jsonl`` (one row per epoch: training and validation loss), TensorBoard events, ``eval.json`` (the cloned
 policy at every ``eval.flow_steps`` N for a flow, the mean action for a Gaussian) and the task's figures.
 """
@@ -33,6 +35,7 @@ from refpo_warp.demonstrations.behaviour_cloning import (
     set_normalizer,
     split_episodes,
 )
+from refpo_warp.demonstrations.dataset_actions import ActionUnits, action_units, squashes
 from refpo_warp.demonstrations.dataset_file import check_spaces, read_dataset
 from refpo_warp.evaluation.evaluate_policy import evaluate_actor, family_evaluation, make_eval_envs, tau_sampler
 from refpo_warp.evaluation.evaluate_run import write_eval_json
@@ -86,8 +89,11 @@ def pretrain(options: list[str] | dict[str, Any]) -> dict:
     check_clonable(actor, cfg["algo"])
     groups = {g: int(env.get_observations()[g].shape[-1]) for g in cfg["runner"]["obs_groups"]["actor"]}
     check_spaces(dataset, cfg["task"], sum(groups.values()), env.num_actions)
-    train_ids, val_ids = split_episodes(len(dataset.episodes), cfg["pretrain"]["validation_fraction"], cfg["seed"])
-    train_data, val_data = dataset.transitions(train_ids), dataset.transitions(val_ids)
+    p = cfg["pretrain"]
+    units = action_units(dataset, p["dataset_actions"], squashes(env), p["squash_margin"], cfg["task"])
+    p["dataset_actions"] = units.units  # config.yaml holds what the actions were taken as (auto: what it decided)
+    train_ids, val_ids = split_episodes(len(dataset.episodes), p["validation_fraction"], cfg["seed"])
+    train_data, val_data = (_training_pairs(dataset, ids, units) for ids in (train_ids, val_ids))
     # --- everything below writes; everything above could refuse the run without touching the disk
     run_dir.mkdir(parents=True, exist_ok=True)
     with run_lock(run_dir), tag_run_dir(run_dir):
@@ -95,7 +101,13 @@ def pretrain(options: list[str] | dict[str, Any]) -> dict:
         for stale in (progress_path(run_dir), run_dir / "eval.json", run_dir / "eval.prev.json"):
             stale.unlink(missing_ok=True)
         dump_config(cfg, run_dir / RUN_CONFIG)
-        return _clone_and_evaluate(run, runner, actor, groups, dataset, train_data, val_data, run_dir)
+        return _clone_and_evaluate(run, runner, actor, groups, dataset, units, train_data, val_data, run_dir)
+
+
+def _training_pairs(dataset: Any, episode_ids: list[int], units: ActionUnits) -> tuple[Any, Any]:
+    """(observations, actions) of the chosen episodes, the actions as the clone's policy outputs them."""
+    obs, actions = dataset.transitions(episode_ids)
+    return obs, units.apply(actions)
 
 
 def _clone_and_evaluate(
@@ -104,6 +116,7 @@ def _clone_and_evaluate(
     actor: Any,
     groups: dict[str, int],
     dataset: Any,
+    units: ActionUnits,
     train_data: Any,
     val_data: Any,
     run_dir: Path,
@@ -122,8 +135,8 @@ def _clone_and_evaluate(
     print(
         f"[pretrain] {cfg['task']} / {cfg['algo']}: cloning the {kind} actor from {dataset.path} "
         f"({len(dataset.episodes)} episodes, {len(train_data[0]):,} training and {len(val_data[0]):,} validation "
-        f"transitions; observation normaliser {'from the data' if normalised else 'off'}), at most {p['epochs']} "
-        f"epochs, run dir {run_dir}",
+        f"transitions; observation normaliser {'from the data' if normalised else 'off'}; actions: "
+        f"{units.describe()}), at most {p['epochs']} epochs, run dir {run_dir}",
         flush=True,
     )
     writer = _tensorboard(run_dir)
@@ -141,7 +154,7 @@ def _clone_and_evaluate(
         )
 
     options = CloneOptions(p["epochs"], p["batch_size"], p["learning_rate"], p["patience"], num_pairs, cfg["seed"])
-    summary = clone(actor, loss, groups, train_data, val_data, options, report)
+    summary = {**clone(actor, loss, groups, train_data, val_data, options, report), **units.summary()}
     print(
         f"[pretrain] best validation loss {summary['best_val_loss']:.4f} at epoch {summary['best_epoch']} "
         f"({summary['epochs_run']} epochs, {summary['time_s']:.0f} s)",

@@ -1,5 +1,5 @@
-"""Helpers of tests/demonstrations: small datasets written through refpo_warp's writer, and the ways a file gets
-damaged."""
+"""Helpers of tests/demonstrations: small datasets written through refpo_warp's writer or Minari's own API (as one
+made elsewhere), and the ways a file gets damaged."""
 
 from __future__ import annotations
 
@@ -30,6 +30,39 @@ def write(path, episodes=None, task="gridworld", **kw):
     obs_dim, action_dim = episodes[0].observations.shape[1], episodes[0].actions.shape[1]
     refpo = {"policy": {"algo": "scripted"}} if task is None else {"task": task, "policy": {"algo": "scripted"}}
     return write_dataset(path, episodes, obs_dim, action_dim, 1.0, refpo, **kw)
+
+
+def minari_dataset(path, episodes, action_low=-1.0, action_high=1.0):
+    """``episodes`` written by Minari's own API (no refpo entry: a dataset made elsewhere), its action space
+    ``Box(action_low, action_high)`` and an unbounded observation space."""
+    import gymnasium as gym
+    from minari.data_collector.episode_buffer import EpisodeBuffer
+    from minari.dataset.minari_storage import MinariStorage
+
+    obs_dim, action_dim = episodes[0].observations.shape[1], episodes[0].actions.shape[1]
+    obs_space = gym.spaces.Box(-np.inf, np.inf, shape=(obs_dim,), dtype=np.float32)
+    action_space = gym.spaces.Box(action_low, action_high, shape=(action_dim,), dtype=np.float32)
+    storage = MinariStorage.new(path, observation_space=obs_space, action_space=action_space)
+    storage.update_episodes(
+        EpisodeBuffer(
+            id=i,
+            observations=e.observations,
+            actions=e.actions,
+            rewards=e.rewards,
+            terminations=e.terminations,
+            truncations=e.truncations,
+            infos={},
+        )
+        for i, e in enumerate(episodes)
+    )
+    return path
+
+
+def with_actions(e: Episode, actions) -> Episode:
+    """``e`` holding ``actions`` (a list of rows, one per step) instead of its own."""
+    actions = np.asarray(actions, np.float32)
+    assert actions.shape == e.actions.shape
+    return Episode(e.observations, actions, e.rewards, e.terminations, e.truncations)
 
 
 def edit_metadata(path, **changes):

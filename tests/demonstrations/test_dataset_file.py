@@ -11,7 +11,7 @@ import pytest
 
 pytest.importorskip("minari")
 
-from dataset_helpers import damage, edit_metadata, episode, write
+from dataset_helpers import damage, edit_metadata, episode, minari_dataset, rewrite_episode, write
 
 from refpo_warp.demonstrations.dataset_file import check_spaces, read_dataset
 from refpo_warp.utils.errors import ConfigError, DataFileError
@@ -43,31 +43,18 @@ def test_minari_reads_what_we_write(tmp_path):
 
 
 def test_a_dataset_made_by_minari_loads(tmp_path):
-    """Written by Minari's own API (no refpo metadata): it loads, and its spaces are checked against the task's."""
-    import gymnasium as gym
-    from minari.data_collector.episode_buffer import EpisodeBuffer
-    from minari.dataset.minari_storage import MinariStorage
-
-    box = gym.spaces.Box(-1, 1, shape=(2,), dtype=np.float32)
-    storage = MinariStorage.new(tmp_path / "other", observation_space=box, action_space=box)
+    """Written by Minari's own API (no refpo metadata): it loads, with its action space's bounds, and its spaces are
+    checked against the task's."""
     e = episode(4)
-    storage.update_episodes(
-        [
-            EpisodeBuffer(
-                id=0,
-                observations=e.observations,
-                actions=e.actions,
-                rewards=e.rewards,
-                terminations=e.terminations,
-                truncations=e.truncations,
-                infos={},
-            )
-        ]
-    )
-    data = read_dataset(tmp_path / "other")
+    data = read_dataset(minari_dataset(tmp_path / "other", [e], action_low=-1.0, action_high=1.0))
+    assert data.refpo == {}
+    np.testing.assert_array_equal(data.episodes[0].actions, e.actions)
+    assert data.action_low.tolist() == [-1.0, -1.0] and data.action_high.tolist() == [1.0, 1.0]
     check_spaces(data, "gridworld", 2, 2)
     with pytest.raises(DataFileError, match=r"observation dim 2, action dim 2.*observation dim 3, action dim 2"):
         check_spaces(data, "dmc_point_mass", 3, 2)
+    unbounded = read_dataset(minari_dataset(tmp_path / "unbounded", [e], action_low=-np.inf, action_high=np.inf))
+    assert np.isinf(unbounded.action_low).all() and np.isinf(unbounded.action_high).all()
 
 
 def test_spaces_of_another_task_are_refused(tmp_path):
@@ -106,6 +93,38 @@ def test_bad_datasets_are_refused_naming_the_file(tmp_path, kind, culprit):
     with pytest.raises(DataFileError, match=culprit) as err:
         read_dataset(path)
     assert str(path.name) in str(err.value)
+
+
+NON_NUMERIC = {
+    "bytes": (lambda a: np.full(a.shape, b"0.5"), "|S3", "bytes"),
+    "text": (lambda a: np.array([str(x) for x in a.ravel()], object).reshape(a.shape), "object", "Python objects"),
+    "complex": (lambda a: a.astype(np.complex64), "complex64", "complex numbers"),
+}
+
+
+@pytest.mark.parametrize("key", ["observations", "actions", "rewards", "terminations", "truncations"])
+@pytest.mark.parametrize("kind", list(NON_NUMERIC))
+def test_an_array_of_no_numbers_is_refused_naming_it_its_episode_and_dtype(tmp_path, key, kind):
+    """Bytes, text (h5py reads variable-length strings as Python objects) or complex numbers, even where they would
+    convert to floats ('0.5'): refused before any arithmetic touches them."""
+    transform, dtype, what = NON_NUMERIC[kind]
+    path = write(tmp_path / "data")
+    rewrite_episode(path, key, transform)
+    with pytest.raises(DataFileError) as err:
+        read_dataset(path)
+    assert str(err.value) == (
+        f"{path}: episode 0: '{key}' holds {dtype} values ({what}); a dataset's arrays hold numbers (bool, integer "
+        f"or float)"
+    )
+
+
+def test_integer_and_bool_arrays_are_numbers(tmp_path):
+    path = write(tmp_path / "data")
+    rewrite_episode(path, "rewards", lambda a: np.arange(len(a), dtype=np.int16))
+    rewrite_episode(path, "terminations", lambda a: a.astype(np.uint8))
+    rewrite_episode(path, "observations", lambda a: (a > 0).astype(bool))
+    data = read_dataset(path)
+    assert data.episodes[0].rewards.tolist() == [0, 1, 2, 3, 4] and bool(data.episodes[0].terminations[-1])
 
 
 def test_reading_never_imports_what_the_file_names(tmp_path):

@@ -48,6 +48,8 @@ def test_collect_writes_the_episodes_and_who_made_them(workflow):
     assert len(data.episodes) == 40 and (data.obs_dim, data.action_dim) == (2, 2)
     assert data.refpo["task"] == "gridworld" and data.refpo["policy"]["kind"] == "gridworld's scripted demonstrator"
     assert data.refpo["policy"]["up_share"] == 0.7 and data.refpo["obs_groups"] == ["policy"]
+    # the policy's own actions, on an env that clips them (pretrain.dataset_actions=auto reads both)
+    assert (data.refpo["action_units"], data.refpo["action_transform"]) == ("pre_squash", "clip")
     # GridWorld's episodes end at a goal row (terminated) or at the 200-step time-out (truncated)
     assert all(bool(e.terminations[-1] or e.truncations[-1]) for e in data.episodes)
     assert all(abs(e.observations[-1, 1]) >= 21 / 24 - 1e-6 for e in data.episodes if e.terminations[-1])
@@ -88,6 +90,8 @@ def test_pretrain_writes_a_run_that_rsl_rl_loads(workflow):
     assert set(results["results"]) == {"N=1", "N=2"} and results["dataset"]["episodes"] == 40
     assert list(clone.glob("events.out.tfevents.*"))
     cfg = load_run(clone, {}).cfg
+    assert cfg["pretrain"]["dataset_actions"] == "pre_squash"  # auto's choice for refpo collect's data, recorded
+    assert results["pretrain"]["dataset_actions"] == "pre_squash" and not results["pretrain"]["actions_atanh"]
     env = make_env("gridworld", num_envs=4, device="cpu")
     runner = OnPolicyRunner(env, rsl_rl_config(cfg), log_dir=None, device="cpu")
     runner.load(str(clone / "model_0.pt"))  # rsl_rl's own loader
