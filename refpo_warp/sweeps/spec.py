@@ -316,11 +316,11 @@ def computed_part(cfg: dict) -> dict:
     without a checkpoint to start from, ``init_from`` itself and the options that act only with one; outside a
     ``refpo pretrain`` run (one with ``pretrain.dataset``), the ``pretrain`` section, which only that command reads.
     So a run saved before one of these options existed stays finished."""
-    ignored = FINGERPRINT_IGNORED
+    ignored: set[str] = set(FINGERPRINT_IGNORED)
     if not cfg.get("init_from"):
-        ignored += (*FINE_TUNING_ONLY, "init_from")
+        ignored.update(FINE_TUNING_ONLY, ["init_from"])
     if not (cfg.get("pretrain") or {}).get("dataset"):
-        ignored += ("pretrain",)
+        ignored.add("pretrain")
     return {k: v for k, v in cfg.items() if k not in ignored}
 
 
