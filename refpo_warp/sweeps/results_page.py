@@ -7,11 +7,12 @@ checks every template.
 A template begins with its header, a YAML comment::
 
     <!-- page
-    script: make_page.py              # the script (in the template's folder) that writes the page
+    script: make_page.py              # the script (in the template's folder) that writes the page, with its flags
     allow: ["N = 1", "N = 10"]        # phrases with digits the prose may hold
     -->
 
-``README.template.md`` writes ``README.md`` (the template's name less ``.template``).
+``README.template.md`` writes ``README.md`` (the template's name less ``.template``). Every page at once:
+``python -m refpo_warp.sweeps.results_page [--check]`` (the pages under docs/results/).
 """
 
 from __future__ import annotations
@@ -75,6 +76,15 @@ def typed_numbers(template: Template) -> list[str]:
     return [line.strip() for line in prose.splitlines() if re.search(r"\d", line)]
 
 
+def script_command(template: Template, check: bool = False) -> list[str]:
+    """The command that writes (or, with ``check``, compares) the template's page."""
+    import shlex
+    import sys
+
+    script, *flags = shlex.split(template.script)
+    return [sys.executable, str(template.path.parent / script), *flags, *(["--check"] if check else [])]
+
+
 def render(template: Template, values: Mapping[str, object]) -> str:
     """The page: the template's fields filled in. A field without a value, or a value no field uses, is an error:
     either is a page that says something other than its script computes."""
@@ -82,7 +92,7 @@ def render(template: Template, values: Mapping[str, object]) -> str:
     unused = sorted(set(values) - set(template.fields))
     if missing or unused:
         raise ConfigError(f"{template.path}: fields without a value {missing}, values without a field {unused}")
-    script = template.path.parent / template.script
+    script = template.path.parent / template.script.split()[0]
     script = script.relative_to(REPO_ROOT) if script.is_relative_to(REPO_ROOT) else script
     banner = (
         f"<!-- Written by `python {script}` from {template.path.name} and the data files it reads: "
@@ -121,3 +131,21 @@ def main_args(description: str):
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--check", action="store_true", help="compare the page with what the data says; exit 1 if not")
     return parser
+
+
+def main() -> None:
+    import subprocess
+    import sys
+
+    parser = main_args("Write (or --check) every results page under docs/results/ with its own script.")
+    args = parser.parse_args()
+    failed = []
+    for template in templates(REPO_ROOT / "docs" / "results"):
+        done = subprocess.run(script_command(template, args.check), check=False, cwd=REPO_ROOT)
+        print(f"{'same' if done.returncode == 0 else 'CHANGED' if args.check else 'FAILED'}: {template.page}")
+        failed += [] if done.returncode == 0 else [str(template.page)]
+    sys.exit(1 if failed else 0)
+
+
+if __name__ == "__main__":
+    main()

@@ -4,12 +4,11 @@ digit outside its fields and the phrases it allows, and its script, run with ``-
 unchanged."""
 
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from refpo_warp.sweeps.results_page import SUFFIX, load_template, render, templates, typed_numbers
+from refpo_warp.sweeps.results_page import SUFFIX, load_template, render, script_command, templates, typed_numbers
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import REPO_ROOT
 
@@ -40,16 +39,11 @@ def test_the_template_types_no_number(template):
 
 @pytest.mark.parametrize("template", TEMPLATES, ids=lambda t: str(t.path.relative_to(RESULTS)))
 def test_the_page_is_what_its_script_writes(template):
-    script = template.path.parent / template.script
-    done = subprocess.run(
-        [sys.executable, str(script), "--check"],
-        check=False,
-        capture_output=True,
-        text=True,
-        cwd=REPO_ROOT,
-        timeout=600,
+    command = script_command(template, check=True)
+    done = subprocess.run(command, check=False, capture_output=True, text=True, cwd=REPO_ROOT, timeout=600)
+    assert done.returncode == 0, (
+        f"{' '.join(command[1:])} changes the page:\n{done.stdout[-4000:]}{done.stderr[-2000:]}"
     )
-    assert done.returncode == 0, f"python {script.relative_to(REPO_ROOT)} changes the page:\n{done.stdout[-4000:]}"
 
 
 def write_template(tmp_path: Path, body: str, allow: str = "[]") -> Path:
