@@ -64,6 +64,40 @@ def point_mass(m, d, ctrl, extra):
     return [*d.qpos, *d.qvel], tol(dist, 0, 0.015, 0.015) * small_control(ctrl)
 
 
+def wall_path_length(p, target, a: float, b: float, inside_tol: float = 1e-5) -> float:
+    """Shortest path from ``p`` to ``target`` (2-D) around the open box (-a, a) x (-b, b): Floyd-Warshall over the
+    visibility graph of the two points and the box's four corners, a segment being visible when none of 2001 points
+    along it lies inside the box shrunk by ``inside_tol`` (a mass pressed into a soft wall sits that little inside)."""
+    nodes = [np.asarray(p, float), np.asarray(target, float)] + [np.array([x, y]) for x in (-a, a) for y in (-b, b)]
+    t = np.linspace(0.0, 1.0, 2001)[:, None]
+
+    def visible(u, v):
+        pts = u + t * (v - u)
+        return not np.any((np.abs(pts[:, 0]) < a - inside_tol) & (np.abs(pts[:, 1]) < b - inside_tol))
+
+    n = len(nodes)
+    dist = np.full((n, n), np.inf)
+    for i in range(n):
+        for j in range(n):
+            if i == j or visible(nodes[i], nodes[j]):
+                dist[i, j] = np.linalg.norm(nodes[i] - nodes[j])
+    for k in range(n):
+        dist = np.minimum(dist, dist[:, k : k + 1] + dist[k : k + 1, :])
+    return float(dist[0, 1])
+
+
+def point_mass_wall(m, d, ctrl, extra):
+    """(near + progress) / 2 * small_control: near, point_mass's term; progress, linear in the path length around the
+    wall grown by the mass's radius, 0 at 1 m beyond the target's radius."""
+    radius = m.geom_size[m.geom("pointmass").id][0]
+    half = m.geom_size[m.geom("wall").id][:2] + radius
+    target = d.geom_xpos[m.geom("target").id][:2]
+    pos = d.geom_xpos[m.geom("pointmass").id][:2]
+    near = tol(float(np.linalg.norm(target - pos)), 0, 0.015, 0.015)
+    progress = tol(wall_path_length(pos, target, *half), 0, 0.015, 1.0, "linear", 0.0)
+    return [*d.qpos, *d.qvel], (near + progress) / 2 * small_control(ctrl)
+
+
 def ball_in_cup(m, d, ctrl, extra):
     delta = np.abs(d.site_xpos[m.site("target").id] - d.xpos[m.body("ball").id])[[0, 2]]
     half = m.site_size[m.site("target").id][[0, 2]] - m.geom_size[m.geom("ball").id][0]
@@ -113,6 +147,7 @@ REFERENCES = {
     "cartpole_swingup": cartpole,
     "pendulum_swingup": pendulum,
     "point_mass": point_mass,
+    "point_mass_wall": point_mass_wall,
     "ball_in_cup": ball_in_cup,
     "finger_spin": finger_spin,
     "reacher_easy": reacher_easy,

@@ -18,6 +18,7 @@ SPACES = {
     "cartpole_swingup": (5, 1, 0.01),
     "pendulum_swingup": (3, 1, 0.02),
     "point_mass": (4, 2, 0.02),
+    "point_mass_wall": (4, 2, 0.02),
     "ball_in_cup": (8, 2, 0.02),
     "finger_spin": (9, 2, 0.02),
     "reacher_easy": (6, 2, 0.02),
