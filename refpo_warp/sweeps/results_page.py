@@ -142,7 +142,8 @@ def main() -> None:
     failed = []
     for template in templates(REPO_ROOT / "docs" / "results"):
         done = subprocess.run(script_command(template, args.check), check=False, cwd=REPO_ROOT)
-        print(f"{'same' if done.returncode == 0 else 'CHANGED' if args.check else 'FAILED'}: {template.page}")
+        state = ("same" if args.check else "written") if done.returncode == 0 else "CHANGED" if args.check else "FAILED"
+        print(f"{state}: {template.page.relative_to(REPO_ROOT)}")
         failed += [] if done.returncode == 0 else [str(template.page)]
     sys.exit(1 if failed else 0)
 
