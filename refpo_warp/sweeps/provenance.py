@@ -48,6 +48,9 @@ RESULTS = REPO_ROOT / "docs" / "results"
 REGISTRY = RESULTS / "provenance.yaml"
 RUN_CONFIG = "config.yaml"
 ABSENT = "(absent)"  # a key one of the two configs does not have
+# Options whose "auto" a run's config.yaml records as what it decided (refpo pretrain: from the dataset), so a
+# command left at auto makes a run saved with any of these values.
+DECIDED_FROM_AUTO = {"pretrain.dataset_actions": ("pre_squash", "env_units")}
 ENTRY_KEYS = ("folder", "page", "command", "trials", "made_at", "difference")
 COMMANDS = ("sweep", "tune", "train", "pretrain")
 _LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml where installed: 205 saved configs read fast
@@ -174,6 +177,8 @@ def config_difference(saved: dict, today: dict) -> dict[str, list]:
     out = {}
     for key in sorted(set(old) | set(new)):
         pair = [old.get(key, ABSENT), new.get(key, ABSENT)]
+        if key in DECIDED_FROM_AUTO and pair[1] == "auto" and pair[0] in DECIDED_FROM_AUTO[key]:
+            continue  # refpo pretrain saves what auto decided from the dataset: the same run
         if json.dumps(pair[0], sort_keys=True) != json.dumps(pair[1], sort_keys=True):
             out[key] = pair
     return out
