@@ -108,7 +108,8 @@ def cpu_runs() -> dict[str, dict[str, dict[int, dict]]]:
     for r in read_csv(CPU_DMC):
         if r["status"] != "ok":
             continue
-        row = {k: number(v) for k, v in r.items() if k not in ("task", "label", "status", "note", "run_dir")}
+        text = ("task", "label", "status", "note", "run_dir", "headline", "health")  # the columns that are not numbers
+        row = {k: number(v) for k, v in r.items() if k not in text}
         out.setdefault(r["label"], {}).setdefault(r["task"], {})[int(r["seed"])] = row
     return out
 
@@ -180,7 +181,8 @@ def cpu_table(data) -> tuple[str, str]:
         f"Cells: the mean over the seeds ({seeds_text(seeds)}) with its 95 % stratified-bootstrap interval; the "
         f'"all {len(tasks)}" rows pool each method\'s {" or ".join(map(str, counts))} runs over the tasks (resampled '
         "within each task), as the paper's table pools tasks; Straightness and Explosion: the mean over the runs. "
-        "`cpu_dmc/report.md` gives the same runs as mean ± population std, the paper's form."
+        "`cpu_dmc/report.md` is `refpo report`'s table of the first seeds as made (mean ± population std, the "
+        "paper's form); `cpu_dmc/README.md` compares the methods over every seed with probabilities of improvement."
     )
     return "\n".join(lines), note
 

@@ -36,6 +36,8 @@ import re
 import sys
 from pathlib import Path
 
+from refpo_warp.sweeps.committed_runs import seeds_text
+
 RESULTS = Path(__file__).resolve().parent
 ROOT = RESULTS.parents[1]
 README = ROOT / "README.md"
@@ -79,21 +81,6 @@ def relative(path: Path) -> str:
 
 def number(text: str | None) -> float | None:
     return float(text) if text not in ("", None) else None
-
-
-def seeds_text(seeds) -> str:
-    """``1-3, 21-22``: the seeds as runs of consecutive numbers."""
-    seeds = sorted({int(s) for s in seeds})
-    if not seeds:
-        return "none"
-    parts, i = [], 0
-    while i < len(seeds):
-        j = i
-        while j + 1 < len(seeds) and seeds[j + 1] == seeds[j] + 1:
-            j += 1
-        parts.append(str(seeds[i]) if i == j else f"{seeds[i]}-{seeds[j]}")
-        i = j + 1
-    return ", ".join(parts)
 
 
 @functools.cache

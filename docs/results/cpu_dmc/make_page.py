@@ -14,15 +14,13 @@ A failed run counts as return 0, as the tuning page counts it.
 from __future__ import annotations
 
 import csv
-import io
-import json
-import shutil
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
+from refpo_warp.sweeps.committed_runs import append_runs, seeds_text
 from refpo_warp.sweeps.intervals import aggregate, improvement
 from refpo_warp.sweeps.results_page import main_args, write_page
 
@@ -68,60 +66,13 @@ def matrix(runs: dict[str, dict[int, float]]) -> np.ndarray:
     return np.array([[runs[t][s] for t in TASKS] for s in seeds])
 
 
-def seeds_text(seeds: list[int]) -> str:
-    """1, 2, 3, 21, 22 -> '1-3, 21-22'."""
-    parts, start = [], None
-    for i, s in enumerate(seeds):
-        start = s if start is None else start
-        if i + 1 == len(seeds) or seeds[i + 1] != s + 1:
-            parts.append(str(s) if s == start else f"{start}-{s}")
-            start = None
-    return ", ".join(parts)
-
-
 # ------------------------------------------------------------------------------------------------ adding runs
-def _eval_rows(progress: Path) -> str:
-    keep = []
-    for line in progress.read_text().splitlines():
-        row = json.loads(line)
-        if any(k.startswith("eval/return") for k in row):
-            keep.append(
-                json.dumps(
-                    {
-                        k: v
-                        for k, v in row.items()
-                        if k in ("iteration", "env_steps", "time_s") or k.startswith("eval/return")
-                    }
-                )
-            )
-    return "\n".join(keep) + ("\n" if keep else "")
-
-
 def add_runs(sweep_dir: Path) -> None:
     """Append the sweep's new seeds to the runs.csv that holds its rows, copying their small files beside it."""
-    new = read_rows(sweep_dir / "report" / "runs.csv")
     target = next(path for path, (name, _) in SWEEP_OF.items() if name == sweep_dir.name)
     runs_dir = SWEEP_OF[target][1] or target.parent.parent / "runs"
-    old = read_rows(target)
-    have = {(r["task"], r["label"], r["seed"]) for r in old}
-    added = [r for r in new if (r["task"], r["label"], r["seed"]) not in have and r["status"] in ("ok", "failed")]
-    for row in added:
-        run = Path(row["run_dir"])
-        dst = runs_dir / row["task"] / row["label"] / f"seed{row['seed']}"
-        dst.mkdir(parents=True, exist_ok=True)
-        for name in ("config.yaml", "eval.json"):
-            if (run / name).exists():
-                shutil.copy2(run / name, dst / name)
-        if (run / "progress.jsonl").exists():
-            (dst / "progress_eval.jsonl").write_text(_eval_rows(run / "progress.jsonl"))
-        row["run_dir"] = str(dst.relative_to(ROOT))
-    columns = list(dict.fromkeys([*old[0].keys(), *(k for r in added for k in r)]))
-    out = io.StringIO()
-    writer = csv.DictWriter(out, columns, lineterminator="\n", restval="")
-    writer.writeheader()
-    writer.writerows([*old, *added])
-    target.write_text(out.getvalue())
-    print(f"{target.relative_to(ROOT)}: {len(added)} run(s) added from {sweep_dir}")
+    added = append_runs(sweep_dir, target, runs_dir, ROOT)
+    print(f"{target.relative_to(ROOT)}: {added} run(s) added from {sweep_dir}")
 
 
 # ------------------------------------------------------------------------------------------------ the page

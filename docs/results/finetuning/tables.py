@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from refpo_warp.sweeps.committed_runs import seeds_text
 from refpo_warp.sweeps.intervals import Estimate, aggregate, improvement
 
 HERE = Path(__file__).resolve().parent
@@ -101,17 +102,6 @@ FLOWS_HELD = ("refpo", "refpo_adaptive", "refpo_aspo", "refpo_onestep")  # fine-
 
 
 # ------------------------------------------------------------------------------------------------ formatting
-def seeds_text(seeds) -> str:
-    """1, 2, 3, 5 -> '1-3, 5'."""
-    seeds, parts, start = sorted(seeds), [], None
-    for i, s in enumerate(seeds):
-        start = s if start is None else start
-        if i + 1 == len(seeds) or seeds[i + 1] != s + 1:
-            parts.append(str(s) if s == start else f"{start}-{s}")
-            start = None
-    return ", ".join(parts)
-
-
 def words(items: list[str]) -> str:
     """'a', 'a and b', 'a, b and c'."""
     items = list(items)

@@ -27,10 +27,8 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import io
 import json
 import re
-import shutil
 import statistics
 import sys
 from dataclasses import dataclass
@@ -39,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
+from refpo_warp.sweeps.committed_runs import append_runs, seeds_text
 from refpo_warp.sweeps.intervals import Estimate, aggregate, improvement
 from refpo_warp.sweeps.results_page import main_args, write_page
 
@@ -148,18 +147,6 @@ def finals(method: Method, setting: str) -> dict[str, dict[int, float]]:
         for row in failed:
             out[row["task"]][int(row["seed"])] = 0.0
     return {t: dict(sorted(seeds.items())) for t, seeds in out.items()}
-
-
-def seeds_text(seeds) -> str:
-    """1, 2, 3, 21, 22 -> '1-3, 21-22'."""
-    seeds = sorted(seeds)
-    parts, start = [], None
-    for i, s in enumerate(seeds):
-        start = s if start is None else start
-        if i + 1 == len(seeds) or seeds[i + 1] != s + 1:
-            parts.append(str(s) if s == start else f"{start}-{s}")
-            start = None
-    return ", ".join(parts) if parts else "none"
 
 
 def common_matrix(runs: dict[str, dict[int, float]]) -> np.ndarray | None:
@@ -461,47 +448,10 @@ def small_verdicts(kept: list[tuple], ms: dict[str, Method]) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ adding runs
-def _eval_rows(progress: Path) -> str:
-    keep = []
-    for line in progress.read_text().splitlines():
-        row = json.loads(line)
-        if any(k.startswith("eval/return") for k in row):
-            keep.append(
-                json.dumps(
-                    {
-                        k: v
-                        for k, v in row.items()
-                        if k in ("iteration", "env_steps", "time_s") or k.startswith("eval/return")
-                    }
-                )
-            )
-    return "\n".join(keep) + ("\n" if keep else "")
-
-
 def add_runs(sweep_dir: Path) -> None:
     """Append the sweep's new (task, label, seed) rows to report/runs.csv, copying their small files under runs/."""
-    new = read_rows(sweep_dir / "report" / "runs.csv")
-    old = read_rows(REPORT)
-    have = {(r["task"], r["label"], r["seed"]) for r in old}
-    added = [r for r in new if (r["task"], r["label"], r["seed"]) not in have and r["status"] in ("ok", "failed")]
-    for row in added:
-        run = Path(row["run_dir"])
-        run = run if run.is_absolute() or run.exists() else sweep_dir / run
-        dst = RUNS / row["task"] / row["label"] / f"seed{row['seed']}"
-        dst.mkdir(parents=True, exist_ok=True)
-        for name in ("config.yaml", "eval.json"):
-            if (run / name).exists():
-                shutil.copy2(run / name, dst / name)
-        if (run / "progress.jsonl").exists():
-            (dst / "progress_eval.jsonl").write_text(_eval_rows(run / "progress.jsonl"))
-        row["run_dir"] = str(dst.relative_to(ROOT))
-    columns = list(dict.fromkeys([*old[0].keys(), *(k for r in added for k in r)]))
-    out = io.StringIO()
-    writer = csv.DictWriter(out, columns, lineterminator="\n", restval="")
-    writer.writeheader()
-    writer.writerows([*old, *added])
-    REPORT.write_text(out.getvalue())
-    print(f"{REPORT.relative_to(ROOT)}: {len(added)} run(s) added from {sweep_dir}")
+    added = append_runs(sweep_dir, REPORT, RUNS, ROOT)
+    print(f"{REPORT.relative_to(ROOT)}: {added} run(s) added from {sweep_dir}")
 
 
 # ------------------------------------------------------------------------------------------------ the page's parts

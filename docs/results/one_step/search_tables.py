@@ -31,6 +31,7 @@ RESULTS = HERE.parent
 ROOT = RESULTS.parents[1]
 sys.path.insert(0, str(ROOT))  # refpo_warp, when run from anywhere
 
+from refpo_warp.sweeps.committed_runs import seeds_text  # noqa: E402
 from refpo_warp.sweeps.results_page import main_args, write_page  # noqa: E402
 
 SEARCH_RUNS = HERE / "search" / "report" / "runs.csv"
@@ -98,18 +99,6 @@ def span(values, digits: int = 2) -> str:
 
 def listing(values, digits: int = 0, sep: str = " / ") -> str:
     return sep.join(num(v, digits) for v in values)
-
-
-def seeds_text(seeds) -> str:
-    """1, 2, 3, 21, 22 -> '1-3, 21-22'."""
-    seeds = sorted(seeds)
-    parts, start = [], None
-    for i, s in enumerate(seeds):
-        start = s if start is None else start
-        if i + 1 == len(seeds) or seeds[i + 1] != s + 1:
-            parts.append(str(s) if s == start else f"{start}-{s}")
-            start = None
-    return ", ".join(parts)
 
 
 def words(items: list[str]) -> str:

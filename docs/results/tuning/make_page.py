@@ -33,6 +33,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from refpo_warp.sweeps.committed_runs import copy_run, seeds_text
+
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
 REPO = RESULTS.parents[1]
@@ -61,47 +63,15 @@ LABELS = ("ppo", "refpo", "refpo_onestep", "fpo_pp")
 FLOWS = ("refpo", "refpo_onestep", "fpo_pp")
 NAMES = {"ppo": "PPO", "refpo": "ReFPO", "refpo_onestep": "ReFPO one-step", "fpo_pp": "FPO++"}
 CODE_NAMES = {"ppo": "PPO", "refpo": "ReFPO", "refpo_onestep": "`refpo_onestep`", "fpo_pp": "FPO++"}
-RUN_FILES = ("config.yaml", "eval.json")
 
 
 # ------------------------------------------------------------------------------------------------ copying
-def _eval_rows(src: Path) -> str:
-    """The progress rows that hold a periodic evaluation (the curves a page needs), not the per-update rows."""
-    keep = []
-    for line in src.read_text().splitlines():
-        try:
-            row = json.loads(line)
-        except ValueError:
-            continue
-        if any(k.startswith("eval/return") for k in row):
-            keep.append(
-                json.dumps(
-                    {
-                        k: v
-                        for k, v in row.items()
-                        if k in ("iteration", "env_steps", "time_s")
-                        or k.startswith("eval/return")
-                        or k == "reward_mean"
-                    }
-                )
-            )
-    return "\n".join(keep) + ("\n" if keep else "")
-
-
 def copy_runs(src: Path, dst: Path) -> int:
     """Every finished run under ``src`` (a folder with eval.json): its small files into the same place under dst."""
-    count = 0
-    for evaluation in sorted(src.rglob("eval.json")):
-        run = evaluation.parent
-        target = dst / run.relative_to(src)
-        target.mkdir(parents=True, exist_ok=True)
-        for name in RUN_FILES:
-            if (run / name).exists():
-                shutil.copy2(run / name, target / name)
-        if (run / "progress.jsonl").exists():
-            (target / "progress_eval.jsonl").write_text(_eval_rows(run / "progress.jsonl"))
-        count += 1
-    return count
+    runs = [evaluation.parent for evaluation in sorted(src.rglob("eval.json"))]
+    for run in runs:
+        copy_run(run, dst / run.relative_to(src))
+    return len(runs)
 
 
 def sync_study(src: Path) -> None:
@@ -181,18 +151,6 @@ def _fmt(value, digits: int = 3) -> str:
     if float(value).is_integer() and abs(value) >= 1:
         return str(int(value))
     return f"{value:.{digits}g}"
-
-
-def seeds_text(seeds) -> str:
-    """The seeds, runs of three or more written as a range: 1, 2, 3, 21, 22 -> '1-3, 21, 22'."""
-    seeds, parts, i = sorted(set(seeds)), [], 0
-    while i < len(seeds):
-        j = i
-        while j + 1 < len(seeds) and seeds[j + 1] == seeds[j] + 1:
-            j += 1
-        parts += [f"{seeds[i]}-{seeds[j]}"] if j - i >= 2 else [str(s) for s in seeds[i : j + 1]]
-        i = j + 1
-    return ", ".join(parts)
 
 
 def and_list(items) -> str:

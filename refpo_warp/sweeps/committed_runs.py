@@ -1,0 +1,79 @@
+"""Committing a sweep's finished runs beside a results page: each run's small files (``config.yaml``, ``eval.json`` and
+its periodic-evaluation rows) copied under the page's folder, and its ``refpo report`` row appended to the page's
+``runs.csv``; and how pages name the seeds they hold."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import shutil
+from pathlib import Path
+
+from refpo_warp.utils.atomic_files import write_text
+
+RUN_FILES = ("config.yaml", "eval.json")
+EVAL_ROW_KEYS = ("iteration", "env_steps", "time_s", "reward_mean")
+
+
+def eval_rows(progress: Path) -> str:
+    """The rows of a run's ``progress.jsonl`` that hold a periodic evaluation (the curves a page draws), each with
+    only its position, its training reward and its ``eval/return*`` values."""
+    keep = []
+    for line in progress.read_text().splitlines():
+        try:
+            row = json.loads(line)
+        except ValueError:
+            continue
+        if any(k.startswith("eval/return") for k in row):
+            keep.append(json.dumps({k: v for k, v in row.items() if k in EVAL_ROW_KEYS or k.startswith("eval/return")}))
+    return "\n".join(keep) + ("\n" if keep else "")
+
+
+def copy_run(run: Path, dst: Path) -> None:
+    """A run's small files into ``dst``: config.yaml, eval.json, and progress_eval.jsonl from its progress.jsonl."""
+    dst.mkdir(parents=True, exist_ok=True)
+    for name in RUN_FILES:
+        if (run / name).exists():
+            shutil.copy2(run / name, dst / name)
+    if (run / "progress.jsonl").exists():
+        write_text(dst / "progress_eval.jsonl", eval_rows(run / "progress.jsonl"))
+
+
+def read_rows(path: Path) -> list[dict]:
+    with path.open(newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def append_runs(sweep_dir: Path, runs_csv: Path, runs_dir: Path, root: Path) -> int:
+    """Append the (task, label, seed) rows of ``<sweep_dir>/report/runs.csv`` (``refpo report``'s) that ``runs_csv``
+    lacks, finished or failed, copying each run's small files to ``runs_dir/<task>/<label>/seed<k>`` (the row's
+    ``run_dir`` then names that folder, relative to ``root``). Returns the rows added."""
+    new = read_rows(sweep_dir / "report" / "runs.csv")
+    old = read_rows(runs_csv)
+    have = {(r["task"], r["label"], r["seed"]) for r in old}
+    added = [r for r in new if (r["task"], r["label"], r["seed"]) not in have and r["status"] in ("ok", "failed")]
+    for row in added:
+        run = Path(row["run_dir"])
+        run = run if run.is_absolute() or run.exists() else sweep_dir / run
+        dst = runs_dir / row["task"] / row["label"] / f"seed{row['seed']}"
+        copy_run(run, dst)
+        row["run_dir"] = str(dst.relative_to(root))
+    columns = list(dict.fromkeys([*old[0].keys(), *(k for r in added for k in r)]))
+    out = io.StringIO()
+    writer = csv.DictWriter(out, columns, lineterminator="\n", restval="")
+    writer.writeheader()
+    writer.writerows([*old, *added])
+    write_text(runs_csv, out.getvalue())
+    return len(added)
+
+
+def seeds_text(seeds) -> str:
+    """How a page names a set of seeds: 1, 2, 3, 21, 22 -> '1-3, 21-22'; none -> 'none'."""
+    seeds, parts, start = sorted({int(s) for s in seeds}), [], None
+    for i, s in enumerate(seeds):
+        start = s if start is None else start
+        if i + 1 == len(seeds) or seeds[i + 1] != s + 1:
+            parts.append(str(s) if s == start else f"{start}-{s}")
+            start = None
+    return ", ".join(parts) if parts else "none"

@@ -1,0 +1,52 @@
+"""Committing a sweep's runs beside a results page: the rows appended once, the small files copied, the evaluation
+rows kept; and the pages' names for sets of seeds."""
+
+import csv
+import json
+
+from refpo_warp.sweeps.committed_runs import append_runs, eval_rows, seeds_text
+
+
+def test_seeds_text_writes_runs_of_consecutive_seeds_as_ranges():
+    assert seeds_text([22, 1, 3, 2, 21]) == "1-3, 21-22"
+    assert seeds_text(["5", 7, 7]) == "5, 7"
+    assert seeds_text([]) == "none"
+
+
+def write_rows(path, rows):
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def test_append_runs_adds_each_new_seed_once_with_its_small_files(tmp_path):
+    sweep = tmp_path / "runs" / "sweeps" / "grid"
+    run = sweep / "task_a" / "ppo" / "seed21"
+    run.mkdir(parents=True)
+    (run / "config.yaml").write_text("seed: 21\n")
+    (run / "eval.json").write_text("{}")
+    (run / "model_3.pt").write_bytes(b"not copied")
+    progress = [{"iteration": 0, "Loss/value": 1.0}, {"iteration": 1, "env_steps": 9, "eval/return_N10": 5.0}]
+    (run / "progress.jsonl").write_text("\n".join(map(json.dumps, progress)) + "\n")
+    (sweep / "report").mkdir()
+    new = [
+        {"task": "task_a", "label": "ppo", "seed": "1", "status": "ok", "minutes": "2", "run_dir": "elsewhere"},
+        {"task": "task_a", "label": "ppo", "seed": "21", "status": "ok", "minutes": "3", "run_dir": str(run)},
+        {"task": "task_a", "label": "ppo", "seed": "22", "status": "missing", "minutes": "", "run_dir": "x"},
+    ]
+    write_rows(sweep / "report" / "runs.csv", new)
+    page = tmp_path / "docs"
+    page.mkdir()
+    write_rows(page / "runs.csv", [{"task": "task_a", "label": "ppo", "seed": "1", "status": "ok", "run_dir": "r"}])
+
+    assert append_runs(sweep, page / "runs.csv", page / "runs", tmp_path) == 1
+    assert append_runs(sweep, page / "runs.csv", page / "runs", tmp_path) == 0  # already there
+    rows = list(csv.DictReader((page / "runs.csv").open()))
+    assert [(r["seed"], r["minutes"], r["run_dir"]) for r in rows] == [
+        ("1", "", "r"),
+        ("21", "3", "docs/runs/task_a/ppo/seed21"),
+    ]
+    kept = page / "runs" / "task_a" / "ppo" / "seed21"
+    assert sorted(p.name for p in kept.iterdir()) == ["config.yaml", "eval.json", "progress_eval.jsonl"]
+    assert eval_rows(run / "progress.jsonl") == json.dumps(progress[1]) + "\n"
