@@ -117,10 +117,10 @@ def test_named_sweeps_resolve():
     cfg = resolve_config(parse_overrides([*paper.runs[2].args, "device=cuda"]), device_type="cuda")
     assert (cfg["num_envs"], cfg["total_env_steps"], cfg["algorithm"]["reflow_coef"]) == (2048, 100_000_000, 0.04)
     cpu = load_sweep("cpu_dmc")
-    assert len(cpu.tasks) >= 3 and all(t.startswith("dmc_") for t in cpu.tasks) and cpu.seeds == [1, 2, 3]
+    assert len(cpu.tasks) >= 3 and all(t.startswith("dmc_") for t in cpu.tasks) and cpu.seeds == [1, 2, 3, 21, 22]
     assert [(m.label, m.algo) for m in cpu.methods] == [("ppo", "ppo"), ("fpo", "fpo"), ("refpo", "refpo")]
     assert cpu.methods[2].overrides == {"algorithm.reflow_coef": 0.04} and cpu.device == "cpu"
-    assert len(validate(cpu)) == len(cpu.tasks) * 9
+    assert len(validate(cpu)) == len(cpu.tasks) * 3 * 5
 
 
 def test_fingerprint_ignores_options_that_do_not_change_the_run():
