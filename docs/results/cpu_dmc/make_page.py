@@ -36,7 +36,11 @@ SOURCES = {  # label shown -> (runs.csv, label in it)
 NAMES = {"ppo": "PPO", "fpo": "FPO", "refpo": "ReFPO", "refpo_onestep": "ReFPO one-step"}
 FLOWS = ("fpo", "refpo", "refpo_onestep")
 TASKS = ("dmc_cartpole_balance", "dmc_point_mass", "dmc_reacher_easy")
-SWEEP_OF = {HERE / "runs.csv": ("cpu_dmc", HERE / "runs"), SOURCES["refpo_onestep"][0]: ("cpu_onestep", None)}
+# sweep name -> (the runs.csv that holds its rows, the folder its runs' small files go to)
+SWEEP_OF = {
+    "cpu_dmc": (HERE / "runs.csv", HERE / "runs"),
+    "cpu_onestep": (SOURCES["refpo_onestep"][0], RESULTS / "one_step" / "search" / "runs"),
+}
 
 
 # ------------------------------------------------------------------------------------------------ data
@@ -69,8 +73,7 @@ def matrix(runs: dict[str, dict[int, float]]) -> np.ndarray:
 # ------------------------------------------------------------------------------------------------ adding runs
 def add_runs(sweep_dir: Path) -> None:
     """Append the sweep's new seeds to the runs.csv that holds its rows, copying their small files beside it."""
-    target = next(path for path, (name, _) in SWEEP_OF.items() if name == sweep_dir.name)
-    runs_dir = SWEEP_OF[target][1] or target.parent.parent / "runs"
+    target, runs_dir = SWEEP_OF[sweep_dir.name]
     added = append_runs(sweep_dir, target, runs_dir, ROOT)
     print(f"{target.relative_to(ROOT)}: {added} run(s) added from {sweep_dir}")
 
