@@ -55,9 +55,11 @@ class WarpVecEnv(VecEnv):
     """rsl_rl ``VecEnv`` over Warp kernels; see the module docstring for the step and the subclass contract."""
 
     cfg_class: ClassVar[type] = EnvCfg
-    episode_metrics: ClassVar[tuple[str, ...]] = ()
+    episode_metrics: tuple[str, ...] = ()
     """Per-episode values a subclass writes every step (valid where the episode ended, e.g. ``success``); logged as
-    ``Episode/<name>`` and used by evaluation."""
+    ``Episode/<name>`` and used by evaluation. A subclass may set it per instance in ``_spaces`` (a DMC task's own)."""
+    curve_metrics: tuple[str, ...] = ()
+    """Those of ``episode_metrics`` the periodic evaluation logs beside the return (``eval/<name>_N10``)."""
     reward_terms: ClassVar[tuple[str, ...]] = ()
     """Named parts of the reward whose per-step values the subclass writes to ``buffers.reward_terms``; their sums
     over each episode are logged as ``Episode_Reward/<name>``."""

@@ -11,10 +11,11 @@ Gaussian actor once, with its mean action. A task family may add ``refpo_warp/ta
 
 Evaluation during training (``periodic_evaluator``, between the runner's chunks: ``refpo_warp/training/train_run.py``):
 every ``eval.interval`` iterations the returns at ``eval.interval_flow_steps`` under each ``eval.initial_noise``
-protocol (``eval/return_N<n>``, ``eval/return_N<n>_zero``, or ``eval/return`` for a Gaussian actor) and, for flows, the
-Jacobian statistics (``Flow/jacobian_*``) on the visited observations. It draws from random streams of its own, seeded
-from the run's seed and the iteration (``refpo_warp.utils.rng``), and reads the policy without updating its
-normaliser: a run trains the same, bit for bit, with any ``eval.interval``.
+protocol (``eval/return_N<n>``, ``eval/return_N<n>_zero``, or ``eval/return`` for a Gaussian actor), the means of the
+env's ``curve_metrics`` beside them (``eval/success_N<n>``) and, for flows, the Jacobian statistics
+(``Flow/jacobian_*``) on the visited observations. It draws from random streams of its own, seeded from the run's
+seed and the iteration (``refpo_warp.utils.rng``), and reads the policy without updating its normaliser: a run
+trains the same, bit for bit, with any ``eval.interval``.
 """
 
 from __future__ import annotations
@@ -51,12 +52,12 @@ def setting_name(flow_steps: int, initial_noise: str = "random") -> str:
     return f"N={flow_steps}" if initial_noise == "random" else f"N={flow_steps}/{initial_noise}"
 
 
-def curve_key(setting: str) -> str:
-    """The progress-log key of a setting's periodic return: ``eval/return_N10``, ``eval/return_N10_zero``,
-    ``eval/return`` (mean action)."""
+def curve_key(setting: str, metric: str = "return") -> str:
+    """The progress-log key of a setting's periodic return (or of an env's curve metric): ``eval/return_N10``,
+    ``eval/return_N10_zero``, ``eval/return`` (mean action), ``eval/success_N10``."""
     if not setting.startswith("N="):
-        return "eval/return"
-    return "eval/return_N" + setting[2:].replace("/", "_")
+        return f"eval/{metric}"
+    return f"eval/{metric}_N" + setting[2:].replace("/", "_")
 
 
 def make_policy(actor, flow_steps: int | None, initial_noise: str = "random", perturbation: bool = False):
@@ -143,6 +144,8 @@ def periodic_evaluator(run: Resolution, runner: Any) -> Evaluator:
                 run, actor, envs, cfg["eval"]["interval_flow_steps"], record_obs=RECORDED_OBSERVATIONS if flow else 0
             )
             out = {curve_key(name): s.get("return_mean", float("nan")) for name, s in results.items()}
+            for metric in next(iter(envs.values())).curve_metrics:
+                out.update({curve_key(name, metric): s[f"{metric}_mean"] for name, s in results.items()})
             if flow and visited is not None and hasattr(actor, "velocity"):
                 stats = jacobian_statistics(actor, visited, num_steps=actor.num_flow_steps)
                 out.update({f"Flow/{k}": v for k, v in stats.items() if isinstance(v, float)})

@@ -26,7 +26,7 @@ def eval_rows(progress: Path) -> str:
         except ValueError:
             continue
         if any(k.startswith("eval/return") for k in row):
-            keep.append(json.dumps({k: v for k, v in row.items() if k in EVAL_ROW_KEYS or k.startswith("eval/return")}))
+            keep.append(json.dumps({k: v for k, v in row.items() if k in EVAL_ROW_KEYS or k.startswith("eval/")}))
     return "\n".join(keep) + ("\n" if keep else "")
 
 

@@ -54,6 +54,8 @@ class DmcEnv(WarpVecEnv):
         if self.cfg.task not in suite.task_names():
             raise unknown("DMC task (env.task)", self.cfg.task, suite.task_names())
         self.task_class = suite.task_class(self.cfg.task)
+        self.episode_metrics = DmcEnv.episode_metrics + self.task_class.episode_metrics
+        self.curve_metrics = self.task_class.episode_metrics
         return self.task_class.num_actions, {"policy": self.task_class.num_obs}
 
     def _build(self) -> None:
@@ -84,6 +86,7 @@ class DmcEnv(WarpVecEnv):
         sim.simulate()
         task.after_physics()
         task.reward(b.rewards)
+        task.record_metrics(b.metrics)
         wp.launch(
             end_diverged_worlds,
             dim=self.num_envs,

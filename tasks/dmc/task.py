@@ -78,6 +78,9 @@ class DmcTask:
     track_body: ClassVar[str | None] = None
     render_view: ClassVar[tuple[float, float]] = (-20.0, 90.0)  # camera elevation, azimuth (deg): the x-z plane
     render_distance: ClassVar[float | None] = None  # of the camera; None: from the size of the model's geoms
+    # Per-episode metrics the task writes (``record_metrics``) beside the env's; read where an episode ends: logged as
+    # ``Episode/<name>``, averaged in ``eval.json`` (``<name>_mean``) and the periodic evaluation (``eval/<name>_N10``).
+    episode_metrics: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, sim: MuJoCoWorlds, cfg, rng) -> None:
         self.sim = sim
@@ -132,6 +135,10 @@ class DmcTask:
     def observe(self, obs, reset_mask) -> None:
         """Write the observation of every env; ``reset_mask`` marks envs whose state was just re-initialised."""
         raise NotImplementedError
+
+    def record_metrics(self, metrics: dict) -> None:
+        """Write this step's value of each of ``episode_metrics`` into ``metrics[name]`` (a per-env Warp array); the
+        value after an episode's last step is the episode's."""
 
     def render_mocap(self, i: int) -> np.ndarray | None:
         """Env i's mocap body positions (nmocap, 3) for its frames, where the task keeps per-env state that the file

@@ -6,6 +6,10 @@ contacts on, and a frictionless box across the middle of the arena, centred on t
 at (-0.2 + U(-s, s), U(-s, s)) (s = ``start_spread``) on the wall's axis, the target (radius 0.015) sits at (0.2, 0)
 on the other side; both ends of the wall leave a gap, so the left (+y) and right (-y) ways are mirror images.
 
+Episode metrics (``Episode/<name>``, ``eval.json``'s ``<name>_mean``): ``success``, the mass's centre within the
+target's radius after the episode's last step; ``went_left`` / ``went_right``, the sign of y where the centre first
+had x > 0 (past the wall's middle; both 0 if it never did).
+
 Observation (4): x, y positions and velocities (point_mass's; the target and the wall are fixed).
 Reward, max 1: (near + progress) / 2 * small_control, with
 near = tolerance(|p - target|, bounds=(0, 0.015), margin=0.015) (point_mass's Gaussian term, 0.1 at the margin),
@@ -89,6 +93,31 @@ def point_mass_wall_reward(
 
 
 @wp.kernel
+def point_mass_wall_metrics(
+    body_q: wp.array2d(dtype=wp.transform),
+    mass: int,
+    way: wp.array(dtype=int),
+    success: wp.array(dtype=float),
+    went_left: wp.array(dtype=float),
+    went_right: wp.array(dtype=float),
+):
+    i = wp.tid()
+    q = wp.transform_get_translation(body_q[i, mass])
+    if way[i] == 0 and q[0] > 0.0:
+        way[i] = wp.where(q[1] > 0.0, 1, -1)
+    success[i] = wp.where(wp.length(TARGET - wp.vec2(q[0], q[1])) <= RADIUS, 1.0, 0.0)
+    went_left[i] = wp.where(way[i] == 1, 1.0, 0.0)
+    went_right[i] = wp.where(way[i] == -1, 1.0, 0.0)
+
+
+@wp.kernel
+def forget_way(mask: wp.array(dtype=wp.bool), way: wp.array(dtype=int)):
+    i = wp.tid()
+    if mask[i]:
+        way[i] = 0
+
+
+@wp.kernel
 def point_mass_wall_obs(
     joint_q: wp.array2d(dtype=float), joint_qd: wp.array2d(dtype=float), obs: wp.array2d(dtype=float)
 ):
@@ -104,6 +133,7 @@ class PointMassWall(DmcTask):
     substeps = 1  # ctrl_dt = sim_dt = 0.02 (point_mass's)
     num_obs = 4
     num_actions = 2
+    episode_metrics = ("success", "went_left", "went_right")
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)
@@ -111,6 +141,7 @@ class PointMassWall(DmcTask):
         self.a, self.b = cfg.wall_box()
         s = cfg.start_spread
         self.reset_ranges = self.uniform_ranges([START_X - s, -s], [START_X + s, s])
+        self.way = wp.zeros(self.num_envs, dtype=int, device=self.device)  # +1 left, -1 right, 0 not yet past x = 0
 
     def _wall_shapes(self) -> list[int]:
         walls = [k for k, label in enumerate(self.sim.model.shape_label) if label.endswith("/wall")]
@@ -132,10 +163,18 @@ class PointMassWall(DmcTask):
 
     def reset(self, mask) -> None:
         self.reset_uniform_joints(mask, self.reset_ranges)
+        self.launch(forget_way, [mask, self.way])
 
     def reward(self, rewards) -> None:
         v = self.views
         self.launch(point_mass_wall_reward, [v.body_q, v.ctrl, self.mass, self.a, self.b, rewards])
+
+    def record_metrics(self, metrics: dict) -> None:
+        m = metrics
+        self.launch(
+            point_mass_wall_metrics,
+            [self.views.body_q, self.mass, self.way, m["success"], m["went_left"], m["went_right"]],
+        )
 
     def observe(self, obs, reset_mask) -> None:
         self.launch(point_mass_wall_obs, [self.views.joint_q, self.views.joint_qd, obs])

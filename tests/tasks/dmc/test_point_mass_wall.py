@@ -225,3 +225,56 @@ def test_collect_writes_a_dataset_of_the_demonstrator(tmp_path):
         assert episode.actions.shape == (1000, 2)
         assert np.abs(episode.actions).max() == pytest.approx(math.atanh(0.99), rel=1e-4)  # the demonstrator's bound
         assert np.linalg.norm(episode.observations[-1, :2] - [0.2, 0.0]) < 0.015
+
+
+def test_episode_metrics_say_the_way_and_the_success_the_trajectory_shows():
+    """At each episode's end the env reports ``success``, ``went_left`` and ``went_right``; they must agree with the
+    trajectory read back from the observations: the sign of y where x first passed zero, and the final distance. Half
+    the envs follow the demonstrator (both ways, reaching the target), half the mean of its ways (never passing)."""
+    env = make_env(TASK, num_envs=16, device="cpu", seed=5)
+    demo = make_demonstrator(make_env_cfg(TASK), torch.Generator().manual_seed(1), left_share=0.5)
+    averaged = torch.arange(16) >= 8
+
+    def policy(obs):
+        return torch.where(averaged[:, None], demo.mean_of_ways(obs["policy"]), demo(obs))
+
+    obs = env.reset()
+    side = torch.zeros(16)
+    for _ in range(env.max_episode_length - 1):
+        obs, _, dones, extras = env.step(policy(obs))
+        assert not dones.any()
+        p = obs["policy"][:, :2]
+        side = torch.where((side == 0) & (p[:, 0] > 0), torch.sign(p[:, 1]), side)
+    final = obs["policy"][:, :2]  # the last step moves a mass at rest in the target by far less than its radius
+    _, _, dones, extras = env.step(policy(obs))
+    assert dones.all()
+    log = extras["log"]
+    torch.testing.assert_close(log["Episode/went_left"], (side > 0).float())
+    torch.testing.assert_close(log["Episode/went_right"], (side < 0).float())
+    torch.testing.assert_close(log["Episode/success"], ((final - TARGET).norm(dim=-1) <= 0.015).float())
+    assert (side[~averaged] != 0).all() and (side[averaged] == 0).all()  # the check sees passes and non-passes
+    assert 0 < int((side > 0).sum()) < 8 and log["Episode/success"][~averaged].all()
+    # The next episodes start with the way forgotten: after one step from the reset no env has passed yet.
+    _, _, _, extras = env.step(policy(env.get_observations()))
+    assert not env.episode_metric_buffers["went_left"].any() and not env.episode_metric_buffers["went_right"].any()
+
+
+def test_a_run_logs_the_ways_through_training_and_in_eval_json(tmp_path):
+    """The task's episode metrics reach the periodic evaluation's curves (``eval/<metric>``) and ``eval.json``."""
+    import json
+
+    from refpo_warp.training import train
+
+    out = train(
+        [
+            f"task={TASK}", "algo=ppo", "device=cpu", "seed=1", "num_envs=4", "runner.num_steps_per_env=8",
+            "max_iterations=1", "eval.interval=1", "eval.num_envs=4", "eval.interval_num_envs=4",
+            f"run_dir={tmp_path / 'run'}",
+        ]
+    )  # fmt: skip
+    final = out["results"]["mean_action"]
+    row = json.loads((tmp_path / "run" / "progress.jsonl").read_text().splitlines()[-1])
+    for metric in ("success", "went_left", "went_right"):
+        assert f"eval/{metric}" in row and f"{metric}_mean" in final
+        assert final[f"{metric}_mean"] in (0.0, 0.25, 0.5, 0.75, 1.0)  # a share of 4 episodes
+    assert final["went_left_mean"] + final["went_right_mean"] <= 1.0
