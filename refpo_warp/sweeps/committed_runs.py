@@ -48,9 +48,10 @@ def read_rows(path: Path) -> list[dict]:
 def append_runs(sweep_dir: Path, runs_csv: Path, runs_dir: Path, root: Path) -> int:
     """Append the (task, label, seed) rows of ``<sweep_dir>/report/runs.csv`` (``refpo report``'s) that ``runs_csv``
     lacks, finished or failed, copying each run's small files to ``runs_dir/<task>/<label>/seed<k>`` (the row's
-    ``run_dir`` then names that folder, relative to ``root``). Returns the rows added."""
+    ``run_dir`` then names that folder, relative to ``root``); a missing ``runs_csv`` is started. Returns the rows
+    added."""
     new = read_rows(sweep_dir / "report" / "runs.csv")
-    old = read_rows(runs_csv)
+    old = read_rows(runs_csv) if runs_csv.exists() else []
     have = {(r["task"], r["label"], r["seed"]) for r in old}
     added = [r for r in new if (r["task"], r["label"], r["seed"]) not in have and r["status"] in ("ok", "failed")]
     for row in added:
@@ -59,7 +60,7 @@ def append_runs(sweep_dir: Path, runs_csv: Path, runs_dir: Path, root: Path) -> 
         dst = runs_dir / row["task"] / row["label"] / f"seed{row['seed']}"
         copy_run(run, dst)
         row["run_dir"] = str(dst.relative_to(root))
-    columns = list(dict.fromkeys([*old[0].keys(), *(k for r in added for k in r)]))
+    columns = list(dict.fromkeys([*(old[0].keys() if old else ()), *(k for r in added for k in r)]))
     out = io.StringIO()
     writer = csv.DictWriter(out, columns, lineterminator="\n", restval="")
     writer.writeheader()

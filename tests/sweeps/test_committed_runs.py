@@ -50,3 +50,22 @@ def test_append_runs_adds_each_new_seed_once_with_its_small_files(tmp_path):
     kept = page / "runs" / "task_a" / "ppo" / "seed21"
     assert sorted(p.name for p in kept.iterdir()) == ["config.yaml", "eval.json", "progress_eval.jsonl"]
     assert eval_rows(run / "progress.jsonl") == json.dumps(progress[1]) + "\n"
+
+
+def test_append_runs_starts_a_missing_table_and_keeps_every_eval_curve(tmp_path):
+    sweep = tmp_path / "sweep"
+    run = sweep / "t" / "refpo" / "seed1"
+    run.mkdir(parents=True)
+    (run / "config.yaml").write_text("seed: 1\n")
+    row = {"iteration": 4, "env_steps": 9, "eval/return_N10": 5.0, "eval/success_N10": 0.5, "Loss/value": 1.0}
+    (run / "progress.jsonl").write_text(json.dumps(row) + "\n")
+    (sweep / "report").mkdir()
+    write_rows(
+        sweep / "report" / "runs.csv",
+        [{"task": "t", "label": "refpo", "seed": "1", "status": "ok", "run_dir": str(run)}],
+    )
+    assert append_runs(sweep, tmp_path / "page" / "runs.csv", tmp_path / "page" / "runs", tmp_path) == 1
+    rows = list(csv.DictReader((tmp_path / "page" / "runs.csv").open()))
+    assert [(r["label"], r["run_dir"]) for r in rows] == [("refpo", "page/runs/t/refpo/seed1")]
+    kept = json.loads((tmp_path / "page" / "runs" / "t" / "refpo" / "seed1" / "progress_eval.jsonl").read_text())
+    assert kept == {k: v for k, v in row.items() if k != "Loss/value"}  # a task's curve metrics beside the return
