@@ -8,9 +8,10 @@ changed); a check's bound must fail there. ``docs/results/learning_checks.md`` g
 (seeds 1-5 on one torch thread, 1-3 on two, the null control on seeds 1-3) and where its bound sits between them;
 ``tests/learning/measure.py`` makes those runs and that table.
 
-CI's default test command runs six of them: ReFPO on GridWorld (N = 1 and 10), on the humanoid and on mjlab's
+CI's default test command runs seven of them: ReFPO on GridWorld (N = 1 and 10), on the humanoid and on mjlab's
 cartpole (in the mjlab job), ReFPO's one-step configuration on point_mass (a whole 1M-step profile), ReinFlow on
-GridWorld, and ReFPO fine-tuning a flow clone of GridWorld demonstrations. The DMC cartpole's five run on demand
+GridWorld, ReFPO fine-tuning a flow clone of GridWorld demonstrations, and the flow clone of the two-way task's
+demonstrations taking both ways. The DMC cartpole's five run on demand
 (``--all-checks``; ``in_ci=False``), to keep CI's whole run within
 its 25 minutes: ReFPO, Gaussian PPO, the advantage-weighted ReFPO, FPO++ and Flow-GRPO (the first four share ReFPO's
 or rsl_rl's update loop, and each loss term of their own has hand-worked unit tests).
@@ -162,6 +163,19 @@ def both_bands_kept(record: dict) -> list[str]:
     ]
 
 
+def ways_kept(record: dict) -> dict[str, float]:
+    """Cloning two ways: the flow clone's rarer way at N = 10 (the smaller of its left and right shares of the
+    episodes), and, unbounded, the Gaussian clone's (its mean action) and the two clones' success. A Gaussian clone
+    takes one way (or averages them into the wall); it may still succeed, by the data's more frequent way."""
+    flow, gauss = record["final"]["N=10"], record["initial"]["mean_action"]
+    return {
+        "minority_way_N=10": min(flow["went_left_mean"], flow["went_right_mean"]),
+        "gaussian_minority_way": min(gauss["went_left_mean"], gauss["went_right_mean"]),
+        "success_N=10": flow["success_mean"],
+        "gaussian_success": gauss["success_mean"],
+    }
+
+
 def length_trend(record: dict) -> dict[str, float]:
     t, rise = linear_trend([row["episode_length_mean"] for row in record["rows"]])
     return {"length_trend_t": t, "length_rise": rise}
@@ -178,6 +192,18 @@ CARTPOLE = ("task=dmc_cartpole_balance",)
 # refpo pretrain; each seed collects and clones its own (the clone is the policy its fine-tuning starts from).
 FINETUNE_COLLECT = ("episodes=500", "num_envs=64")
 FINETUNE_PRETRAIN = ("pretrain.epochs=30", "pretrain.num_pairs=8")
+# The two-way clone check: the wall task's scripted demonstrator (60 / 40 left / right), cloned by refpo pretrain
+# into ReFPO's flow actor and PPO's Gaussian one; each seed collects and clones its own.
+# The clones are evaluated on 500-step episodes (the demonstrator is at the target after about 360 steps).
+WAYS_COLLECT = ("task=dmc_point_mass_wall", "episodes=32", "num_envs=32", "demonstrator.left_share=0.6")
+WAYS_PRETRAIN = (
+    "pretrain.epochs=30",
+    "pretrain.batch_size=512",
+    "pretrain.num_pairs=8",
+    "eval.num_envs=64",
+    "eval.flow_steps=[10]",
+    "env.max_episode_length=500",
+)
 MJLAB_ITERATIONS = 100
 FPO_PP_OWN_VALUES = (
     "algorithm.learning_rate=0.0001",
@@ -293,6 +319,16 @@ CHECKS: dict[str, LearningCheck] = {
             describe="ReFPO fine-tuned from a flow clone of GridWorld's scripted two-mode demonstrator (24 iterations, "
             "the first 4 the critic's warm-up): the episode length at N = 1 and 10 against the clone's; both "
             "goal bands keep a share",
+        ),
+        LearningCheck(
+            "point_mass_wall_clones",
+            ("task=dmc_point_mass_wall", "algo=refpo"),
+            ways_kept,
+            (Bound("minority_way_N=10", ">=", 0.05),),
+            runner="clones",
+            minutes=1.5,
+            describe="Behaviour cloning of the two-way task's demonstrator (32 episodes, 30 epochs): the share of the "
+            "flow clone's episodes at N = 10 that pass the wall by its rarer way",
         ),
         LearningCheck(
             "humanoid_refpo",
@@ -425,6 +461,33 @@ def run_finetune_check(check: LearningCheck, seed: int, run_dir: Path, null: boo
     }
 
 
+def run_clones_check(check: LearningCheck, seed: int, run_dir: Path, null: bool = False) -> dict:
+    """Collect the two-way task's scripted demonstrations (``WAYS_COLLECT``, seeded by ``seed``) and clone them twice
+    (``WAYS_PRETRAIN``): ReFPO's flow actor (``final``) and PPO's Gaussian actor (``initial``). The null control
+    switches the cloning's learning off (a learning rate of 1e-12: both clones stay as initialised)."""
+    from refpo_warp.demonstrations.collect import collect
+    from refpo_warp.demonstrations.pretrain_run import pretrain
+
+    run_dir = Path(run_dir)
+    data = run_dir.with_name(f"{run_dir.name}_data")
+    off = ("pretrain.learning_rate=1e-12",) if null else ()
+    common = [*WAYS_PRETRAIN, *off, f"seed={seed}", "device=cpu", f"dataset={data}"]
+    with contextlib.redirect_stdout(io.StringIO()):
+        collect({**parse_options(WAYS_COLLECT), "demonstrator": "scripted", "seed": seed, "out": str(data)})
+        flow = pretrain([*check.overrides, *common, f"run_dir={run_dir}"])
+        gauss = pretrain([WAYS_COLLECT[0], "algo=ppo", *common, f"run_dir={run_dir}_gauss"])
+    return {
+        "check": check.name,
+        "overrides": list(check.overrides),
+        "seed": seed,
+        "null": null,
+        "initial": gauss["results"],
+        "final": flow["results"],
+        "diagnostics": {},
+        "rows": [],
+    }
+
+
 def parse_options(options) -> dict:
     from refpo_warp.config.dotted import parse_overrides
 
@@ -437,6 +500,8 @@ def run_check(check: LearningCheck, seed: int, run_dir: Path, null: bool = False
         return run_mjlab_check(check, seed, run_dir, null)
     if check.runner == "finetune":
         return run_finetune_check(check, seed, run_dir, null)
+    if check.runner == "clones":
+        return run_clones_check(check, seed, run_dir, null)
     from refpo_warp.runner.progress import read_rows
     from refpo_warp.training import train
 

@@ -19,7 +19,7 @@ def marks(check):
         out.append(pytest.mark.skip(reason="mjlab is not installed: the mjlab job runs it in its venv (.ci/mjlab)"))
     elif check.runner != "mjlab" and importlib.util.find_spec("warp") is None:
         out.append(pytest.mark.skip(reason="needs the sim extra (warp, newton)"))
-    elif check.runner == "finetune" and importlib.util.find_spec("minari") is None:
+    elif check.runner in ("finetune", "clones") and importlib.util.find_spec("minari") is None:
         out.append(pytest.mark.skip(reason="needs the data extra (minari) for its demonstrations"))
     return out
 
