@@ -6,6 +6,7 @@ from __future__ import annotations
 import torch
 
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_rules import Check
 
 
 def check_device_name(device: str) -> str:
@@ -64,3 +65,9 @@ def flush_denormals_on_cpu(device: str | torch.device) -> None:
     """
     if torch.device(device).type == "cpu":
         torch.set_flush_denormal(True)
+
+
+# Every command's device= (a run's is refpo_warp/config/run_options.py's, the same names): auto, the default of all of
+# them, is the GPU where one is usable, else the CPU.
+DEVICE_RULE = Check(lambda key, value: check_device_name(value), "auto, cpu, cuda or cuda:N")
+DEVICE_DOC = "where it runs (auto: cuda:0 where CUDA is usable, else cpu)"

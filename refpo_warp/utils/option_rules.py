@@ -161,7 +161,8 @@ class Text(Rule):
 
 
 class ListOf(Rule):
-    """A list of ``min_len`` to ``max_len`` items, each valid for ``item``."""
+    """A list of ``min_len`` to ``max_len`` items, each valid for ``item``; one item may be given alone (``x`` is
+    ``[x]``); a string with a comma is refused naming the list spelling (``a,b``: ``[a,b]``), in every command."""
 
     def __init__(
         self,
@@ -175,6 +176,11 @@ class ListOf(Rule):
         self.item, self.min_len, self.max_len = item, min_len, max_len
 
     def _check(self, key: str, value: Any) -> Any:
+        if isinstance(value, str) and "," in value:  # the one list syntax is YAML's: a bare a,b is one string
+            items = ",".join(v.strip() for v in value.split(","))
+            raise self.error(key, value, f"a list is written {key}=[{items}]")
+        if not isinstance(value, (list, tuple, dict)):
+            value = [value]  # one item may be given without brackets: tasks=dmc_point_mass
         if not isinstance(value, (list, tuple)):
             raise self.error(key, value, "not a list")
         if len(value) < self.min_len or (self.max_len is not None and len(value) > self.max_len):
