@@ -23,8 +23,8 @@ from pathlib import Path
 import torch
 
 from refpo_warp.config.run_options import FLOW_STEPS
-from refpo_warp.utils.device import DEVICE_DOC, DEVICE_RULE, resolve_device
-from refpo_warp.utils.option_rules import Int, ListOf, Rule, Text
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Int, ListOf, Rule, Text
 from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import print_table, time_call
 

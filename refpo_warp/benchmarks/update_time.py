@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import torch
 
-from refpo_warp.utils.device import DEVICE_DOC, DEVICE_RULE, resolve_device
+from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.errors import unknown
-from refpo_warp.utils.option_rules import Int, ListOf, Text
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Int, ListOf, Text
 from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import print_table, synchronize
 

@@ -6,17 +6,12 @@ from __future__ import annotations
 import torch
 
 from refpo_warp.utils.errors import ConfigError
-from refpo_warp.utils.option_rules import Check
+from refpo_warp.utils.option_rules import DEVICE_RULE
 
 
 def check_device_name(device: str) -> str:
     """``device`` if it is a device name (auto, cpu, cuda, cuda:N), whether or not this machine has it."""
-    if not (
-        isinstance(device, str)
-        and (device in ("auto", "cpu", "cuda") or (device.startswith("cuda:") and device[5:].isdigit()))
-    ):
-        raise ConfigError(f"device={device!r} is invalid; expected auto, cpu, cuda or cuda:N")
-    return device
+    return DEVICE_RULE.check("device", device)
 
 
 def resolve_device(device: str = "auto") -> str:
@@ -65,9 +60,3 @@ def flush_denormals_on_cpu(device: str | torch.device) -> None:
     """
     if torch.device(device).type == "cpu":
         torch.set_flush_denormal(True)
-
-
-# Every command's device= (a run's is refpo_warp/config/run_options.py's, the same names): auto, the default of all of
-# them, is the GPU where one is usable, else the CPU.
-DEVICE_RULE = Check(lambda key, value: check_device_name(value), "auto, cpu, cuda or cuda:N")
-DEVICE_DOC = "where it runs (auto: cuda:0 where CUDA is usable, else cpu)"

@@ -208,6 +208,22 @@ class Check(Rule):
         return self.description
 
 
+def _device_name(key: str, value: Any) -> str:
+    if not (
+        isinstance(value, str)
+        and (value in ("auto", "cpu", "cuda") or (value.startswith("cuda:") and value[5:].isdigit()))
+    ):
+        raise ConfigError(f"{key}={value!r} is invalid; expected auto, cpu, cuda or cuda:N")
+    return value
+
+
+# Every command's device= (a run's is refpo_warp/config/run_options.py's, the same names); whether this machine has the
+# device is checked where it is used (refpo_warp/utils/device.py's resolve_device). auto, the default of every
+# command, is the GPU where one is usable, else the CPU.
+DEVICE_RULE = Check(_device_name, "auto, cpu, cuda or cuda:N")
+DEVICE_DOC = "where it runs (auto: cuda:0 where CUDA is usable, else cpu)"
+
+
 def mapping_or_none(key: str, value: Any) -> Any:
     """For ``Check``: null or a mapping of options (e.g. rsl_rl's ``rnd_cfg``), checked by whoever consumes it."""
     if value is not None and not isinstance(value, dict):

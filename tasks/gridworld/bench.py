@@ -15,8 +15,8 @@ import numpy as np
 import torch
 
 from refpo_warp.envs.registry import make_env
-from refpo_warp.utils.device import DEVICE_DOC, DEVICE_RULE, resolve_device
-from refpo_warp.utils.option_rules import Int
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Int
 from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import env_steps_per_second, print_table
 

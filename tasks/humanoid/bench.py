@@ -26,8 +26,8 @@ import torch
 
 from refpo_warp.envs.registry import make_env
 from refpo_warp.utils.atomic_files import write_json
-from refpo_warp.utils.device import DEVICE_DOC, DEVICE_RULE, resolve_device
-from refpo_warp.utils.option_rules import Flag, Int, Text
+from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Flag, Int, Text
 from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import env_steps_per_second, print_title
 
