@@ -36,12 +36,36 @@ from refpo_warp.config.config_path import config_path
 from refpo_warp.config.dotted import LEAF_KEYS, parse_overrides
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.option_rules import DEVICE_RULE, Int, ListOf, Text, optional
+from refpo_warp.utils.options import option
 
 SPEC_KEYS = ("name", "description", "device", "tasks", "seeds", "overrides", "methods", "report", "out")
 METHOD_KEYS = ("label", "algo", "name", "overrides")
 REPORT_KEYS = ("curve_methods", "ratio_tasks", "ratio_methods")
-# Run options the sweep sets itself; on the command line use the sweep-level key instead.
+# Run options the sweep sets itself (on the command line: the sweep-level key, utils/renamed_spellings.py's "sweep")
 MANAGED = {"task": "tasks=", "algo": "methods=", "seed": "seeds=", "run_dir": "out=", "resume": None}
+
+
+@dataclass(frozen=True)
+class SweepOptions:
+    """The sweep-level options of ``refpo sweep``'s command line (over the sweep file's keys of the same names);
+    every other ``key=value`` is a run option of every run."""
+
+    tasks: list[str] | None = option(None, ListOf(Text(), optional=True), "task ids (default: the file's tasks)")
+    seeds: list[int] | None = option(
+        None, ListOf(Int(0, 2**32 - 1), optional=True), "seeds (default: the file's seeds, else [1])"
+    )
+    methods: list[str] | None = option(
+        None, ListOf(Text(), optional=True), "method labels to keep: an entry's label keeps all its variants"
+    )
+    device: str | None = option(
+        None, optional(DEVICE_RULE), "the runs' device profile (default: the file's device, else auto)"
+    )
+    out: str | None = option(
+        None, Text(optional=True), "the sweep dir (default: the file's out, else runs/sweeps/<name>)"
+    )
+
+
 # Config keys that do not change what a run computes: a finished run whose config differs only here is kept.
 FINGERPRINT_IGNORED = ("device", "resume", "run_dir", "verbose", "config_dir")
 # Options that act only with init_from: without it a run computes the same whatever they say.
@@ -239,9 +263,10 @@ def load_sweep(source: str, args: list[str] | None = None) -> Sweep:
     its variants), ``device=``, ``out=`` (the sweep dir). Every other ``key=value`` is a run option for every run
     (list values expand the grid as in the file).
     """
+    from refpo_warp.config.command_options import parse_options
     from refpo_warp.config.resolve import resolve_config  # here: a Ray worker imports this module without torch
 
-    cli = parse_overrides(args or [])
+    given, cli = parse_options("sweep", SweepOptions, args or [], lambda key: True)  # the rest: run options
     path = config_path(cli.get("config_dir")).named_or_path("sweep", source)  # the runs' config folders
     spec = load_yaml(path)
     where = str(path)
@@ -252,11 +277,11 @@ def load_sweep(source: str, args: list[str] | None = None) -> Sweep:
         if key in cli:
             raise ConfigError(f"'{key}=' is set by the sweep for each run" + (f"; use '{hint}...'" if hint else ""))
     name = str(spec.get("name", path.stem))
-    device = str(cli.pop("device", spec.get("device", "auto")))
-    tasks = _as_list(cli.pop("tasks", spec.get("tasks")), "tasks", str)
-    seeds = _as_list(cli.pop("seeds", spec.get("seeds", [1])), "seeds", int)
-    keep = cli.pop("methods", None)
-    out_dir = Path(str(cli.pop("out", spec.get("out") or Path("runs") / "sweeps" / name)))
+    device = str(given.device or spec.get("device", "auto"))
+    tasks = _as_list(given.tasks or spec.get("tasks"), "tasks", str)
+    seeds = _as_list(given.seeds or spec.get("seeds", [1]), "seeds", int)
+    keep = given.methods
+    out_dir = Path(str(given.out or spec.get("out") or Path("runs") / "sweeps" / name))
     report = dict(spec.get("report") or {})
     for key in report:
         if key not in REPORT_KEYS:

@@ -36,10 +36,11 @@ from pathlib import Path
 from typing import Any
 
 from refpo_warp.config.config_path import config_path
-from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.sweeps.spec import Method, Run, _flat_overrides, cli_value, device_type
 from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.option_rules import Int, ListOf, Text
+from refpo_warp.utils.options import option
 
 SPEC_KEYS = (
     "description",
@@ -65,6 +66,22 @@ DIMENSION_KEYS = {"float": ("low", "high", "log"), "categorical": ("choices",)}
 CONFIG_VALUES = "config"  # an `enqueue` entry: the values the method's own config resolves to
 # The run options a trial sets itself.
 MANAGED = ("task", "algo", "seed", "run_dir", "resume")
+
+
+@dataclass(frozen=True)
+class TuneOptions:
+    """The options of ``refpo tune``'s command line (over the tuning file's keys of the same names)."""
+
+    trials: int | None = option(None, Int(1, optional=True), "trials per method (default: the file's trials, else 8)")
+    methods: list[str] | None = option(
+        None, ListOf(Text(), optional=True), "labels of the methods to tune (default: every one)"
+    )
+    out: str | None = option(
+        None, Text(optional=True), "the tuning folder (default: the file's out, else runs/tune/<name>)"
+    )
+    config_dir: str | None = option(
+        None, Text(optional=True), "a folder of your own config files, searched before the shipped ones"
+    )
 
 
 @dataclass(frozen=True)
@@ -232,19 +249,17 @@ def _int(value: Any, key: str, where: str, low: int) -> int:
 
 
 def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
-    """Read a tuning file; command-line ``key=value``: ``trials=``, ``methods=`` (labels to keep), ``out=``,
-    ``config_dir=`` (the runs' config folders)."""
-    cli = parse_overrides(args or [])
-    folders = {"config_dir": cli.pop("config_dir")} if "config_dir" in cli else {}
+    """Read a tuning file; command-line ``key=value``: ``TuneOptions``."""
+    from refpo_warp.config.command_options import parse_options
+
+    given, _ = parse_options("tune", TuneOptions, args or [])
+    folders = {"config_dir": given.config_dir} if given.config_dir is not None else {}
     path = config_path(folders.get("config_dir")).named_or_path("tune", source)
     spec = load_yaml(path)
     where = str(path)
     for key in spec:
         if key not in SPEC_KEYS:
             raise unknown(f"key in tuning file {where}", key, SPEC_KEYS)
-    for key in cli:
-        if key not in ("trials", "methods", "out"):
-            raise unknown("refpo tune option", key, ("trials", "methods", "out", "config_dir"))
     tasks = spec.get("tasks")
     if not isinstance(tasks, list) or not tasks:
         raise ConfigError(f"{where}: 'tasks' must be a non-empty list of task ids")
@@ -285,16 +300,15 @@ def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
     labels = [m.label for m in methods]
     if len(set(labels)) != len(labels):
         raise ConfigError(f"{where}: method labels must be unique, got {labels}")
-    if "methods" in cli:
-        keep = cli.pop("methods")
-        keep = keep.split(",") if isinstance(keep, str) else list(keep)
+    if given.methods is not None:
+        keep = given.methods
         for label in keep:
             if label not in labels:
                 raise unknown(f"method of tuning '{path.stem}'", label, labels)
         methods = [m for m in methods if m.label in keep]
     evaluation = _evaluation(spec.get("evaluate"), labels, where)
-    trials = _int(cli.pop("trials", spec.get("trials", 8)), "trials", where, 1)
-    device = str(spec.get("device", "cpu"))
+    trials = given.trials or _int(spec.get("trials", 8), "trials", where, 1)
+    device = str(spec.get("device", "auto"))
     device_type(device)
     return Tuning(
         name=path.stem,
@@ -319,7 +333,7 @@ def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
             "warmup_evaluations": _int(pruner.get("warmup_evaluations", 5), "pruner.warmup_evaluations", where, 0),
         },
         methods=methods,
-        out_dir=Path(str(cli.pop("out", spec.get("out") or Path("runs") / "tune" / path.stem))),
+        out_dir=Path(str(given.out or spec.get("out") or Path("runs") / "tune" / path.stem)),
         evaluation=evaluation,
         folders=folders,
     )

@@ -224,6 +224,13 @@ DEVICE_RULE = Check(_device_name, "auto, cpu, cuda or cuda:N")
 DEVICE_DOC = "where it runs (auto: cuda:0 where CUDA is usable, else cpu)"
 
 
+def optional(rule: Rule) -> Rule:
+    """The same rule with null valid too (an option whose default is found elsewhere, e.g. in a sweep file)."""
+    out = copy.copy(rule)
+    out.optional = True
+    return out
+
+
 def mapping_or_none(key: str, value: Any) -> Any:
     """For ``Check``: null or a mapping of options (e.g. rsl_rl's ``rnd_cfg``), checked by whoever consumes it."""
     if value is not None and not isinstance(value, dict):
