@@ -34,7 +34,8 @@ Options (key=value; lists as key=[a,b]):
 {options_help(TuneOptions)}
 
 Flags: --explain [KEYS] (each option's value and where it comes from), --jobs N runs of a trial at a time
-(default: its tasks, at most the CPU cores; one torch thread each on a CPU), --dry-run. Needs Optuna: pip install "refpo-warp[tune]".
+(default: its tasks, at most the CPU cores; one torch thread each on a CPU), --dry-run.
+Needs Optuna: pip install "refpo-warp[tune]".
 """
 FLAGS = (
     Flag("--jobs", int, "runs of a trial at a time"),
