@@ -136,9 +136,12 @@ def main(argv: list[str]) -> int:
     if wants_help(argv):
         print(USAGE)
         return 0
-    from refpo_warp.cli.guard import run_guarded
-
-    return run_guarded(lambda: _run(argv))
+    try:
+        _run(argv)
+    except ConfigError as err:  # a bad option: one message, exit code 2 (refpo's, docs/cli.md)
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    return 0
 
 
 def _run(argv: list[str]) -> None:
