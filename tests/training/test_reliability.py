@@ -356,7 +356,7 @@ def _tear(run):
 
 def test_torn_progress_line_is_tolerated_by_plot(run):
     _tear(run)
-    proc = call_tool("plot", f"run_dir={run}")
+    proc = call_tool("plot", f"run_dirs={run}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (run / "curves.png").stat().st_size > 0
 
@@ -383,7 +383,7 @@ def test_damaged_progress_line_is_named(run):
     path = run / "progress.jsonl"
     lines = path.read_text().splitlines()
     path.write_text("\n".join([lines[0], "garbage{", *lines[1:]]) + "\n")
-    assert_refused(call_tool("plot", f"run_dir={run}"), BAD_FILE, "progress.jsonl: line 2")
+    assert_refused(call_tool("plot", f"run_dirs={run}"), BAD_FILE, "progress.jsonl: line 2")
 
 
 # ------------------------------------------------------------------------------------------------ motion files
