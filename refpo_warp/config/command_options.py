@@ -81,8 +81,10 @@ def options_help(cls: type, skip: Iterable[str] = ()) -> str:
 def explain_options(command: str, cls: type, given: Iterable[str], keys: str = "", rest=None) -> str:
     """``--explain [KEYS]``: each option's value, whether the command line or the field's default set it, its valid
     values and doc (nothing is run)."""
+    given = list(given)
+    options: Any
     options, passed = parse_options(command, cls, given, rest)
-    flat = parse_overrides(list(given))
+    flat = parse_overrides(given)
     docs, rules = docs_for(cls), rules_for(cls)
     chosen = [k.strip() for k in keys.split(",") if k.strip()] or option_names(cls)
     lines = [f"Options of refpo {command} (the command line over each field's default):"]
