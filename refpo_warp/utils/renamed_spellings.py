@@ -56,6 +56,8 @@ RENAMED: dict[str, dict[str, str]] = {
         "--frames": "timed_frames=",
         "--seconds": "video_seconds=",
     },
+    "convert-amass": _keys("fps"),
+    "make-clips": _keys("random", "seed", "schema", "fps", "float32"),
     "mjlab evaluate": {},
 }
 

@@ -411,20 +411,20 @@ def test_bad_motion_file_is_named(kind, tmp_path):
     options, culprit = MOTIONS[kind]
     src = _amass(tmp_path / f"{kind}_poses.npz", **options)
     out = tmp_path / "out.motionlib.npz"
-    assert_refused(call_tool("convert_amass", src, out), BAD_FILE, str(src), culprit)
+    assert_refused(call_tool("convert_amass", src, f"out={out}"), BAD_FILE, str(src), culprit)
     assert not out.exists()
 
 
 @SLOW
 def test_bad_library_frame_rate_option(tmp_path):
     src = _amass(tmp_path / "ok_poses.npz")
-    assert_refused(call_tool("convert_amass", src, tmp_path / "o.motionlib.npz", "--fps", "0"), USAGE, "--fps=0")
+    assert_refused(call_tool("convert_amass", src, f"out={tmp_path / 'o.motionlib.npz'}", "fps=0"), USAGE, "fps=0")
 
 
 @pytest.mark.parametrize("damage", cases(["one-frame-clip", "not-a-zip"]))
 def test_bad_motion_library_given_to_train_is_named(damage, tmp_path):
     lib = tmp_path / "lib.motionlib.npz"
-    assert call_tool("convert_amass", _amass(tmp_path / "ok_poses.npz"), lib).returncode == 0
+    assert call_tool("convert_amass", _amass(tmp_path / "ok_poses.npz"), f"out={lib}").returncode == 0
     if damage == "not-a-zip":
         lib.write_bytes(b"PK\x03\x04 broken")
         culprit = "cannot be read"
