@@ -61,6 +61,24 @@ def parse_options(
     return cls(**values), passed
 
 
+def read_section(where: str, cls: type[T], mapping: Any) -> T:
+    """A section of a file (a sweep file, one of its method entries) as ``cls``: each key one of its fields (an unknown
+    one refused naming the valid ones), each value checked by the field's rule (the error names the file), the others
+    their defaults; a field without a default is required."""
+    names = option_names(cls)
+    if not isinstance(mapping, dict):
+        raise ConfigError(f"{where}: expected a mapping of {', '.join(names)}, got {mapping!r}")
+    rules, declared, docs = rules_for(cls), declared_options(cls), docs_for(cls)
+    for key in mapping:
+        if key not in names:
+            raise unknown(f"key in {where}", str(key), names)
+    values = {k: rules[k].check(f"{where}: {k}", v) if k in rules else v for k, v in mapping.items()}
+    for name in names:
+        if name not in values and name not in declared:
+            raise ConfigError(f"{where}: '{name}' is missing ({docs.get(name, '')})")
+    return cls(**values)
+
+
 def options_help(cls: type, skip: Iterable[str] = ()) -> str:
     """One line per option: ``key=<default>`` (or ``key=...`` for a required one), its doc and valid values."""
     declared, docs, rules = declared_options(cls), docs_for(cls), rules_for(cls)
