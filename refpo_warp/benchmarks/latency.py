@@ -1,13 +1,13 @@
 """Action-latency benchmark (the paper's Figure 5b): time to compute one batch of actions with N = 10 and N = 1
 Euler steps for flow policies, and with the mean action for a Gaussian policy.
 
-    refpo bench latency [--tasks dmc_cheetah_run] [--algos ppo,fpo,refpo] [--batch 1,128]
-                                  [--device auto] [--repeats 50] [--json PATH]
+    refpo bench latency [tasks=[dmc_cheetah_run]] [algos=[ppo,fpo,refpo]] [batch_sizes=[1,128]]
+                        [flow_steps=[10,1]] [device=auto] [repeats=50] [out=PATH]
 
 Each policy is the task's actor at its resolved config (the device's profile) with freshly initialised weights:
 latency depends on the architecture and N, not on the weights. The observation batch comes from the task's env
 after reset; each timing is the median of ``repeats`` calls after warm-up, synchronising the device every call.
-``--json PATH`` also writes the rows (read by ``refpo report`` for the latency figure).
+``out=PATH`` also writes the rows (read by ``refpo report`` for the latency figure).
 """
 
 from __future__ import annotations
@@ -17,12 +17,15 @@ import datetime
 import functools
 import io
 import platform
+from dataclasses import dataclass
 from pathlib import Path
 
 import torch
 
-from refpo_warp.utils.command_line import Flag, parse_flags, usage
+from refpo_warp.config.run_options import FLOW_STEPS
 from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Int, ListOf, Rule, Text
+from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import print_table, time_call
 
 
@@ -60,32 +63,40 @@ def policy_latency(
     return rows
 
 
-FLAGS = (
-    Flag("--tasks", str, "comma-separated task ids", default="dmc_cheetah_run"),
-    Flag("--algos", str, "comma-separated algo names", default="ppo,fpo,refpo"),
-    Flag("--batch", str, "observations per call, comma-separated; num_envs: the profile's", default="1,num_envs"),
-    Flag("--flow-steps", str, "comma-separated N", default="10,1"),
-    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
-    Flag("--repeats", int, "timed calls per case", default=50),
-    Flag("--json", str, "also write the rows to this JSON file (refpo report's latency=)"),
-)
-USAGE = usage("refpo bench latency [flags]", __doc__.split("\n\n")[0], FLAGS)
+class _BatchSize(Rule):
+    """A positive batch size or ``num_envs`` (the task's profile's)."""
+
+    def _check(self, key, value):
+        return value if value == "num_envs" else Int(1, 1 << 22).check(key, value)
+
+    def describe(self) -> str:
+        return "a positive integer or num_envs"
 
 
-def main(argv: list[str]) -> None:
-    args, _ = parse_flags("bench latency", argv, FLAGS)
+@dataclass(frozen=True)
+class Options:
+    tasks: list[str] = option(["dmc_cheetah_run"], ListOf(Text()), "task ids")
+    algos: list[str] = option(["ppo", "fpo", "refpo"], ListOf(Text()), "algorithms (refpo train's algo= names)")
+    batch_sizes: list = option([1, "num_envs"], ListOf(_BatchSize()), "observations per call; num_envs: the profile's")
+    flow_steps: list[int] = option([10, 1], FLOW_STEPS, "Euler steps N of a flow policy, each timed")
+    device: str = option("auto", DEVICE_RULE, DEVICE_DOC)
+    repeats: int = option(50, Int(1), "timed calls per case")
+    out: str | None = option(
+        None, Text(optional=True), "also write the rows to this JSON file (refpo report's latency=)"
+    )
 
+
+def run(args: Options, _: dict | None = None) -> None:
     from refpo_warp.config.resolve import resolve_config
     from refpo_warp.utils.atomic_files import write_json
 
     device = resolve_device(args.device)
-    flow_steps = [int(n) for n in args.flow_steps.split(",")]
     rows = []
-    for task in [t.strip() for t in args.tasks.split(",") if t.strip()]:
+    for task in args.tasks:
         profile_envs = resolve_config([f"task={task}", f"device={device}"])["num_envs"]
-        batches = sorted({profile_envs if b.strip() == "num_envs" else int(b) for b in args.batch.split(",")})
-        for algo in [a.strip() for a in args.algos.split(",") if a.strip()]:
-            rows += policy_latency(task, algo, device, batches, flow_steps, args.repeats)
+        batches = sorted({profile_envs if b == "num_envs" else b for b in args.batch_sizes})
+        for algo in args.algos:
+            rows += policy_latency(task, algo, device, batches, args.flow_steps, args.repeats)
     ratios = []
     for task, algo, batch in sorted({(r["task"], r["algo"], r["batch"]) for r in rows if r["flow_steps"]}):
         by_n = {
@@ -100,8 +111,8 @@ def main(argv: list[str]) -> None:
         f"median of {args.repeats} calls",
         notes=tuple(ratios),
     )
-    if args.json:
-        path = Path(args.json)
+    if args.out:
+        path = Path(args.out)
         path.parent.mkdir(parents=True, exist_ok=True)
         write_json(
             {

@@ -1,8 +1,8 @@
-"""Rendering speed: refpo bench render [--width 640] [--height 480] [--frames 60] [--seconds 10]
+"""Rendering speed: refpo bench render [width=640] [height=480] [timed_frames=60] [video_seconds=10]
 
 Frames per second of each family's frames (a DMC task with its tracking camera, the humanoid with and without its
 reference, GridWorld), drawn from envs stepped by uniform random actions, and the time to record and write a
-``--seconds`` long video of each (MP4, and GIF at half the size): the anchor of each row is the same frames without
+``video_seconds`` long video of each (MP4, and GIF at half the size): the anchor of each row is the same frames without
 the overlay, tiling and encoding, so the ratio says what a recording adds to drawing.
 """
 
@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +20,8 @@ from refpo_warp.envs.registry import family_module, make_env
 from refpo_warp.render.frames import overlay, tile
 from refpo_warp.render.gl import select_gl_platform
 from refpo_warp.render.video import write_video
-from refpo_warp.utils.command_line import Flag, parse_flags, usage
+from refpo_warp.utils.option_rules import Int, Real
+from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import print_table
 
 CASES: tuple[tuple[str, dict[str, Any], dict[str, Any]], ...] = (
@@ -74,28 +76,28 @@ def video_seconds(env, source, fps: float, seconds: float, width: int, height: i
     return out
 
 
-FLAGS = (
-    Flag("--width", int, "frame width", default=640),
-    Flag("--height", int, "frame height", default=480),
-    Flag("--frames", int, "timed frames per case", default=60),
-    Flag("--seconds", float, "length of the timed video, at 30 frames/s", default=10.0),
-)
-USAGE = usage("refpo bench render [flags]", __doc__.split("\n\n")[0], FLAGS)
+@dataclass(frozen=True)
+class Options:
+    width: int = option(640, Int(16, 8192), "frame width")
+    height: int = option(480, Int(16, 8192), "frame height")
+    timed_frames: int = option(60, Int(1), "timed frames per case")
+    video_seconds: float = option(10.0, Real(0, 3600, lo_open=True), "length of the timed video, at 30 frames/s")
 
 
-def main(argv: list[str]) -> None:
-    args, _ = parse_flags("bench render", argv, FLAGS)
+def run(args: Options, _: dict | None = None) -> None:
     platform = select_gl_platform()
     rows = []
     for task, env_options, render_options in CASES:
-        fps, (env, source) = frames_per_second(task, env_options, render_options, args.width, args.height, args.frames)
+        fps, (env, source) = frames_per_second(
+            task, env_options, render_options, args.width, args.height, args.timed_frames
+        )
         row = {
             "frames": f"{task}"
             + ("" if not render_options else f" (reference {'on' if render_options['reference'] else 'off'})"),
             "frames/s": f"{fps:.1f}",
         }
-        video = video_seconds(env, source, 30.0, args.seconds, args.width, args.height)
-        anchor = args.seconds * 30 / fps  # drawing alone
+        video = video_seconds(env, source, 30.0, args.video_seconds, args.width, args.height)
+        anchor = args.video_seconds * 30 / fps  # drawing alone
         row.update({k: f"{v:.2f}" if "(s)" in k else f"{v:.0f}" for k, v in video.items()})
         row["video / drawing"] = f"{(video['draw + overlay (s)'] + video['MP4 write (s)']) / anchor:.2f}"
         source.close()
@@ -104,5 +106,5 @@ def main(argv: list[str]) -> None:
         rows,
         list(rows[0]),
         title=f"Rendering on the CPU ({platform}), {args.width}x{args.height}, shadows "
-        f"off; {args.seconds:g} s videos at 30 frames/s",
+        f"off; {args.video_seconds:g} s videos at 30 frames/s",
     )

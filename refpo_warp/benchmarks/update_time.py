@@ -1,12 +1,13 @@
-"""Update time of every algorithm on one batch size: refpo bench algorithms [--task T] [--num-envs E] ...
+"""Update time of every algorithm on one batch size: refpo bench algorithms [task=T] [num_envs=E] ...
 
 Each algorithm is built from its config for the task (its own actor, pairs/chain and losses), collects one rollout
-of ``envs x steps`` transitions and times ``update()`` (median of ``--repeats`` fresh rollouts, 5 by default) with
-the same number of passes and minibatches for all, so the ratio to FPO is the per-transition cost of each method's
-update. A second ratio scales each time to the paper's settings per env step (DMC tables (a)-(d): 16 passes for
-PPO/FPO/ReFPO, 8 for Flow-GRPO and ReinFlow, and ReinFlow's transitions are chunks of 4 env steps).
+of ``num_envs x num_steps_per_env`` transitions and times ``update()`` (median of ``repeats`` fresh rollouts, 5 by
+default) with the same number of passes (``num_learning_epochs``) and ``num_mini_batches`` for all, so the ratio to
+FPO is the per-transition cost of each method's update. A second ratio scales each time to the paper's settings per
+env step (DMC tables (a)-(d): 16 passes for PPO/FPO/ReFPO, 8 for Flow-GRPO and ReinFlow, and ReinFlow's transitions
+are chunks of 4 env steps).
 
-``--algos`` also takes ReFPO's options as variants (``VARIANTS``: coupled Reflow pairs, the adaptive coefficient),
+``algos=`` also takes ReFPO's options as variants (``VARIANTS``: coupled Reflow pairs, the adaptive coefficient),
 built as the algo plus their overrides, as ``configs/sweep/cpu_reflow_pairs.yaml`` runs them.
 """
 
@@ -15,12 +16,14 @@ from __future__ import annotations
 import contextlib
 import io
 import time
+from dataclasses import dataclass
 
 import torch
 
-from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.errors import unknown
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Int, ListOf, Text
+from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import print_table, synchronize
 
 # table order; other algos follow, sorted
@@ -42,7 +45,7 @@ VARIANTS = {
     "refpo_coupled": ("refpo", ["algorithm.reflow_pairs=coupled"]),
     "refpo_adaptive": ("refpo", ["algorithm.reflow_schedule=adaptive"]),
 }
-"""name -> (algo, overrides): options of an algorithm timed as a row of their own (only when asked: --algos)."""
+"""name -> (algo, overrides): options of an algorithm timed as a row of their own (only when asked: algos=)."""
 PAPER_PASSES = {
     "fpo": 16,
     "refpo": 16,
@@ -54,7 +57,7 @@ PAPER_PASSES = {
     "reinflow": 8,
     "ppo": 16,
 }  # FPO++ at the ReFPO family's passes, as it runs in the grid
-"""Passes per batch in the paper's DMC tables; an algorithm not in them is scaled with ``--passes``."""
+"""Passes per batch in the paper's DMC tables; an algorithm not in them is scaled with ``num_learning_epochs``."""
 
 
 def algorithms() -> list[str]:
@@ -110,43 +113,41 @@ def update_time(alg, env, device: str, repeats: int) -> float:
     return sorted(times)[len(times) // 2]
 
 
-FLAGS = (
-    Flag("--task", str, "a task id", default="dmc_cheetah_run"),
-    Flag("--num-envs", int, "envs, a multiple of 8 (Flow-GRPO's groups)", default=256),
-    Flag("--steps", int, "policy steps per env and rollout", default=60),
-    Flag("--minibatches", int, "minibatches per pass", default=8),
-    Flag("--passes", int, "passes over the rollout", default=2),
-    Flag("--repeats", int, "fresh rollouts timed (the median is reported)", default=5),
-    Flag("--algos", str, "comma-separated algos and variants (default: every algorithm)"),
-    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
-)
-USAGE = usage("refpo bench algorithms [flags]", __doc__.split("\n\n")[0], FLAGS)
+@dataclass(frozen=True)
+class Options:
+    task: str = option("dmc_cheetah_run", Text(), "a task id")
+    num_envs: int = option(256, Int(8, 1 << 22, multiple_of=8), "envs, a multiple of 8 (Flow-GRPO's groups)")
+    num_steps_per_env: int = option(60, Int(1), "policy steps per env and rollout (runner.num_steps_per_env)")
+    num_mini_batches: int = option(8, Int(1), "minibatches per pass (algorithm.num_mini_batches)")
+    num_learning_epochs: int = option(2, Int(1), "passes over the rollout (algorithm.num_learning_epochs)")
+    repeats: int = option(5, Int(1), "fresh rollouts timed (the median is reported)")
+    algos: list[str] | None = option(None, ListOf(Text(), optional=True), "algos and variants (default: every one)")
+    device: str = option("auto", DEVICE_RULE, DEVICE_DOC)
 
 
-def main(argv: list[str]) -> None:
-    args, _ = parse_flags("bench algorithms", argv, FLAGS, renamed={"--envs": "--num-envs"})
+def run(options: Options, _: dict | None = None) -> None:
     choices = [*algorithms(), *VARIANTS]
-    args.algos = [a.strip() for a in args.algos.split(",") if a.strip()] if args.algos else algorithms()
-    for algo in args.algos:
+    algos = list(options.algos or algorithms())
+    for algo in algos:
         if algo not in choices:
             raise unknown("algorithm of refpo bench algorithms", algo, choices)
-    args.envs = args.num_envs
-    device = resolve_device(args.device)
-    if "fpo" not in args.algos:
-        args.algos = ["fpo", *args.algos]
+    device = resolve_device(options.device)
+    envs, steps = options.num_envs, options.num_steps_per_env
+    minibatches, passes_given = options.num_mini_batches, options.num_learning_epochs
+    if "fpo" not in algos:
+        algos = ["fpo", *algos]
     title = (
-        f"Update time on {args.task}, {device}, torch threads {torch.get_num_threads()}: {args.envs} envs x "
-        f"{args.steps} steps = {args.envs * args.steps} transitions, {args.minibatches} minibatches, "
-        f"{args.passes} passes"
+        f"Update time on {options.task}, {device}, torch threads {torch.get_num_threads()}: {envs} envs x "
+        f"{steps} steps = {envs * steps} transitions, {minibatches} minibatches, {passes_given} passes"
     )
     seconds, chunks = {}, {}
-    for algo in args.algos:
+    for algo in algos:
         torch.manual_seed(0)
-        env, alg, cfg = build(algo, args.task, device, args.envs, args.steps, args.minibatches, args.passes)
-        seconds[algo] = update_time(alg, env, device, args.repeats)
+        env, alg, cfg = build(algo, options.task, device, envs, steps, minibatches, passes_given)
+        seconds[algo] = update_time(alg, env, device, options.repeats)
         chunks[algo] = cfg["env"].get("action_chunk", 1)
-    passes = {a: PAPER_PASSES.get(VARIANTS.get(a, (a,))[0], args.passes) for a in seconds}
-    per_env_step = {a: seconds[a] / args.passes * passes[a] / chunks[a] for a in seconds}
+    passes = {a: PAPER_PASSES.get(VARIANTS.get(a, (a,))[0], passes_given) for a in seconds}
+    per_env_step = {a: seconds[a] / passes_given * passes[a] / chunks[a] for a in seconds}
     rows = [
         {
             "algorithm": NAMES.get(a, a),

@@ -5,22 +5,22 @@ from __future__ import annotations
 import importlib
 import importlib.util
 
-from refpo_warp.utils.command_line import Arguments, wants_help
+from refpo_warp.utils.command_line import Arguments, parse_arguments, wants_help
 from refpo_warp.utils.errors import ConfigError, unknown
 
 SUMMARY = "env speed vs gymnasium, action latency, update cost of every algorithm, rendering speed"
-USAGE = """Benchmarks: refpo bench <gridworld|dmc|humanoid|all|latency|algorithms|render> [--flags of that benchmark]
+USAGE = """Benchmarks: refpo bench <gridworld|dmc|humanoid|all|latency|algorithms|render> [key=value ...] [--explain]
 
 Each task family with a benchmark has it in tasks/<family>/bench.py (found there, not listed here);
-`refpo bench dmc --help` shows its flags, read by the convention of every refpo command. `all` runs every
-family's benchmark. `latency` (refpo_warp/benchmarks/latency.py) times action generation at N = 10 vs N = 1 for
-chosen tasks and algorithms; `--json PATH` writes the rows for `refpo report` (its latency=). `algorithms`
+`refpo bench dmc --help` shows its options, key=value as in every refpo command (device=, num_envs=, tasks=[...]).
+`all` runs every family's benchmark. `latency` (refpo_warp/benchmarks/latency.py) times action generation at N = 10
+vs N = 1 for chosen tasks and algorithms; `out=PATH` writes the rows for `refpo report` (its latency=). `algorithms`
 (refpo_warp/benchmarks/update_time.py) times the update of every algorithm on one batch size, as ratios to FPO.
 `render` (refpo_warp/benchmarks/rendering.py): frames per second of each family's frames and the cost of a video.
 """
 FLAGS = ()
 SUBJECTS = 1
-PASSES_ON = True  # the flags after the benchmark's name are the benchmark's own (its --help included)
+PASSES_ON = True  # the arguments after the benchmark's name are the benchmark's own (its --help included)
 OTHERS = {
     "latency": "refpo_warp.benchmarks.latency",
     "algorithms": "refpo_warp.benchmarks.update_time",
@@ -43,18 +43,46 @@ def run(args: Arguments) -> None:
     name, rest = args.subjects[0], args.options
     if name not in choices:
         raise unknown("benchmark", name, choices)
-    modules = (
-        [OTHERS[name]]
-        if name in OTHERS
-        else [f"refpo_warp.tasks.{f}.bench" for f in (families if name == "all" else (name,))]
-    )
-    if wants_help(rest):  # a benchmark's own flags, from the same convention as every command
-        print("\n\n".join(importlib.import_module(m).USAGE for m in modules))
+    names = [name] if name != "all" else families
+    modules = {n: OTHERS.get(n, f"refpo_warp.tasks.{n}.bench") for n in names}
+    if wants_help(rest):  # a benchmark's own options, from its fields
+        print("\n\n".join(bench_help(n, importlib.import_module(m)) for n, m in modules.items()))
         return
     from refpo_warp.utils.device import set_torch_threads
 
     set_torch_threads()
-    for module in modules:
+    for bench, path in modules.items():
+        module = importlib.import_module(path)
+        if not hasattr(module, "Options"):  # a benchmark that reads its own arguments
+            module.main(rest)
+            continue
+        parsed = parse_bench(bench, module, rest)
+        if parsed is None:
+            continue  # --explain printed
         if name not in OTHERS:
-            print(f"\n## {module.split('.')[-2]}", flush=True)  # each family's tables follow as ### blocks
-        importlib.import_module(module).main(rest)
+            print(f"\n## {bench}", flush=True)  # each family's tables follow as ### blocks
+        module.run(*parsed)
+
+
+def parse_bench(name: str, module, argv: list[str]):
+    """(options, env options) of ``refpo bench <name>``: its ``Options`` fields and, for a benchmark with
+    ``REST_PREFIXES``, the options passed on (``env.<option>=``); None after ``--explain``."""
+    from refpo_warp.config.command_options import EXPLAIN, options_or_explain
+
+    command = f"bench {name}"
+    args = parse_arguments(command, argv, (EXPLAIN,))
+    prefixes = getattr(module, "REST_PREFIXES", ())
+    rest = (lambda key: key.startswith(prefixes)) if prefixes else None
+    return options_or_explain(command, module.Options, args, rest, [f"{p}<option>" for p in prefixes])
+
+
+def bench_help(name: str, module) -> str:
+    """``refpo bench <name> --help``: the first paragraph of the benchmark's docstring and its options' fields."""
+    if not hasattr(module, "Options"):
+        return module.USAGE
+    from refpo_warp.config.command_options import command_help
+
+    prefixes = getattr(module, "REST_PREFIXES", ())
+    passed = "".join(f" [{p}<option>=VALUE ...]" for p in prefixes)
+    summary = module.__doc__.split("\n\n")[0] + "".join(f"\n{p}<option>=VALUE: {module.REST_DOC}" for p in prefixes)
+    return command_help(f"refpo bench {name} [key=value ...]{passed}", summary, module.Options)

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from refpo_warp.demonstrations.collect_options import options_usage
+from refpo_warp.config.command_options import EXPLAIN, explain_options
+from refpo_warp.demonstrations.collect_options import DEMONSTRATOR, CollectOptions, options_usage
 from refpo_warp.utils.command_line import Arguments
 
 SUMMARY = "roll out a trained policy (or a scripted demonstrator) and write a Minari demonstration dataset"
@@ -13,17 +14,21 @@ Rolls the policy out on num_envs vectorised envs and writes the K whole episodes
 terminations, truncations; the spaces, task and policy in metadata.json) as a Minari dataset folder at out
 (docs/finetuning.md). Options (refpo_warp/demonstrations/collect_options.py):
 {options_usage()}
+Flags: --explain [KEY,KEY,...] (each option's value and where it comes from; nothing is collected).
 GridWorld's scripted demonstrator: demonstrator.up_share=0.7 demonstrator.band=3 (tasks/gridworld/demonstrator.py).
 
 Examples:
     refpo collect task=gridworld demonstrator=scripted episodes=2000 out=data/grid_demo
-    refpo collect run_dir=runs/dmc_point_mass/ppo_seed1 episodes=500 noise=0.3 sample=mean out=data/pm_ppo
+    refpo collect run_dir=runs/dmc_point_mass/ppo_seed1 episodes=500 noise=0.3 initial_noise=zero out=data/pm_ppo
 """
-FLAGS = ()
+FLAGS = (EXPLAIN,)
 SUBJECTS = 0
 
 
 def run(args: Arguments) -> None:
+    if "--explain" in args.flags:
+        print(explain_options("collect", CollectOptions, args.options, args.flag("--explain") or "", DEMONSTRATOR))
+        return
     from refpo_warp.config.dotted import parse_overrides
     from refpo_warp.demonstrations.collect import collect
     from refpo_warp.utils.device import set_torch_threads

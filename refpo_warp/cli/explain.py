@@ -6,10 +6,11 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from refpo_warp.utils.command_line import Arguments, Flag
+from refpo_warp.config.command_options import EXPLAIN
+from refpo_warp.utils.command_line import Arguments
 from refpo_warp.utils.errors import ConfigError
 
-EXPLAIN = Flag("--explain", str, "the keys to explain, comma-separated; none: every option", optional_value=True)
+__all__ = ["EXPLAIN", "explain_or_run", "explain_run"]
 
 
 def explain_or_run(command: str, args: Arguments, action: Callable[[list[str]], None]) -> None:

@@ -67,7 +67,7 @@ def _dispatch(argv: list[str]) -> int:
         if passes_on:
             args = Arguments(rest[:1], rest[1:]) if rest and not rest[0].startswith("-") else Arguments([], rest)
         else:
-            args = parse_arguments(name, rest, command.FLAGS, command.SUBJECTS, getattr(command, "RENAMED", {}))
+            args = parse_arguments(name, rest, command.FLAGS, command.SUBJECTS)
         return command.run(args)
 
     return run_guarded(run)

@@ -10,31 +10,51 @@ options ``video.<key>`` (``refpo_warp/render/options.py``), env options ``env.<k
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from refpo_warp.config.command_options import EXPLAIN, command_help, explain_options, option_names, parse_options
 from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.render.options import VideoOptions
 from refpo_warp.utils.command_line import Arguments
 from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, OneOf, Text
+from refpo_warp.utils.options import option
+from refpo_warp.utils.renamed_spellings import renamed_error
+
+AGENTS = ("zero", "random")
+
+
+@dataclass(frozen=True)
+class PlayOptions:
+    run_dir: str | None = option(None, Text(optional=True), "a trained run whose policy plays (refpo train's run dir)")
+    checkpoint: str | None = option(
+        None, Text(optional=True), "a checkpoint of the run (default: its newest usable one)"
+    )
+    task: str | None = option(None, Text(optional=True), "the task an agent plays (with agent=; a run plays its own)")
+    agent: str | None = option(None, OneOf(None, *AGENTS), "zero or random: an agent instead of a trained policy")
+    device: str = option("auto", DEVICE_RULE, DEVICE_DOC + "; a run's: its config's unless given")
+    out: str = option("runs/videos", Text(), "the folder of an agent's video (a run's go to <run dir>/videos)")
+
 
 SUMMARY = "a video of a trained policy (one flow step beside ten) or of a zero / random agent"
-USAGE = """A video of a policy: refpo play run_dir=PATH [checkpoint=PATH] [video.flow_steps=[1,10]]
+USAGE = command_help(
+    """A video of a policy: refpo play run_dir=PATH [checkpoint=PATH] [video.flow_steps=[1,10]]
                    [eval.initial_noise=[random,zero]] [video.num_envs=4] [run options] [video options]
-                   or: refpo play task=<task id> agent=zero|random [env.<option>=...] [out=DIR] [video options]
-
-Writes <run dir>/videos/<name>.mp4 (video.format=gif or both for a GIF) and prints its path.
+                   or: refpo play task=<task id> agent=zero|random [env.<option>=...] [out=DIR] [video options]""",
+    """Writes <run dir>/videos/<name>.mp4 (video.format=gif or both for a GIF) and prints its path.
 video.flow_steps=[1,10] shows the 1-step and the 10-step policy side by side from the same initial states;
 eval.initial_noise=[random,zero] each N under both initial-noise protocols (the run's by default); any other run
 option (device=, eval.env.<option>=, ...) applies over the run's saved config, as in refpo eval. Video options, named
 as in refpo train: [video.length=300] [video.width=640] [video.height=480] [video.camera=track]
 [video.format=mp4|gif|both] [video.fps=30] [video.seed=3] [video.name=NAME] [video.shadows=false]
-[video.reference=true] (refpo_warp/render/options.py, docs/videos.md).
-"""
-FLAGS = ()
+[video.reference=true] (refpo_warp/render/options.py, docs/videos.md).""",
+    PlayOptions,
+)
+FLAGS = (EXPLAIN,)
 SUBJECTS = 0
-AGENTS = ("zero", "random")
-RUN_KEYS = ("run_dir", "checkpoint")  # the rest of a run's arguments are run options over its saved config
+RUN_KEYS = ("run_dir", "checkpoint", "device")  # a run's; the rest of its arguments are run options over its config
 AGENT_KEYS = ("task", "agent", "device", "out")
 VIDEO_KEYS = tuple(k for k in VideoOptions.__dataclass_fields__ if k not in ("at_end", "interval"))  # not training's
 
@@ -43,13 +63,11 @@ def _old_spelling(key: str, env_keys: tuple[str, ...]) -> str | None:
     """The name a key has now, for a key spelled the way refpo play once took it (refused, with the new name)."""
     if key in VIDEO_KEYS:
         return f"video.{key}"
-    if key == "initial_noise":
-        return "eval.initial_noise"
     return f"env.{key}" if key in env_keys else None
 
 
-def split_arguments(args: list[str]) -> tuple[dict[str, Any], VideoOptions, dict[str, Any]]:
-    """(the run or agent keys, the video options, the rest: a run's run options or an agent's env options), all
+def split_arguments(args: list[str]) -> tuple[PlayOptions, VideoOptions, dict[str, Any]]:
+    """(the play options, the video options, the rest: a run's run options or an agent's env options), all
     checked."""
     flat = parse_overrides(args)
     has_run, has_task = "run_dir" in flat, "task" in flat
@@ -65,33 +83,38 @@ def split_arguments(args: list[str]) -> tuple[dict[str, Any], VideoOptions, dict
     env_keys = tuple(spec.cfg_class.defaults()) if spec is not None else ()
     own = RUN_KEYS if has_run else AGENT_KEYS
     for key in (k for k in flat if k not in own):  # an env option may share a name of ours (DMC's `task`)
+        renamed = renamed_error("play", f"{key}=")
+        if renamed is not None:
+            raise renamed
         new = _old_spelling(key, env_keys)
         if new is not None:
             raise ConfigError(f"'{key}=' is spelled '{new}=' (refpo play names options as refpo train does)")
     if any(k.startswith("video.") and k[6:] in ("at_end", "interval") for k in flat):
         raise ConfigError("video.at_end and video.interval say when a training run records; refpo play records now")
     video = VideoOptions.from_dict({k[6:]: flat.pop(k) for k in list(flat) if k.startswith("video.")})
-    picked = {k: flat.pop(k) for k in list(flat) if k in own}
-    if has_run:
-        return picked, video, flat  # run options: checked over the saved config (load_run)
-    agent = picked.get("agent")
-    if agent not in AGENTS:
-        raise ConfigError(
-            f"agent={agent!r} is invalid; expected one of {', '.join(AGENTS)} (or run_dir=PATH for a trained policy)"
-        )
-    env = {k[4:]: flat.pop(k) for k in list(flat) if k.startswith("env.")}
-    for key in [*flat, *(f"env.{k}" for k in env if k not in env_keys)]:
-        raise unknown(
-            f"play option of an agent on task '{picked['task']}'",
-            key,
-            [*own, *(f"video.{k}" for k in VIDEO_KEYS), *(f"env.{k}" for k in env_keys)],
-        )
+    if has_run:  # every other key is a run option, checked over the saved config (load_run)
+        options, rest = parse_options("play", PlayOptions, flat, lambda key: key not in RUN_KEYS)
+        if "device" in flat:
+            rest["device"] = options.device
+        return options, video, rest
+    choices = [*own, *(f"video.{k}" for k in VIDEO_KEYS), *(f"env.{k}" for k in env_keys)]
+    for key in flat:
+        if key not in own and not (key.startswith("env.") and key[4:] in env_keys):
+            raise unknown(f"play option of an agent on task '{flat['task']}'", key, choices)
+    options, passed = parse_options("play", PlayOptions, flat, lambda key: key.startswith("env."))
+    if options.agent is None:
+        raise ConfigError("refpo play task=... needs agent=zero|random (or run_dir=PATH for a trained policy)")
+    env = {k[4:]: v for k, v in passed.items()}
     assert spec is not None  # an agent plays a task=ID (has_task)
     spec.cfg_class(**{**spec.cfg_overrides, **env})  # the env options' rules
-    return picked, video, env
+    return options, video, env
 
 
 def run(args: Arguments) -> None:
+    if "--explain" in args.flags:
+        rest = lambda key: key not in option_names(PlayOptions)  # noqa: E731  (run, video and env options: passed on)
+        print(explain_options("play", PlayOptions, args.options, args.flag("--explain") or "", rest))
+        return
     from refpo_warp.utils.device import set_torch_threads
 
     set_torch_threads(cuda_cap=4)
@@ -101,20 +124,14 @@ def run(args: Arguments) -> None:
 
 def play(args: list[str]) -> list[Path]:
     """Write the video the arguments ask for; returns its files."""
-    picked, video, rest = split_arguments(args)
+    options, video, rest = split_arguments(args)
     from refpo_warp.render.gl import select_gl_platform
 
     select_gl_platform()  # before anything imports MuJoCo
-    if "run_dir" in picked:
-        return _play_run(Path(str(picked["run_dir"])), picked.get("checkpoint"), rest, video)
-    return _play_agent(
-        str(picked["task"]),
-        str(picked["agent"]),
-        str(picked.get("device", "cpu")),
-        Path(str(picked.get("out", "runs/videos"))),
-        video,
-        rest,
-    )
+    if options.run_dir is not None:
+        return _play_run(Path(options.run_dir), options.checkpoint, rest, video)
+    assert options.task is not None and options.agent is not None  # split_arguments: an agent on a task
+    return _play_agent(options.task, options.agent, options.device, Path(options.out), video, rest)
 
 
 def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -> list[Path]:
@@ -124,8 +141,6 @@ def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -
     from refpo_warp.runner.checkpoints import load_latest
     from refpo_warp.utils.device import resolve_device
 
-    if checkpoint is not None and not isinstance(checkpoint, str):
-        raise ConfigError(f"checkpoint={checkpoint!r} is invalid; expected a path to a model_<iteration>.pt file")
     run = load_run(run_dir, overrides)
     cfg, task = run.cfg, run.task
     env_options = {**cfg["env"], **cfg["eval"]["env"]}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from refpo_warp.config.command_options import EXPLAIN
 from refpo_warp.utils.command_line import Arguments
 
 SUMMARY = "clone an algorithm's actor from a demonstration dataset (flow: CFM loss, Gaussian: max. likelihood)"
@@ -16,16 +17,24 @@ Fine-tune it with: refpo train task=<task> algo=<algo> init_from=<that run dir> 
 Options (configs/default.yaml, pretrain section): pretrain.epochs=100 pretrain.batch_size=512
 pretrain.learning_rate=0.001 pretrain.validation_fraction=0.1 pretrain.patience=10 pretrain.num_pairs=null; any run
 option (seed, device, eval.flow_steps, the actor's sizes, ...) as for refpo train.
+Flags: --explain [KEY,KEY,...] (the value of each option and the layer that set it, as refpo train's; nothing is run).
 
 Examples:
     refpo pretrain task=gridworld algo=refpo dataset=data/grid_demo
     refpo pretrain task=gridworld algo=ppo dataset=data/grid_demo run_dir=runs/grid_bc_gauss
 """
-FLAGS = ()
+FLAGS = (EXPLAIN,)
 SUBJECTS = 0
 
 
 def run(args: Arguments) -> None:
+    if "--explain" in args.flags:
+        from refpo_warp.config.explain import explain
+        from refpo_warp.demonstrations.pretrain_run import pretrain_config
+
+        keys = [k.strip() for k in (args.flag("--explain") or "").split(",") if k.strip()]
+        print(explain(pretrain_config(args.options), keys or None), flush=True)
+        return
     from refpo_warp.demonstrations.pretrain_run import pretrain
     from refpo_warp.utils.console import headline_numbers, summary_block
     from refpo_warp.utils.device import set_torch_threads

@@ -5,11 +5,13 @@ from __future__ import annotations
 import signal
 
 from refpo_warp.cli.guard import EXIT_INTERRUPTED, EXIT_UNEXPECTED
+from refpo_warp.config.command_options import EXPLAIN, explain_options, options_help
+from refpo_warp.sweeps.spec import SweepOptions
 from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
 
 SUMMARY = "a grid of tasks x methods x seeds, each run a training process (local or on a Ray cluster)"
-USAGE = """Run a sweep: refpo sweep <sweep name or file> [key=value ...] [--jobs N] [--dry-run] [--launcher CMD]
+USAGE = f"""Run a sweep: refpo sweep <sweep name or file> [key=value ...] [--jobs N] [--dry-run] [--launcher CMD]
                               [--backend local|ray] [--ray-address ADDR] [--gpus-per-run G] [--cpus-per-run C]
 
 A grid of tasks x methods x seeds (x list-valued overrides), each run a separate `python -m refpo_warp train`
@@ -29,11 +31,13 @@ Examples:
     taskset -c 0,1 refpo sweep cpu_dmc --launcher "taskset -c 1"   # keep the sweep and its runs on chosen cores
     refpo sweep paper_dmc --backend ray --ray-address auto  # on the head of a Ray cluster: a GPU per run
 
-Sweep-level keys: tasks=, seeds=, methods= (labels to keep), device=, out= (the sweep dir); any other key=value is
-a run option for every run (refpo train's keys, config_dir= included); a list expands the grid unless the option
-itself takes a list.
-Flags: --jobs N runs at a time (default: the CPU cores; on CUDA one per GPU; more share the GPUs round-robin),
---retries N (default 1), --launcher "CMD" prefixes each training command, --dry-run.
+Sweep-level options (key=value; lists as key=[a,b]):
+{options_help(SweepOptions)}
+Any other key=value is a run option for every run (refpo train's keys, config_dir= included); a list expands the
+grid unless the option itself takes a list.
+Flags: --explain [KEYS] (the sweep-level options' values and where they come from), --jobs N runs at a time
+(default: the CPU cores; on CUDA one per GPU; more share the GPUs round-robin), --retries N (default 1),
+--launcher "CMD" prefixes each training command, --dry-run.
 
 --backend ray: every run is one Ray task, on the node and GPU Ray picks (pip install "refpo-warp[ray]"; every node
 needs the package installed and must share the sweep dir and the working directory: docs/results/README.md, "On a
@@ -47,6 +51,7 @@ FLAGS = (
     Flag("--retries", int, "retries of a failed run"),
     Flag("--launcher", str, "a command that prefixes each training command"),
     Flag("--dry-run", doc="list the runs and their states, train nothing"),
+    EXPLAIN,
     Flag("--backend", str, "local or ray"),
     Flag("--ray-address", str, "auto or HOST:PORT"),
     Flag("--gpus-per-run", float, "GPUs per run on Ray"),
@@ -55,7 +60,11 @@ FLAGS = (
 SUBJECTS = 1
 
 
-def run(args: Arguments) -> int:
+def run(args: Arguments) -> int | None:
+    if "--explain" in args.flags:
+        every = lambda key: True  # noqa: E731  (every other key: a run option, passed on)
+        print(explain_options("sweep", SweepOptions, args.options, args.flag("--explain") or "", every))
+        return None
     if not args.subjects:
         raise ConfigError(
             "refpo sweep needs a sweep: a name (configs/sweep/<name>.yaml) or a YAML file; see refpo sweep --help"

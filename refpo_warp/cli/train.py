@@ -5,7 +5,7 @@ from __future__ import annotations
 from refpo_warp.cli.explain import EXPLAIN, explain_or_run
 from refpo_warp.utils.command_line import Arguments, Flag
 
-SUMMARY = "train a policy and evaluate it; --tasks lists the task ids, --explain KEY says who set an option"
+SUMMARY = "train a policy and evaluate it; --list-tasks lists the task ids, --explain KEY says who set an option"
 USAGE = """Train a policy: refpo train task=<task id> [algo=<algo: refpo, fpo, ppo, ...>] [key=value ...]
 
 Examples:
@@ -14,18 +14,18 @@ Examples:
     refpo train task=humanoid_root
     refpo train run_dir=runs/grid resume=true                   # continue from the last checkpoint
     refpo train task=gridworld algo=fpo --explain algorithm.reflow_coef   # the value and the layer that set it
-    refpo train --tasks [config_dir=DIR]                        # the task ids (those of your config folder too)
+    refpo train --list-tasks [config_dir=DIR]                   # the task ids (those of your config folder too)
 
 Any config key can be overridden (the run options: configs/default.yaml, installed as refpo_warp/configs/);
 config_dir=DIR (or REFPO_CONFIG_PATH) adds your own task, algo and sweep files (docs/cli.md).
-Flags: --tasks, --explain [KEY,KEY,...] (without keys: every option; nothing is trained).
+Flags: --list-tasks, --explain [KEY,KEY,...] (without keys: every option; nothing is trained).
 """
-FLAGS = (Flag("--tasks", doc="list the task ids"), EXPLAIN)
+FLAGS = (Flag("--list-tasks", doc="list the task ids"), EXPLAIN)
 SUBJECTS = 0
 
 
 def run(args: Arguments) -> None:
-    if args.flag("--tasks"):
+    if args.flag("--list-tasks"):
         list_tasks(args.options)
     else:
         explain_or_run("train", args, train)

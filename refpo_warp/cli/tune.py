@@ -5,11 +5,13 @@ from __future__ import annotations
 import signal
 
 from refpo_warp.cli.guard import EXIT_INTERRUPTED
+from refpo_warp.config.command_options import EXPLAIN, explain_options, options_help
+from refpo_warp.sweeps.tune_spec import TuneOptions
 from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
 
 SUMMARY = "an equal tuning budget for several methods (Optuna studies of training runs), resumable"
-USAGE = """Tune: refpo tune <tuning name or file> [trials=N] [methods=a,b] [out=DIR] [config_dir=DIR] [--jobs N]
+USAGE = f"""Tune: refpo tune <tuning name or file> [trials=N] [methods=[a,b]] [out=DIR] [config_dir=DIR] [--jobs N]
                   [--dry-run]
 
 One Optuna study per method of the tuning file (configs/tune/<name>.yaml, or tune/ of your config_dir=DIR or
@@ -28,17 +30,25 @@ Examples:
     refpo tune cpu_dmc --jobs 2         # default out: runs/tune/cpu_dmc
     refpo tune cpu_dmc trials=12        # raise every method's budget; finished trials are kept
 
-Flags: --jobs N runs of a trial at a time (default: its tasks, at most the CPU cores; one torch thread each on a
-CPU), --dry-run. Needs Optuna: pip install "refpo-warp[tune]".
+Options (key=value; lists as key=[a,b]):
+{options_help(TuneOptions)}
+
+Flags: --explain [KEYS] (each option's value and where it comes from), --jobs N runs of a trial at a time
+(default: its tasks, at most the CPU cores; one torch thread each on a CPU), --dry-run.
+Needs Optuna: pip install "refpo-warp[tune]".
 """
 FLAGS = (
     Flag("--jobs", int, "runs of a trial at a time"),
     Flag("--dry-run", doc="validate and list, train nothing"),
+    EXPLAIN,
 )
 SUBJECTS = 1
 
 
-def run(args: Arguments) -> int:
+def run(args: Arguments) -> int | None:
+    if "--explain" in args.flags:
+        print(explain_options("tune", TuneOptions, args.options, args.flag("--explain") or ""))
+        return None
     if not args.subjects:
         raise ConfigError(
             "refpo tune needs a tuning: a name (configs/tune/<name>.yaml) or a YAML file; see refpo tune --help"

@@ -58,7 +58,7 @@ def collect(flat: dict[str, Any]) -> dict:
         ACTION_UNITS_KEY: PRE_SQUASH,  # the policy's own actions (noise added), as the env received them before tanh
         "obs_groups": groups,
         "obs_group_dims": {g: int(env.get_observations()[g].shape[-1]) for g in groups},
-        "policy": {**source, "sample": options["sample"], "action_noise_std": options["noise"]},
+        "policy": {**source, "initial_noise": options["initial_noise"], "action_noise_std": options["noise"]},
         "num_envs": env.num_envs,
         "collect_time_s": wall,
     }
@@ -104,12 +104,13 @@ def _run_policy(options: dict, device: str):
     else:
         checkpoint = str(load_latest(runner, run_dir, cfg["task"], cfg["algo"])[0])
     actor = runner.get_inference_policy(device=device)
-    stochastic = options["sample"] == "stochastic"
+    noise = options["initial_noise"]
+    stochastic = noise == "random"
     if is_flow(actor):
         steps = options["flow_steps"] or actor.num_flow_steps
 
         def policy(obs):
-            return actor.sample(obs, steps, "random" if stochastic else "zero", perturbation=False)
+            return actor.sample(obs, steps, noise, perturbation=False)
     else:
         steps = None
 

@@ -4,19 +4,18 @@ their checks: ``collect_options`` validates a command line's ``key=value`` optio
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+from refpo_warp.config.command_options import parse_options
 from refpo_warp.config.option_docs import shown_value
-from refpo_warp.config.run_options import RUN_RULES
-from refpo_warp.utils.errors import ConfigError, unknown
-from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real, Text, check_options
-from refpo_warp.utils.options import declared_options, option, rules_for
+from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_rules import DEVICE_RULE, Flag, Int, OneOf, Real, Text
+from refpo_warp.utils.options import declared_options, option
 
-SAMPLING = ("stochastic", "mean")
+INITIAL_NOISE = ("random", "zero")  # eval.initial_noise's protocols
 MAX_DEFAULT_ENVS = 64
-REQUIRED = ("episodes", "out")
 SOURCES = ("run_dir", "task", "demonstrator")  # what is rolled out: in the usage's synopsis, not its option list
 
 
@@ -47,16 +46,13 @@ class CollectOptions:
     flow_steps: int | None = option(
         None, Int(1, 1000, optional=True), "Euler steps of a flow policy (default: its num_flow_steps)"
     )
-    sample: str = option(
-        "stochastic",
-        OneOf(*SAMPLING),
-        "stochastic: a flow from random initial noise, a Gaussian's sample; mean: zero noise / mean",
+    initial_noise: str = option(
+        "random",
+        OneOf(*INITIAL_NOISE),
+        "random: a flow from random initial noise, a Gaussian's sample; zero: zero initial noise, a Gaussian's mean "
+        "(as eval.initial_noise)",
     )
-    device: str = option("cpu", RUN_RULES["device"], "where the policy and the envs run")
-
-
-RULES = rules_for(CollectOptions)
-DEFAULTS = {name: found.default for name, found in declared_options(CollectOptions).items()}
+    device: str = option("auto", DEVICE_RULE, "where the policy and the envs run (auto: cuda:0 if usable, else cpu)")
 
 
 def options_usage() -> str:
@@ -68,17 +64,16 @@ def options_usage() -> str:
     return "\n".join(f"    {given[n]:<{width}}{declared[n].doc}" for n in names)
 
 
+def DEMONSTRATOR(key: str) -> bool:
+    """A scripted demonstrator's option (``demonstrator.<option>``), passed on unchecked."""
+    return key.startswith("demonstrator.")
+
+
 def collect_options(flat: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
     """(checked options, demonstrator options); every problem a ``ConfigError`` naming the key and valid values."""
-    demo = {k.split(".", 1)[1]: v for k, v in flat.items() if k.startswith("demonstrator.")}
-    flat = {k: v for k, v in flat.items() if not k.startswith("demonstrator.")}
-    for key in flat:
-        if key not in RULES:
-            raise unknown("option of refpo collect", key, [*RULES, "demonstrator.<option>"])
-    for key in REQUIRED:
-        if key not in flat:
-            raise ConfigError(f"refpo collect needs {key}=... (refpo collect --help)")
-    options = {**DEFAULTS, **check_options(RULES, flat)}
+    parsed, passed = parse_options("collect", CollectOptions, flat, DEMONSTRATOR, ["demonstrator.<option>"])
+    demo = {k.split(".", 1)[1]: v for k, v in passed.items()}
+    options = asdict(parsed)
     if (options["run_dir"] is None) == (options["demonstrator"] is None):
         raise ConfigError("refpo collect needs either run_dir=<trained run> or task=<task> demonstrator=scripted")
     if options["demonstrator"] and not options["task"]:

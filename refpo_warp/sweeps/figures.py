@@ -2,7 +2,7 @@
 seeds), Figure 4 (training return vs proxy-ratio spikes per update) and Figure 5b (action latency, N = 1 vs N = 10).
 
 Curves come from each run's ``progress.jsonl`` (``eval/return_N10``, ``eval/return_N1``, ``eval/return``,
-``reward_mean``, ``Flow/ratio_max``); latency from the JSON of ``refpo bench latency --json``.
+``reward_mean``, ``Flow/ratio_max``); latency from the JSON of ``refpo bench latency out=PATH``.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ its runs, as the folder's page gives it::
     entries:
       - folder: fpo_pp/runs                     # under docs/results/
         page: fpo_pp/README.md                  # the page that gives the command
-        command: refpo sweep cpu_fpo_pp methods=fpo_pp,refpo_pp
+        command: refpo sweep cpu_fpo_pp methods=[fpo_pp,refpo_pp]
         made_at: "f11a28a"                      # only where today's command resolves to another config: the
         difference:                             # commit(s) that added the runs, and each differing key as
           algorithm.learning_rate: [0.0001, 0.00147]   # [the runs' config.yaml, today's command]

@@ -4,7 +4,7 @@
 ``status.json``, then every run's ``eval.json`` and ``progress.jsonl``, and writes into ``<sweep dir>/report/``:
 ``report.md`` (all tables, the figures, the missing runs), ``main.csv``, ``per_task.csv``, ``appendix_c.csv``,
 ``runs.csv`` (one row per run), ``fig3_reward_curves.png``, ``fig4_ratio_spikes.png`` and, when a latency JSON
-from ``refpo bench latency --json`` is there, ``fig5b_latency.png``. A directory without ``sweep.yaml`` is
+from ``refpo bench latency out=PATH`` is there, ``fig5b_latency.png``. A directory without ``sweep.yaml`` is
 read as ``<task>/<label>/seed<k>/`` run dirs. A run without a (current) ``eval.json`` is listed as missing.
 """
 
@@ -262,7 +262,7 @@ def write_report(
         )
     else:
         notes.append(
-            f"Figure 5b: no {latency_path}; write it with `refpo bench latency --tasks <task> --json {latency_path}`."
+            f"Figure 5b: no {latency_path}; write it with `refpo bench latency tasks=<task> out={latency_path}`."
         )
     written += [path for _, path in figures]
     _write(out / "report.md", report_markdown(spec, records, mrows, trows, figures, notes, sweep_dir, out))

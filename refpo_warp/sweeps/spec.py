@@ -26,22 +26,84 @@ import itertools
 import json
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from refpo_warp.config.command_options import parse_options, read_section
 from refpo_warp.config.config_path import config_path
 from refpo_warp.config.dotted import LEAF_KEYS, parse_overrides
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.option_rules import DEVICE_RULE, Check, Int, ListOf, Rule, Text, mapping_or_none, optional
+from refpo_warp.utils.options import option
 
-SPEC_KEYS = ("name", "description", "device", "tasks", "seeds", "overrides", "methods", "report", "out")
-METHOD_KEYS = ("label", "algo", "name", "overrides")
-REPORT_KEYS = ("curve_methods", "ratio_tasks", "ratio_methods")
-# Run options the sweep sets itself; on the command line use the sweep-level key instead.
+_MAPPING = Check(mapping_or_none, "null or a mapping of run options (dotted keys or nested mappings)", optional=True)
+_LABELS = ListOf(Text(), optional=True)
+
+
+@dataclass(frozen=True)
+class SweepFile:
+    """The keys of a sweep file (the module docstring shows one)."""
+
+    name: str | None = option(None, Text(optional=True), "the sweep's name (default: the file's name)")
+    description: str = option("", Text(), "what the sweep is for")
+    device: str = option("auto", DEVICE_RULE, "the device profile every run resolves for (cpu, cuda, cuda:N, auto)")
+    tasks: list[str] = option(rule=ListOf(Text()), doc="the task ids")
+    seeds: list[int] = option([1], ListOf(Int(0, 2**32 - 1)), "the seeds")
+    overrides: dict | None = option(None, _MAPPING, "run options of every run")
+    methods: list = option(rule=ListOf(Rule()), doc="the methods, one table row each (MethodEntry, or an algo name)")
+    report: dict | None = option(None, _MAPPING, "figure choices: curve_methods, ratio_tasks, ratio_methods")
+    out: str | None = option(None, Text(optional=True), "the sweep dir (default: runs/sweeps/<name>)")
+
+
+@dataclass(frozen=True)
+class MethodEntry:
+    """One entry of a sweep file's ``methods``."""
+
+    algo: str = option(rule=Text(), doc="the algorithm (refpo train's algo=)")
+    label: str | None = option(None, Text(optional=True), "its label (default: algo); {key} takes a variant's value")
+    name: str | None = option(None, Text(optional=True), "its name in tables (default: the label)")
+    overrides: dict | None = option(None, _MAPPING, "its run options; a list expands the grid")
+
+
+@dataclass(frozen=True)
+class ReportChoices:
+    """A sweep file's ``report``: the figures' defaults of ``refpo report`` (its command line's keys of the same
+    names override them)."""
+
+    curve_methods: list[str] | None = option(None, _LABELS, "method labels in Figure 3")
+    ratio_tasks: list[str] | None = option(None, _LABELS, "tasks of Figure 4")
+    ratio_methods: list[str] | None = option(None, _LABELS, "method labels of Figure 4")
+
+
+SPEC_KEYS = tuple(f.name for f in fields(SweepFile))
+# Run options the sweep sets itself (on the command line: the sweep-level key, utils/renamed_spellings.py's "sweep")
 MANAGED = {"task": "tasks=", "algo": "methods=", "seed": "seeds=", "run_dir": "out=", "resume": None}
+
+
+@dataclass(frozen=True)
+class SweepOptions:
+    """The sweep-level options of ``refpo sweep``'s command line (over the sweep file's keys of the same names);
+    every other ``key=value`` is a run option of every run."""
+
+    tasks: list[str] | None = option(None, ListOf(Text(), optional=True), "task ids (default: the file's tasks)")
+    seeds: list[int] | None = option(
+        None, ListOf(Int(0, 2**32 - 1), optional=True), "seeds (default: the file's seeds, else [1])"
+    )
+    methods: list[str] | None = option(
+        None, ListOf(Text(), optional=True), "method labels to keep: an entry's label keeps all its variants"
+    )
+    device: str | None = option(
+        None, optional(DEVICE_RULE), "the runs' device profile (default: the file's device, else auto)"
+    )
+    out: str | None = option(
+        None, Text(optional=True), "the sweep dir (default: the file's out, else runs/sweeps/<name>)"
+    )
+
+
 # Config keys that do not change what a run computes: a finished run whose config differs only here is kept.
 FINGERPRINT_IGNORED = ("device", "resume", "run_dir", "verbose", "config_dir")
 # Options that act only with init_from: without it a run computes the same whatever they say.
@@ -198,25 +260,17 @@ def expand_method(entry: dict, overrides: dict[str, Any], probe: dict) -> list[M
     return variants
 
 
-def _method_entries(spec: dict, where: str) -> list[dict]:
-    entries = spec.get("methods")
-    if not isinstance(entries, list) or not entries:
-        raise ConfigError(f"{where}: 'methods' must be a non-empty list of {{label, algo, name, overrides}}")
+def _method_entries(entries: list, where: str) -> list[dict]:
     out = []
     for given in entries:
-        entry = {"algo": given} if isinstance(given, str) else given
-        if not isinstance(entry, dict) or "algo" not in entry:
-            raise ConfigError(f"{where}: each method needs an 'algo' (e.g. {{label: ppo, algo: ppo}}), got {entry!r}")
-        for key in entry:
-            if key not in METHOD_KEYS:
-                raise unknown(f"method key in {where}", key, METHOD_KEYS)
-        label = str(entry.get("label", entry["algo"]))
+        entry = read_section(f"{where} method", MethodEntry, {"algo": given} if isinstance(given, str) else given)
+        label = str(entry.label or entry.algo)
         out.append(
             {
                 "label": label,
-                "algo": str(entry["algo"]),
-                "name": str(entry.get("name", label)),
-                "overrides": _flat_overrides(entry.get("overrides"), where),
+                "algo": entry.algo,
+                "name": str(entry.name or label),
+                "overrides": _flat_overrides(entry.overrides, where),
             }
         )
     return out
@@ -241,28 +295,23 @@ def load_sweep(source: str, args: list[str] | None = None) -> Sweep:
     """
     from refpo_warp.config.resolve import resolve_config  # here: a Ray worker imports this module without torch
 
-    cli = parse_overrides(args or [])
+    given, cli = parse_options("sweep", SweepOptions, args or [], lambda key: True)  # the rest: run options
     path = config_path(cli.get("config_dir")).named_or_path("sweep", source)  # the runs' config folders
-    spec = load_yaml(path)
     where = str(path)
-    for key in spec:
-        if key not in SPEC_KEYS:
-            raise unknown(f"key in sweep file {where}", key, SPEC_KEYS)
+    spec = read_section(f"sweep file {where}", SweepFile, load_yaml(path))
     for key, hint in MANAGED.items():
         if key in cli:
             raise ConfigError(f"'{key}=' is set by the sweep for each run" + (f"; use '{hint}...'" if hint else ""))
-    name = str(spec.get("name", path.stem))
-    device = str(cli.pop("device", spec.get("device", "auto")))
-    tasks = _as_list(cli.pop("tasks", spec.get("tasks")), "tasks", str)
-    seeds = _as_list(cli.pop("seeds", spec.get("seeds", [1])), "seeds", int)
-    keep = cli.pop("methods", None)
-    out_dir = Path(str(cli.pop("out", spec.get("out") or Path("runs") / "sweeps" / name)))
-    report = dict(spec.get("report") or {})
-    for key in report:
-        if key not in REPORT_KEYS:
-            raise unknown(f"report key in {where}", key, REPORT_KEYS)
-    entries = _method_entries(spec, where)
-    base = _flat_overrides(spec.get("overrides"), where)
+    name = str(spec.name or path.stem)
+    device = str(given.device or spec.device)
+    tasks = _as_list(given.tasks or spec.tasks, "tasks", str)
+    seeds = _as_list(given.seeds or spec.seeds, "seeds", int)
+    keep = given.methods
+    out_dir = Path(str(given.out or spec.out or Path("runs") / "sweeps" / name))
+    figures = read_section(f"report of {where}", ReportChoices, spec.report or {})
+    report = {k: v for k, v in vars(figures).items() if v is not None}
+    entries = _method_entries(spec.methods, where)
+    base = _flat_overrides(spec.overrides, where)
     dtype = device_type(device)
     methods: list[tuple[str, Method]] = []  # (entry label, variant), the file's grid
     probes: dict[str, dict] = {}
@@ -292,7 +341,7 @@ def load_sweep(source: str, args: list[str] | None = None) -> Sweep:
     sweep = Sweep(
         name,
         str(path),
-        str(spec.get("description", "")).strip(),
+        spec.description.strip(),
         device,
         tasks,
         seeds,

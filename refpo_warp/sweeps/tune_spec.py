@@ -31,40 +31,104 @@ A tuning file (``tune/<name>.yaml`` of the config folders, or any YAML path) hol
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
+from refpo_warp.config.command_options import parse_options, read_section
 from refpo_warp.config.config_path import config_path
-from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.sweeps.spec import Method, Run, _flat_overrides, cli_value, device_type
 from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.option_rules import DEVICE_RULE, Check, Int, ListOf, Real, Rule, Text, mapping_or_none
+from refpo_warp.utils.options import option
 
-SPEC_KEYS = (
-    "description",
-    "device",
-    "tasks",
-    "seed",
-    "trials",
-    "overrides",
-    "objective",
-    "sampler",
-    "pruner",
-    "methods",
-    "evaluate",
-    "out",
-)
-METHOD_KEYS = ("label", "algo", "name", "overrides", "enqueue", "space")
-OBJECTIVE_KEYS = ("metric", "reference", "description")
-SAMPLER_KEYS = ("startup_trials",)
-PRUNER_KEYS = ("percentile", "startup_trials", "warmup_evaluations")
-EVALUATE_KEYS = ("tasks", "seeds", "variants")
-VARIANT_KEYS = ("label", "of", "algo", "name")
+_MAPPING = Check(mapping_or_none, "null or a mapping", optional=True)
+
+
+@dataclass(frozen=True)
+class TuningFile:
+    """The keys of a tuning file (the module docstring shows one)."""
+
+    description: str = option("", Text(), "what the tuning is for")
+    device: str = option("auto", DEVICE_RULE, "the device profile every trial run resolves for")
+    tasks: list[str] = option(rule=ListOf(Text()), doc="the task ids every trial trains on")
+    seed: int = option(101, Int(0, 2**32 - 1), "the tuning seed: never one of the reported seeds")
+    trials: int = option(8, Int(1), "trials per method: the equal budget")
+    overrides: dict | None = option(None, _MAPPING, "run options of every trial run")
+    objective: dict = option(rule=_MAPPING, doc="the score: metric, reference (ObjectiveSection)")
+    sampler: dict | None = option(None, _MAPPING, "Optuna's TPE sampler (SamplerSection)")
+    pruner: dict | None = option(None, _MAPPING, "the pruner (PrunerSection); null: no pruning")
+    methods: list = option(rule=ListOf(Rule()), doc="the methods tuned (MethodSection)")
+    evaluate: dict | None = option(None, _MAPPING, "the sweep of the chosen values on fresh seeds (EvaluateSection)")
+    out: str | None = option(None, Text(optional=True), "the tuning folder (default: runs/tune/<name>)")
+
+
+@dataclass(frozen=True)
+class ObjectiveSection:
+    metric: str = option(rule=Text(), doc="a column of the sweep report's runs.csv (N = 10, or a Gaussian's mean)")
+    reference: dict = option(rule=_MAPPING, doc="a positive number per task: score = mean of metric / reference")
+    description: str = option("", Text(), "what the score means")
+
+
+@dataclass(frozen=True)
+class SamplerSection:
+    startup_trials: int = option(4, Int(0), "TPE's random trials first (the enqueued ones count among them)")
+
+
+@dataclass(frozen=True)
+class PrunerSection:
+    percentile: float = option(25.0, Real(0, 100, lo_open=True, hi_open=True), "prune below this percentile")
+    startup_trials: int = option(3, Int(0), "trials never pruned, first")
+    warmup_evaluations: int = option(5, Int(0), "periodic evaluations of a trial before it may be pruned")
+
+
+@dataclass(frozen=True)
+class MethodSection:
+    algo: str = option(rule=Text(), doc="the algorithm (refpo train's algo=)")
+    space: dict = option(rule=_MAPPING, doc="the searched run options: {low, high, log} or {choices: [...]} each")
+    label: str | None = option(None, Text(optional=True), "its label (default: algo)")
+    name: str | None = option(None, Text(optional=True), "its name in tables (default: the label)")
+    overrides: dict | None = option(None, _MAPPING, "fixed run options of its trials")
+    enqueue: list = option(["config"], ListOf(Rule(), min_len=0), "first trials: config (its own values) or mappings")
+
+
+@dataclass(frozen=True)
+class EvaluateSection:
+    tasks: list[str] = option(rule=ListOf(Text()), doc="the tasks of the evaluation sweep")
+    seeds: list[int] = option(rule=ListOf(Int(0, 2**32 - 1)), doc="its fresh seeds")
+    variants: list | None = option(None, ListOf(Rule(), optional=True), "more rows (VariantSection)")
+
+
+@dataclass(frozen=True)
+class VariantSection:
+    label: str = option(rule=Text(), doc="the row's label")
+    of: str = option(rule=Text(), doc="the tuned method whose chosen values it takes")
+    algo: str = option(rule=Text(), doc="its algorithm")
+    name: str | None = option(None, Text(optional=True), "its name in tables (default: the label)")
+
+
+SPEC_KEYS = tuple(f.name for f in fields(TuningFile))
 DIMENSION_KEYS = {"float": ("low", "high", "log"), "categorical": ("choices",)}
 CONFIG_VALUES = "config"  # an `enqueue` entry: the values the method's own config resolves to
 # The run options a trial sets itself.
 MANAGED = ("task", "algo", "seed", "run_dir", "resume")
+
+
+@dataclass(frozen=True)
+class TuneOptions:
+    """The options of ``refpo tune``'s command line (over the tuning file's keys of the same names)."""
+
+    trials: int | None = option(None, Int(1, optional=True), "trials per method (default: the file's trials, else 8)")
+    methods: list[str] | None = option(
+        None, ListOf(Text(), optional=True), "labels of the methods to tune (default: every one)"
+    )
+    out: str | None = option(
+        None, Text(optional=True), "the tuning folder (default: the file's out, else runs/tune/<name>)"
+    )
+    config_dir: str | None = option(
+        None, Text(optional=True), "a folder of your own config files, searched before the shipped ones"
+    )
 
 
 @dataclass(frozen=True)
@@ -171,113 +235,60 @@ def _dimension(key: str, spec: Any, where: str) -> Dimension:
     return Dimension(key, low, high, log)
 
 
-def _method(entry: Any, where: str) -> TunedMethod:
-    if not isinstance(entry, dict) or "algo" not in entry or "space" not in entry:
-        raise ConfigError(
-            f"{where}: each method needs 'algo' and 'space' (and optionally label, name, overrides, "
-            f"enqueue), got {entry!r}"
-        )
-    for key in entry:
-        if key not in METHOD_KEYS:
-            raise unknown(f"method key in {where}", key, METHOD_KEYS)
-    label = str(entry.get("label", entry["algo"]))
-    space = entry["space"]
-    if not isinstance(space, dict) or not space:
+def _method(given: Any, where: str) -> TunedMethod:
+    entry = read_section(f"method of {where}", MethodSection, given)
+    label = str(entry.label or entry.algo)
+    space = entry.space
+    if not space:
         raise ConfigError(f"{where}: method '{label}': 'space' must be a non-empty mapping of run options")
     dims = [_dimension(str(k), v, f"{where}, method '{label}'") for k, v in space.items()]
-    overrides = _flat_overrides(entry.get("overrides"), where)
+    overrides = _flat_overrides(entry.overrides, where)
     for key in overrides:
         if key in space:
             raise ConfigError(f"{where}: method '{label}' both fixes and searches '{key}'")
-    enqueue = entry.get("enqueue", [CONFIG_VALUES])
-    if not isinstance(enqueue, list):
-        raise ConfigError(f"{where}: method '{label}': 'enqueue' must be a list of '{CONFIG_VALUES}' or mappings")
+    enqueue = entry.enqueue
     for item in enqueue:
         if item != CONFIG_VALUES and not isinstance(item, dict):
             raise ConfigError(
                 f"{where}: method '{label}': an 'enqueue' entry is '{CONFIG_VALUES}' or a mapping of "
                 f"searched values, got {item!r}"
             )
-    return TunedMethod(label, str(entry.get("name", label)), str(entry["algo"]), overrides, dims, enqueue)
+    return TunedMethod(label, str(entry.name or label), entry.algo, overrides, dims, enqueue)
 
 
-def _evaluation(spec: Any, labels: list[str], where: str) -> Evaluation | None:
-    if spec is None:
+def _evaluation(given: Any, labels: list[str], where: str) -> Evaluation | None:
+    if given is None:
         return None
-    if not isinstance(spec, dict):
-        raise ConfigError(f"{where}: 'evaluate' must be a mapping with tasks, seeds and optionally variants")
-    for key in spec:
-        if key not in EVALUATE_KEYS:
-            raise unknown(f"evaluate key in {where}", key, EVALUATE_KEYS)
-    tasks, seeds = spec.get("tasks"), spec.get("seeds")
-    if not isinstance(tasks, list) or not tasks or not isinstance(seeds, list) or not seeds:
-        raise ConfigError(f"{where}: evaluate needs non-empty lists 'tasks' and 'seeds'")
+    spec = read_section(f"evaluate of {where}", EvaluateSection, given)
     variants = []
-    for entry in spec.get("variants") or []:
-        if not isinstance(entry, dict) or not {"label", "of", "algo"} <= set(entry):
-            raise ConfigError(f"{where}: an evaluate variant needs label, of (a tuned method) and algo, got {entry!r}")
-        for key in entry:
-            if key not in VARIANT_KEYS:
-                raise unknown(f"evaluate variant key in {where}", key, VARIANT_KEYS)
-        if entry["of"] not in labels:
-            raise unknown(f"tuned method (evaluate variant '{entry['label']}' of) in {where}", entry["of"], labels)
-        variants.append({k: str(entry.get(k, entry["label"])) for k in VARIANT_KEYS})
-    return Evaluation([str(t) for t in tasks], [_int(s, "evaluate.seeds", where, 0) for s in seeds], variants)
-
-
-def _int(value: Any, key: str, where: str, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < low:
-        raise ConfigError(f"{where}: '{key}' must be an integer >= {low}, got {value!r}")
-    return value
+    for entry in spec.variants or []:
+        variant = read_section(f"evaluate variant of {where}", VariantSection, entry)
+        if variant.of not in labels:
+            raise unknown(f"tuned method (evaluate variant '{variant.label}' of) in {where}", variant.of, labels)
+        variants.append({**vars(variant), "name": variant.name or variant.label})
+    return Evaluation(list(spec.tasks), list(spec.seeds), variants)
 
 
 def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
-    """Read a tuning file; command-line ``key=value``: ``trials=``, ``methods=`` (labels to keep), ``out=``,
-    ``config_dir=`` (the runs' config folders)."""
-    cli = parse_overrides(args or [])
-    folders = {"config_dir": cli.pop("config_dir")} if "config_dir" in cli else {}
+    """Read a tuning file; command-line ``key=value``: ``TuneOptions``."""
+    given, _ = parse_options("tune", TuneOptions, args or [])
+    folders = {"config_dir": given.config_dir} if given.config_dir is not None else {}
     path = config_path(folders.get("config_dir")).named_or_path("tune", source)
-    spec = load_yaml(path)
     where = str(path)
-    for key in spec:
-        if key not in SPEC_KEYS:
-            raise unknown(f"key in tuning file {where}", key, SPEC_KEYS)
-    for key in cli:
-        if key not in ("trials", "methods", "out"):
-            raise unknown("refpo tune option", key, ("trials", "methods", "out", "config_dir"))
-    tasks = spec.get("tasks")
-    if not isinstance(tasks, list) or not tasks:
-        raise ConfigError(f"{where}: 'tasks' must be a non-empty list of task ids")
-    objective = spec.get("objective")
-    if not isinstance(objective, dict) or "metric" not in objective or "reference" not in objective:
-        raise ConfigError(f"{where}: 'objective' needs 'metric' and 'reference' (a positive number per task)")
-    for key in objective:
-        if key not in OBJECTIVE_KEYS:
-            raise unknown(f"objective key in {where}", key, OBJECTIVE_KEYS)
-    reference = objective["reference"]
-    if (
-        not isinstance(reference, dict)
-        or sorted(reference) != sorted(tasks)
-        or not all(isinstance(v, (int, float)) and v > 0 for v in reference.values())
+    spec = read_section(f"tuning file {where}", TuningFile, load_yaml(path))
+    tasks = spec.tasks
+    objective = read_section(f"objective of {where}", ObjectiveSection, spec.objective)
+    reference = objective.reference
+    if sorted(reference) != sorted(tasks) or not all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 for v in reference.values()
     ):
         raise ConfigError(
             f"{where}: objective.reference needs one positive number for each of {tasks}, got {reference!r}"
         )
-    sampler = spec.get("sampler") or {}
-    for key in sampler:
-        if key not in SAMPLER_KEYS:
-            raise unknown(f"sampler key in {where}", key, SAMPLER_KEYS)
-    pruner = spec.get("pruner")
-    if pruner is not None:
-        for key in pruner:
-            if key not in PRUNER_KEYS:
-                raise unknown(f"pruner key in {where}", key, PRUNER_KEYS)
-        if not 0 < float(pruner.get("percentile", 25)) < 100:
-            raise ConfigError(f"{where}: pruner.percentile must lie in (0, 100)")
-    overrides = _flat_overrides(spec.get("overrides"), where)
-    methods = [_method(m, where) for m in spec.get("methods") or []]
-    if not methods:
-        raise ConfigError(f"{where}: 'methods' must be a non-empty list")
+    sampler = read_section(f"sampler of {where}", SamplerSection, spec.sampler or {})
+    pruner = None if spec.pruner is None else read_section(f"pruner of {where}", PrunerSection, spec.pruner)
+    overrides = _flat_overrides(spec.overrides, where)
+    methods = [_method(m, where) for m in spec.methods]
     for m in methods:
         for key in [*overrides, *m.overrides, *(d.key for d in m.space)]:
             if key in MANAGED:
@@ -285,41 +296,32 @@ def load_tuning(source: str, args: list[str] | None = None) -> Tuning:
     labels = [m.label for m in methods]
     if len(set(labels)) != len(labels):
         raise ConfigError(f"{where}: method labels must be unique, got {labels}")
-    if "methods" in cli:
-        keep = cli.pop("methods")
-        keep = keep.split(",") if isinstance(keep, str) else list(keep)
+    if given.methods is not None:
+        keep = given.methods
         for label in keep:
             if label not in labels:
                 raise unknown(f"method of tuning '{path.stem}'", label, labels)
         methods = [m for m in methods if m.label in keep]
-    evaluation = _evaluation(spec.get("evaluate"), labels, where)
-    trials = _int(cli.pop("trials", spec.get("trials", 8)), "trials", where, 1)
-    device = str(spec.get("device", "cpu"))
+    evaluation = _evaluation(spec.evaluate, labels, where)
+    trials = given.trials or spec.trials
+    device = spec.device
     device_type(device)
     return Tuning(
         name=path.stem,
         source=str(path),
-        description=str(spec.get("description", "")).strip(),
+        description=spec.description.strip(),
         device=device,
         tasks=[str(t) for t in tasks],
-        seed=_int(spec.get("seed", 101), "seed", where, 0),
+        seed=spec.seed,
         trials=trials,
         overrides=overrides,
         objective=Objective(
-            str(objective["metric"]),
-            {str(k): float(v) for k, v in reference.items()},
-            str(objective.get("description", "")).strip(),
+            objective.metric, {str(k): float(v) for k, v in reference.items()}, objective.description.strip()
         ),
-        startup_trials=_int(sampler.get("startup_trials", 4), "sampler.startup_trials", where, 0),
-        pruner=None
-        if pruner is None
-        else {
-            "percentile": float(pruner.get("percentile", 25)),
-            "startup_trials": _int(pruner.get("startup_trials", 3), "pruner.startup_trials", where, 0),
-            "warmup_evaluations": _int(pruner.get("warmup_evaluations", 5), "pruner.warmup_evaluations", where, 0),
-        },
+        startup_trials=sampler.startup_trials,
+        pruner=None if pruner is None else vars(pruner),
         methods=methods,
-        out_dir=Path(str(cli.pop("out", spec.get("out") or Path("runs") / "tune" / path.stem))),
+        out_dir=Path(str(given.out or spec.out or Path("runs") / "tune" / path.stem)),
         evaluation=evaluation,
         folders=folders,
     )

@@ -6,8 +6,9 @@
 - a subject: the one or two things a command acts on, where it has them (``refpo sweep cpu_dmc``,
   ``refpo report runs/sweeps/cpu_dmc``, ``refpo bench dmc``).
 
-A command declares its subjects and flags; anything else is an error naming the argument and the valid flags. A
-spelling a command once took (``RENAMED``: ``--out`` -> ``out=DIR``) is refused with the name it has now.
+A command declares its subjects and flags (its options: ``refpo_warp/config/command_options.py``); anything else is an
+error naming the argument and the valid flags. A spelling a command once took (the table of
+``refpo_warp/utils/renamed_spellings.py``: ``refpo report --out`` -> ``out=DIR``) is refused with the name it has now.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from types import SimpleNamespace
 from typing import Any
 
 from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.renamed_spellings import renamed_error
 
 HELP = ("-h", "--help", "help")
 
@@ -35,7 +37,7 @@ class Flag:
         """The flag's line in a command's help."""
         value = "" if self.kind is None else f" {self.name.lstrip('-').replace('-', '_').upper()}"
         default = "" if self.default is None else f" (default {self.default})"
-        return f"    {self.name + value:24s}{self.doc}{default}"
+        return f"    {self.name + value:22s}  {self.doc}{default}"
 
     def convert(self, text: str) -> Any:
         kind = self.kind
@@ -82,10 +84,9 @@ def parse_arguments(
     argv: list[str],
     flags: tuple[Flag, ...] = (),
     subjects: int = 0,
-    renamed: dict[str, str] | None = None,
 ) -> Arguments:
-    """Split ``argv``; a flag not declared, a missing flag value, an extra subject or an old spelling (``renamed``:
-    ``--flag`` or ``key=`` -> its name now) raises ``ConfigError``."""
+    """Split ``argv``; a flag not declared, a missing flag value, an extra subject or an old spelling (the command's
+    entries in ``refpo_warp/utils/renamed_spellings.py``) raises ``ConfigError``."""
     declared = {flag.name: flag for flag in flags}
     out = Arguments()
     i = 0
@@ -93,8 +94,9 @@ def parse_arguments(
         arg = argv[i]
         i += 1
         old = arg.partition("=")[0] if arg.startswith("--") else arg.partition("=")[0] + "=" if "=" in arg else None
-        if renamed and old in renamed:
-            raise ConfigError(f"refpo {command}: '{old}' is spelled '{renamed[old]}' now; see refpo {command} --help")
+        error = renamed_error(command, old) if old else None
+        if error is not None:
+            raise error
         if arg.startswith("--"):
             name, has_value, value = arg.partition("=")
             if name not in declared:
@@ -142,12 +144,12 @@ def parse_flags(
     argv: list[str],
     flags: tuple[Flag, ...],
     options: tuple[str, ...] = (),
-    renamed: dict[str, str] | None = None,
 ) -> tuple[SimpleNamespace, dict[str, str]]:
-    """A benchmark's arguments through the convention: its flags as attributes (``--num-envs 8`` ->
+    """A benchmark that does not declare an ``Options`` dataclass (``refpo_warp/cli/bench.py`` calls its
+    ``main(argv)``): its arguments through the convention, its flags as attributes (``--num-envs 8`` ->
     ``.num_envs``, the declared default when not given) and its ``key=value`` options whose key starts with one of
     ``options`` (e.g. ``env.``), as text."""
-    args = parse_arguments(command, argv, flags, 0, renamed)
+    args = parse_arguments(command, argv, flags, 0)
     given = {}
     for option in args.options:
         key, _, value = option.partition("=")

@@ -6,16 +6,12 @@ from __future__ import annotations
 import torch
 
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_rules import DEVICE_RULE
 
 
 def check_device_name(device: str) -> str:
     """``device`` if it is a device name (auto, cpu, cuda, cuda:N), whether or not this machine has it."""
-    if not (
-        isinstance(device, str)
-        and (device in ("auto", "cpu", "cuda") or (device.startswith("cuda:") and device[5:].isdigit()))
-    ):
-        raise ConfigError(f"device={device!r} is invalid; expected auto, cpu, cuda or cuda:N")
-    return device
+    return DEVICE_RULE.check("device", device)
 
 
 def resolve_device(device: str = "auto") -> str:

@@ -161,7 +161,8 @@ class Text(Rule):
 
 
 class ListOf(Rule):
-    """A list of ``min_len`` to ``max_len`` items, each valid for ``item``."""
+    """A list of ``min_len`` to ``max_len`` items, each valid for ``item``; one item may be given alone (``x`` is
+    ``[x]``); a string with a comma is refused naming the list spelling (``a,b``: ``[a,b]``), in every command."""
 
     def __init__(
         self,
@@ -175,6 +176,11 @@ class ListOf(Rule):
         self.item, self.min_len, self.max_len = item, min_len, max_len
 
     def _check(self, key: str, value: Any) -> Any:
+        if isinstance(value, str) and "," in value:  # the one list syntax is YAML's: a bare a,b is one string
+            items = ",".join(v.strip() for v in value.split(","))
+            raise self.error(key, value, f"a list is written {key}=[{items}]")
+        if not isinstance(value, (list, tuple, dict)):
+            value = [value]  # one item may be given without brackets: tasks=dmc_point_mass
         if not isinstance(value, (list, tuple)):
             raise self.error(key, value, "not a list")
         if len(value) < self.min_len or (self.max_len is not None and len(value) > self.max_len):
@@ -200,6 +206,29 @@ class Check(Rule):
 
     def describe(self) -> str:
         return self.description
+
+
+def _device_name(key: str, value: Any) -> str:
+    if not (
+        isinstance(value, str)
+        and (value in ("auto", "cpu", "cuda") or (value.startswith("cuda:") and value[5:].isdigit()))
+    ):
+        raise ConfigError(f"{key}={value!r} is invalid; expected auto, cpu, cuda or cuda:N")
+    return value
+
+
+# Every command's device= (a run's is refpo_warp/config/run_options.py's, the same names); whether this machine has the
+# device is checked where it is used (refpo_warp/utils/device.py's resolve_device). auto, the default of every
+# command, is the GPU where one is usable, else the CPU.
+DEVICE_RULE = Check(_device_name, "auto, cpu, cuda or cuda:N")
+DEVICE_DOC = "where it runs (auto: cuda:0 where CUDA is usable, else cpu)"
+
+
+def optional(rule: Rule) -> Rule:
+    """The same rule with null valid too (an option whose default is found elsewhere, e.g. in a sweep file)."""
+    out = copy.copy(rule)
+    out.optional = True
+    return out
 
 
 def mapping_or_none(key: str, value: Any) -> Any:

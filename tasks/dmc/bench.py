@@ -1,6 +1,6 @@
 """DMC benchmark: env steps per second of every task vs the MuJoCo C library stepping the same model.
 
-    refpo bench dmc [--num-envs N] [--device auto] [--tasks cartpole_balance,walker_walk] [--seconds 3]
+    refpo bench dmc [num_envs=N] [device=auto] [tasks=[dmc_cartpole_balance,dmc_walker_walk]] [timed_seconds=3]
 
 Ours: the task's Warp env (Newton + MuJoCo Warp), uniform random actions in [-1, 1], timed after warm-up steps (the
 step is replayed as a captured graph: a CUDA graph on GPU, a Warp CPU graph on CPU); one env step = the task's
@@ -14,15 +14,17 @@ one ``MjData`` per world. Physics only: no observation or reward work on the C s
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
 
 from refpo_warp.envs.registry import make_env
-from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.device import resolve_device
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Flag, Int, ListOf, Real, Text
+from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import env_steps_per_second, print_table
 
 if TYPE_CHECKING:
@@ -88,42 +90,39 @@ def mujoco_c(env, seconds: float) -> tuple[float, float]:
     return rollout_rate, loop_rate
 
 
-FLAGS = (
-    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
-    Flag("--num-envs", int, "envs (default: 256 on CPU, 4096 on CUDA)"),
-    Flag("--tasks", str, "comma-separated suite names (default: all)"),
-    Flag("--seconds", float, "approximate timing window per measurement", default=3.0),
-    Flag("--no-mujoco-c", doc="skip the MuJoCo C comparison", default=False),
-)
-USAGE = usage("refpo bench dmc [flags]", __doc__.split("\n\n")[0], FLAGS)
+@dataclass(frozen=True)
+class Options:
+    device: str = option("auto", DEVICE_RULE, DEVICE_DOC)
+    num_envs: int | None = option(None, Int(1, 1 << 22, optional=True), "envs (default: 256 on CPU, 4096 on CUDA)")
+    tasks: list[str] | None = option(None, ListOf(Text(), optional=True), "DMC task ids (default: every one)")
+    timed_seconds: float = option(3.0, Real(0, 3600, lo_open=True), "approximate timing window per measurement")
+    mujoco_c: bool = option(True, Flag(), "also time MuJoCo C on the same model (false: ours only)")
 
 
-def main(argv: list[str]) -> None:
+def run(options: Options, _: dict | None = None) -> None:
     from refpo_warp.tasks.dmc.suite import task_names
 
-    TASKS = task_names()
-
-    args, _ = parse_flags("bench dmc", argv, FLAGS)
-    args.tasks = args.tasks or ",".join(TASKS)
-
-    device = resolve_device(args.device)
-    num_envs = args.num_envs or (256 if device == "cpu" else 4096)
-    tasks = [t.strip() for t in args.tasks.split(",") if t.strip()]
-    unknown = [t for t in tasks if t not in TASKS]
+    ids = [f"dmc_{t}" for t in task_names()]
+    chosen = options.tasks or ids
+    unknown = [t for t in chosen if t not in ids]
     if unknown:
-        raise ConfigError(f"unknown DMC task(s) {unknown}; choose from {', '.join(TASKS)}")
+        raise ConfigError(f"tasks={unknown} has unknown DMC task ids; choose from {', '.join(ids)}")
+    device = resolve_device(options.device)
+    num_envs = options.num_envs or (256 if device == "cpu" else 4096)
+    with_c = options.mujoco_c
     torch.manual_seed(0)
     print(
         f"DMC env steps/s on {device}: {num_envs} envs, random actions, graph-captured step"
-        + ("" if args.no_mujoco_c else "; MuJoCo C on the same model and number of worlds (1 thread)"),
+        + ("; MuJoCo C on the same model and number of worlds (1 thread)" if with_c else ""),
         flush=True,
     )
     rows = []
-    for task in tasks:
-        rate, env = ours(task, num_envs, device, args.seconds)
+    for task_id in chosen:
+        task = task_id.removeprefix("dmc_")
+        rate, env = ours(task, num_envs, device, options.timed_seconds)
         row = {"task": task, "substeps": env.task.substeps, "ours (env steps/s)": f"{rate:,.0f}"}
-        if not args.no_mujoco_c:
-            c_rollout, c_loop = mujoco_c(env, args.seconds)
+        if with_c:
+            c_rollout, c_loop = mujoco_c(env, options.timed_seconds)
             row.update(
                 {
                     "C rollout": f"{c_rollout:,.0f}",
@@ -136,6 +135,6 @@ def main(argv: list[str]) -> None:
         print(f"  {task}: {row}", flush=True)
         del env
     columns = ["task", "substeps", "ours (env steps/s)"]
-    if not args.no_mujoco_c:
+    if with_c:
         columns += ["C rollout", "ours / C rollout", "C loop", "ours / C loop"]
     print_table(rows, columns, title=f"DMC env steps per second on {device}, {num_envs} envs")

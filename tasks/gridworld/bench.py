@@ -1,21 +1,23 @@
 """GridWorld benchmark: the Warp env against the same dynamics in numpy under gymnasium's SyncVectorEnv.
 
-    refpo bench gridworld [--num-envs 4096] [--device auto] [--gym-steps 20]
+    refpo bench gridworld [num_envs=4096] [device=auto] [gym_steps=20]
 
-Action latency and update time on the GridWorld config: ``refpo bench latency --tasks gridworld`` and
-``refpo bench algorithms --task gridworld``.
+Action latency and update time on the GridWorld config: ``refpo bench latency tasks=gridworld`` and
+``refpo bench algorithms task=gridworld``.
 """
 
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import torch
 
 from refpo_warp.envs.registry import make_env
-from refpo_warp.utils.command_line import Flag, parse_flags, usage
 from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Int
+from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import env_steps_per_second, print_table
 
 
@@ -37,16 +39,14 @@ def gym_steps_per_second(num_envs: int, steps: int) -> float:
     return steps * num_envs / elapsed
 
 
-FLAGS = (
-    Flag("--num-envs", int, "envs of both", default=4096),
-    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
-    Flag("--gym-steps", int, "timed steps of the gymnasium baseline", default=20),
-)
-USAGE = usage("refpo bench gridworld [flags]", __doc__.split("\n\n")[0], FLAGS)
+@dataclass(frozen=True)
+class Options:
+    num_envs: int = option(4096, Int(1, 1 << 22), "envs of both")
+    device: str = option("auto", DEVICE_RULE, DEVICE_DOC)
+    gym_steps: int = option(20, Int(1), "timed steps of the gymnasium baseline")
 
 
-def main(argv: list[str]) -> None:
-    args, _ = parse_flags("bench gridworld", argv, FLAGS, renamed={"--envs": "--num-envs"})
+def run(args: Options, _: dict | None = None) -> None:
     device = resolve_device(args.device)
     print(f"GridWorld benchmark on {device}, {args.num_envs} envs, torch threads {torch.get_num_threads()}", flush=True)
 

@@ -1,4 +1,4 @@
-"""Env-stepping throughput of the humanoid tracking env: ``refpo bench humanoid [--num-envs N] ...``.
+"""Env-stepping throughput of the humanoid tracking env: ``refpo bench humanoid [num_envs=N] ...``.
 
 Ours: timed with ``refpo_warp.utils.timing.env_steps_per_second``: uniform random actions in [-1, 1] drawn ahead of
 time, after warm-up steps (the first step compiles kernels and captures the step graph). One env step is the whole
@@ -16,17 +16,19 @@ sampling.
 
 from __future__ import annotations
 
-import ast
-import json
 import time
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import torch
 
 from refpo_warp.envs.registry import make_env
-from refpo_warp.utils.command_line import Flag, parse_flags, usage
+from refpo_warp.utils.atomic_files import write_json
 from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Flag, Int, Text
+from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import env_steps_per_second, print_title
 
 
@@ -102,44 +104,36 @@ def mujoco_c(env, steps: int, episode_length: int, seed: int = 0) -> dict:
     return {"c_env_steps_per_s": run(episodes), "c_episode_length": length, "c_settings": mc.solver_settings(model)}
 
 
-def _literal(value: str) -> object:
-    try:
-        return ast.literal_eval(value)
-    except (ValueError, SyntaxError):
-        return value
+@dataclass(frozen=True)
+class Options:
+    task: str = option("humanoid_all", Text(), "a humanoid task id")
+    device: str = option("auto", DEVICE_RULE, DEVICE_DOC)
+    num_envs: int | None = option(None, Int(1, 1 << 22, optional=True), "envs (default: 64 on CPU, 4096 on CUDA)")
+    timed_steps: int | None = option(None, Int(1, optional=True), "timed steps (default: 30 on CPU, 300 on CUDA)")
+    warmup_steps: int = option(3, Int(0), "untimed steps first")
+    mujoco_c: bool = option(True, Flag(), "also time the MuJoCo C anchor (false: ours only)")
+    out: str | None = option(None, Text(optional=True), "also write the result to this JSON file")
 
 
-FLAGS = (
-    Flag("--task", str, "a humanoid task id", default="humanoid_all"),
-    Flag("--device", str, "auto, cpu or cuda:N", default="auto"),
-    Flag("--num-envs", int, "envs (default: 64 on CPU, 4096 on CUDA)"),
-    Flag("--steps", int, "timed steps (default: 30 on CPU, 300 on CUDA)"),
-    Flag("--warmup", int, "untimed steps first", default=3),
-    Flag("--no-mujoco-c", doc="skip the MuJoCo C anchor", default=False),
-    Flag("--json", doc="print the result as one JSON line", default=False),
-)
-USAGE = usage(
-    "refpo bench humanoid [flags] [env.<option>=VALUE ...]",
-    __doc__.split("\n\n")[0] + " env.<option>=VALUE sets an env cfg option (e.g. env.njmax=320).",
-    FLAGS,
-)
+REST_PREFIXES = ("env.",)
+REST_DOC = "an env cfg option (e.g. env.njmax=320)"
 
 
-def main(argv: list[str]) -> None:
-    args, given = parse_flags("bench humanoid", argv, FLAGS, options=("env.",), renamed={"--env": "env.<option>="})
-
+def run(options: Options, given: dict[str, Any]) -> None:
+    args = options
     device = resolve_device(args.device)
     cpu = device == "cpu"
     num_envs = args.num_envs or (64 if cpu else 4096)
-    steps = args.steps or (30 if cpu else 300)
-    env_cfg: dict[str, Any] = {key.removeprefix("env."): _literal(value) for key, value in given.items()}
-    result = measure(args.task, num_envs, device, steps, args.warmup, with_c=not args.no_mujoco_c, **env_cfg)
-    if args.json:
-        print(json.dumps(result))
-        return
+    steps = args.timed_steps or (30 if cpu else 300)
+    env_cfg: dict[str, Any] = {key.removeprefix("env."): value for key, value in given.items()}
+    result = measure(args.task, num_envs, device, steps, args.warmup_steps, with_c=args.mujoco_c, **env_cfg)
+    if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        write_json(result, Path(args.out))
+        print(f"wrote {args.out}")
     print_title(f"{result['task']} env steps per second on {result['device']}, {num_envs} envs")
     print(
-        f"{result['task']} on {result['device']}: {num_envs} envs, {steps} steps after {args.warmup} warm-up "
+        f"{result['task']} on {result['device']}: {num_envs} envs, {steps} steps after {args.warmup_steps} warm-up "
         f"(graph captured: {result['graph_captured']}), uniform random actions in [-1, 1]"
         + (f"; env options {env_cfg}" if env_cfg else "")
     )
@@ -164,9 +158,3 @@ def main(argv: list[str]) -> None:
         )
         print("    physics only: no rewards, observations, resets or reference sampling")
         print(f"  ours / MuJoCo C: {result['ours_over_c']:.2f}")
-
-
-if __name__ == "__main__":
-    import sys
-
-    main(sys.argv[1:])

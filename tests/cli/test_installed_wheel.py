@@ -132,7 +132,7 @@ def test_the_wheel_trains_evaluates_explains_lists_and_sweeps_outside_the_checko
 
     (tmp_path / "mine" / "task").mkdir(parents=True)
     (tmp_path / "mine" / "task" / "grid_small.yaml").write_text("base: gridworld\nnum_envs: 8\n")
-    listed = run([refpo, "train", "--tasks", "config_dir=mine"], tmp_path, env).stdout
+    listed = run([refpo, "train", "--list-tasks", "config_dir=mine"], tmp_path, env).stdout
     assert "dmc_cartpole_balance" in listed and "grid_small" in listed
 
     swept = run([refpo, "sweep", "cpu_dmc", "--dry-run"], tmp_path, env).stdout

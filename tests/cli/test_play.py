@@ -85,7 +85,7 @@ def test_bad_options_and_a_missing_gl_platform_get_one_message_and_an_exit_code(
             ("agent=random", "video.camera=overhead", "video.length=2", *SMALL),
             "camera='overhead' is invalid; expected one of 'track', 'fixed'",
         ),
-        (("agent=walk",), "agent='walk' is invalid; expected one of zero, random"),
+        (("agent=walk",), "agent='walk' is invalid; expected null or one of 'zero', 'random'"),
         (("agent=zero", "video.widht=64"), "Did you mean 'video.width'"),
         (("agent=zero", "env.action_transfrom=tanh"), "Did you mean 'env.action_transform'"),
         # the spellings refpo play once took, refused with the names refpo train gives them

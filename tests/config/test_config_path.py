@@ -44,7 +44,7 @@ def test_the_environment_variable_names_folders_too(user_configs, monkeypatch):
 
 
 def test_tasks_lists_the_users_task_and_explain_names_its_file(user_configs, capsys):
-    assert main(["train", "--tasks", f"config_dir={user_configs}"]) == 0
+    assert main(["train", "--list-tasks", f"config_dir={user_configs}"]) == 0
     listed = capsys.readouterr().out
     assert "gridworld " in listed and "grid_small" in listed and "grid_small.yaml" in listed
     code = main(

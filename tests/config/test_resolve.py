@@ -89,7 +89,7 @@ def test_cli_unknown_task_exits_nonzero_with_suggestion():
 
 def test_cli_lists_tasks():
     proc = subprocess.run(
-        [sys.executable, "tools/train.py", "--tasks"],
+        [sys.executable, "tools/train.py", "--list-tasks"],
         cwd=ROOT,
         capture_output=True,
         text=True,

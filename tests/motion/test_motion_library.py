@@ -256,13 +256,15 @@ def test_convert_amass_command(amass_dir, library, tmp_path, capsys):
     from refpo_warp.cli.main import main
 
     out = tmp_path / "three.motionlib.npz"
-    assert main(["convert-amass", str(amass_dir), str(out), "--fps", "30"]) == 0
+    assert main(["convert-amass", str(amass_dir), f"out={out}", "fps=30"]) == 0
     converted = MotionLibrary.load(out)
     assert converted.clip_names == library.clip_names
     np.testing.assert_array_equal(converted.frames["dof_pos"], library.frames["dof_pos"])
     (tmp_path / "bad").mkdir()
     (tmp_path / "bad" / "x_poses.npz").write_text("garbage")
-    assert main(["convert-amass", str(tmp_path / "bad"), str(tmp_path / "no.motionlib.npz")]) == 4  # a bad input file
+    assert (
+        main(["convert-amass", str(tmp_path / "bad"), f"out={tmp_path / 'no.motionlib.npz'}"]) == 4
+    )  # a bad input file
     assert "x_poses.npz: cannot be read as an npz archive" in capsys.readouterr().err
     assert not (tmp_path / "no.motionlib.npz").exists()
 

@@ -96,7 +96,7 @@ def test_make_clips_command(tmp_path, capsys):
     from refpo_warp.cli.main import main
 
     out = str(tmp_path / "x")
-    assert main(["make-clips", out, "--random", "3", "--seed", "1", "--schema", "smplx", "--fps", "50"]) == 0
+    assert main(["make-clips", f"out={out}", "random=3", "seed=1", "schema=smplx", "fps=50"]) == 0
     files = sorted((tmp_path / "x").glob("*_stageii.npz"))
     assert len(files) == 3 and all(read_amass(f).schema == "smplx" and read_amass(f).fps == 50 for f in files)
     assert "wrote 3 clips" in capsys.readouterr().out

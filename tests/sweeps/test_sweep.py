@@ -63,7 +63,7 @@ def test_grid_expands_tasks_methods_seeds_and_list_overrides(tmp_path):
     cfg = resolve_config(parse_overrides(list(run.args)))  # the arguments resolve as tools/train.py reads them
     assert cfg["algorithm"]["reflow_coef"] == 0.08 and cfg["seed"] == 1 and cfg["run_dir"] == str(run.run_dir)
     # Command-line values: run options for every run (a list expands), sweep-level keys narrow the grid.
-    sweep = load_sweep(str(spec), ["methods=refpo_l0.02,ppo", "seeds=[3]", "algorithm.learning_rate=[0.001,0.002]"])
+    sweep = load_sweep(str(spec), ["methods=[refpo_l0.02,ppo]", "seeds=[3]", "algorithm.learning_rate=[0.001,0.002]"])
     assert [m.label for m in sweep.methods] == [
         "ppo_learning_rate0.001",
         "ppo_learning_rate0.002",
@@ -86,7 +86,7 @@ def test_a_typo_fails_before_anything_starts(tmp_path):
     assert not (tmp_path / "out").exists()
     with pytest.raises(ConfigError, match="Did you mean 'refpo'"):
         load_sweep(str(write_spec(tmp_path / "algo.yaml", methods=[{"algo": "refp"}])))
-    with pytest.raises(ConfigError, match="use 'seeds="):
+    with pytest.raises(ConfigError, match="'seed=' is spelled 'seeds='"):
         load_sweep(str(spec), ["seed=3"])
     if not torch.cuda.is_available():  # a CUDA sweep validates anywhere but trains only with a GPU
         cuda_spec = write_spec(tmp_path / "cuda.yaml", device="cuda", methods=[{"algo": "ppo"}])
@@ -185,7 +185,7 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     evals = {label: out / "gridworld" / label / "seed1" / "eval.json" for label in ("ppo", "refpo")}
     stamps = {label: path.stat().st_mtime_ns for label, path in evals.items()}
     lines: list[str] = []
-    summary = run_sweep(load_sweep(str(spec), [f"out={out}", "methods=ppo,refpo"]), jobs=2, echo=lines.append)
+    summary = run_sweep(load_sweep(str(spec), [f"out={out}", "methods=[ppo,refpo]"]), jobs=2, echo=lines.append)
     assert summary.ok and summary.skipped == ["gridworld/ppo/seed1", "gridworld/refpo/seed1"] and not summary.finished
     assert "2 done (skipped)" in "\n".join(lines)
     assert {label: path.stat().st_mtime_ns for label, path in evals.items()} == stamps
@@ -194,11 +194,11 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     evals["refpo"].unlink()
     lines.clear()
     run_sweep(
-        load_sweep(str(spec), [f"out={out}", "methods=ppo,refpo", "eval.num_envs=3"]), dry_run=True, echo=lines.append
+        load_sweep(str(spec), [f"out={out}", "methods=[ppo,refpo]", "eval.num_envs=3"]), dry_run=True, echo=lines.append
     )
     assert "2 stale: config changed (rerun from scratch)" in lines[1]
     lines.clear()
-    run_sweep(load_sweep(str(spec), [f"out={out}", "methods=ppo,refpo"]), dry_run=True, echo=lines.append)
+    run_sweep(load_sweep(str(spec), [f"out={out}", "methods=[ppo,refpo]"]), dry_run=True, echo=lines.append)
     assert "1 done (skipped), 1 unfinished (rerun from scratch)" in lines[1]
 
     # The report lists the crashed run as missing, with its log.

@@ -356,7 +356,7 @@ def _tear(run):
 
 def test_torn_progress_line_is_tolerated_by_plot(run):
     _tear(run)
-    proc = call_tool("plot", f"run_dir={run}")
+    proc = call_tool("plot", f"run_dirs={run}")
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (run / "curves.png").stat().st_size > 0
 
@@ -383,7 +383,7 @@ def test_damaged_progress_line_is_named(run):
     path = run / "progress.jsonl"
     lines = path.read_text().splitlines()
     path.write_text("\n".join([lines[0], "garbage{", *lines[1:]]) + "\n")
-    assert_refused(call_tool("plot", f"run_dir={run}"), BAD_FILE, "progress.jsonl: line 2")
+    assert_refused(call_tool("plot", f"run_dirs={run}"), BAD_FILE, "progress.jsonl: line 2")
 
 
 # ------------------------------------------------------------------------------------------------ motion files
@@ -411,20 +411,20 @@ def test_bad_motion_file_is_named(kind, tmp_path):
     options, culprit = MOTIONS[kind]
     src = _amass(tmp_path / f"{kind}_poses.npz", **options)
     out = tmp_path / "out.motionlib.npz"
-    assert_refused(call_tool("convert_amass", src, out), BAD_FILE, str(src), culprit)
+    assert_refused(call_tool("convert_amass", src, f"out={out}"), BAD_FILE, str(src), culprit)
     assert not out.exists()
 
 
 @SLOW
 def test_bad_library_frame_rate_option(tmp_path):
     src = _amass(tmp_path / "ok_poses.npz")
-    assert_refused(call_tool("convert_amass", src, tmp_path / "o.motionlib.npz", "--fps", "0"), USAGE, "--fps=0")
+    assert_refused(call_tool("convert_amass", src, f"out={tmp_path / 'o.motionlib.npz'}", "fps=0"), USAGE, "fps=0")
 
 
 @pytest.mark.parametrize("damage", cases(["one-frame-clip", "not-a-zip"]))
 def test_bad_motion_library_given_to_train_is_named(damage, tmp_path):
     lib = tmp_path / "lib.motionlib.npz"
-    assert call_tool("convert_amass", _amass(tmp_path / "ok_poses.npz"), lib).returncode == 0
+    assert call_tool("convert_amass", _amass(tmp_path / "ok_poses.npz"), f"out={lib}").returncode == 0
     if damage == "not-a-zip":
         lib.write_bytes(b"PK\x03\x04 broken")
         culprit = "cannot be read"

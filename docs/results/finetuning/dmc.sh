@@ -28,7 +28,7 @@ for task in ${TASKS[@]}; do
         run_dir="$D/demonstrator"
     fi
   done
-  [ -d "$D/data" ] || refpo collect run_dir="$D/demonstrator" checkpoint="$CK" episodes=200 noise=0.3 sample=mean \
+  [ -d "$D/data" ] || refpo collect run_dir="$D/demonstrator" checkpoint="$CK" episodes=200 noise=0.3 initial_noise=zero \
     out="$D/data"
   for algo in refpo ppo; do
     [ -f "$D/clone_$algo/eval.json" ] || refpo pretrain task=$task algo=$algo dataset="$D/data" \

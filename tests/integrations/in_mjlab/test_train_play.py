@@ -139,11 +139,11 @@ def test_evaluate_reports_both_initial_noise_protocols(trained):
     names them, and at a given number of flow steps; a bad value is one message and exit code 2. The first call as a
     user makes it (``python -m``), the others in this process."""
     _, run_dir = trained
-    base = [TASK, str(run_dir / "model_1.pt"), "num_envs=4", "num_steps=20"]
+    base = [f"task={TASK}", f"checkpoint={run_dir / 'model_1.pt'}", "num_envs=4", "num_steps=20", "device=cpu"]
     module = [sys.executable, "-m", "refpo_warp.integrations.mjlab.evaluate"]
     rates = printed_json(
         subprocess.run(
-            [*module, *base, "initial_noise=random,zero"], capture_output=True, text=True, timeout=600, check=False
+            [*module, *base, "initial_noise=[random,zero]"], capture_output=True, text=True, timeout=600, check=False
         )
     )
     zero = printed_json(evaluate_here(*base))
@@ -154,4 +154,4 @@ def test_evaluate_reports_both_initial_noise_protocols(trained):
     bad = evaluate_here(*base, "initial_noise=none")
     assert bad.returncode == 2 and "initial_noise='none' is invalid" in bad.stderr and "Traceback" not in bad.stderr
     bad = evaluate_here(*base, "num_envs=abc")
-    assert bad.returncode == 2 and "num_envs=abc is invalid" in bad.stderr and "Traceback" not in bad.stderr
+    assert bad.returncode == 2 and "num_envs='abc' is invalid" in bad.stderr and "Traceback" not in bad.stderr
