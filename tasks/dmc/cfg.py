@@ -53,11 +53,12 @@ def task_cfg_class(name: str) -> type[DmcCfg]:
     return found[0]
 
 
-def stray_cfg_modules() -> list[str]:
-    """``tasks/dmc/*_cfg.py`` files that name no suite task (a misspelt task name would leave its options unused)."""
+def stray_cfg_modules(folder: Path = Path(__file__).parent) -> list[str]:
+    """``*_cfg.py`` files of ``folder`` (``tasks/dmc/``) that name no suite task (a misspelt task name would leave its
+    options unused)."""
     names = set(task_names())
     return sorted(
         p.name
-        for p in Path(__file__).parent.glob(f"*{TASK_CFG_SUFFIX}.py")
+        for p in folder.glob(f"*{TASK_CFG_SUFFIX}.py")
         if p.name.removesuffix(f"{TASK_CFG_SUFFIX}.py") not in names
     )
