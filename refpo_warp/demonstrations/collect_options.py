@@ -8,10 +8,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from refpo_warp.config.option_docs import shown_value
 from refpo_warp.config.run_options import RUN_RULES
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.option_rules import Flag, Int, OneOf, Real, Text, check_options
+from refpo_warp.utils.option_tables import shown_value
 from refpo_warp.utils.options import declared_options, option, rules_for
 
 SAMPLING = ("stochastic", "mean")

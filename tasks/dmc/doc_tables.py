@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
-from refpo_warp.config.option_docs import markdown_table, option_cells
 from refpo_warp.tasks.dmc import suite
 from refpo_warp.tasks.dmc.cfg import DmcCfg, task_cfg_class
+from refpo_warp.utils.option_tables import markdown_table, option_cells
 
 MUJOCO_TIMESTEP = 0.002  # MuJoCo's default, where a model file's <option> sets none
 
