@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import pkgutil
+from collections.abc import Iterable
 from typing import Any
 
 from refpo_warp.envs.task_spec import TaskSpec
@@ -94,7 +95,7 @@ def _option_names(spec: TaskSpec) -> list[str]:
     return [f.name for f in dataclasses.fields(spec.cfg_class)]
 
 
-def check_env_options(spec: TaskSpec, keys, prefix: str = "") -> None:
+def check_env_options(spec: TaskSpec, keys: Iterable[str], prefix: str = "") -> None:
     """Refuse a key that is no env option of the task's cfg class, naming the task, its options and, for an option
     of other tasks (one task's own, e.g. dmc_point_mass_wall's ``wall_half_length``), the tasks that have it."""
     valid = _option_names(spec)
