@@ -6,56 +6,47 @@ cannot state another default than the code. A table stands in a page between two
     ...
     <!-- end options -->
 
+A table that is not one class's options (e.g. docs/dmc.md's tasks and their rewards) stands between markers naming
+the function, ``module:function`` returning the Markdown, that makes it::
+
+    <!-- table refpo_warp.tasks.dmc.doc_tables:tasks_table -->
+    ...
+    <!-- end table -->
+
 ``python -m refpo_warp.config.option_docs docs/algorithms.md`` rewrites every table of a page;
-``tests/docs/test_option_tables.py`` fails when a page's table is not the one its class makes.
+``tests/docs/test_option_tables.py`` fails when a page's table is not the one its class or function makes.
 """
 
 from __future__ import annotations
 
+import importlib
 import re
 import sys
 from pathlib import Path
-from typing import Any
 
 from refpo_warp.config.classes import resolve_class
 from refpo_warp.utils.atomic_files import write_text
-from refpo_warp.utils.options import declared_options, option_fields
+from refpo_warp.utils.option_tables import markdown_table, option_cells
 
 BLOCK = re.compile(r"(<!-- options (?P<name>\S+) -->\n)(?P<table>.*?)(<!-- end options -->)", re.DOTALL)
-
-
-def shown_value(value: Any) -> str:
-    """A default as a config file writes it."""
-    if value is None:
-        return "null"
-    if isinstance(value, bool):
-        return str(value).lower()
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(shown_value(v) for v in value) + "]"
-    if isinstance(value, float):
-        short = f"{value:g}"
-        return short if "e" in short else repr(value)
-    return f"`{value}`" if isinstance(value, str) else str(value)
+MADE = re.compile(r"(<!-- table (?P<name>\S+) -->\n)(?P<table>.*?)(<!-- end table -->)", re.DOTALL)
 
 
 def options_table(class_name: str) -> str:
     """The Markdown table of the options ``class_name`` declares itself (not its bases')."""
-    cls = resolve_class(class_name)
-    declared = declared_options(cls)
-    own = option_fields(cls)
-    rows = ["| option | default | valid values | meaning |", "|---|---|---|---|"]
-    for name in own:
-        found = declared[name]
-        rule = found.rule
-        valid = ("null or " if rule.optional else "") + rule.describe() if rule is not None else "any value"
-        cells = [f"`{name}`", shown_value(found.default), valid, found.doc]
-        rows.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
-    return "\n".join(rows) + "\n"
+    return markdown_table(["option", "default", "valid values", "meaning"], option_cells(resolve_class(class_name)))
+
+
+def made_table(function_name: str) -> str:
+    """The Markdown table that the function ``module:function`` returns."""
+    module, _, name = function_name.partition(":")
+    return getattr(importlib.import_module(module), name)()
 
 
 def with_tables(text: str) -> str:
-    """``text`` with every marked table made again from its class."""
-    return BLOCK.sub(lambda m: m.group(1) + options_table(m.group("name")) + m.group(4), text)
+    """``text`` with every marked table made again from its class or function."""
+    text = BLOCK.sub(lambda m: m.group(1) + options_table(m.group("name")) + m.group(4), text)
+    return MADE.sub(lambda m: m.group(1) + made_table(m.group("name")) + m.group(4), text)
 
 
 def main(argv: list[str]) -> int:

@@ -15,6 +15,7 @@ from __future__ import annotations
 from refpo_warp.config.classes import CLASS_SECTIONS, check_class_kind, section_options
 from refpo_warp.config.dotted import LEAF_KEYS
 from refpo_warp.config.run_options import RUN_RULES
+from refpo_warp.envs.registry import check_env_options
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.option_rules import check_options
@@ -42,10 +43,10 @@ def class_section(section: str, values: dict) -> dict:
 
 
 def env_section(task: TaskSpec, values: dict, prefix: str = "env.") -> dict:
-    """Env options: fields of the task's env cfg, each checked by the cfg's rules."""
-    cfg_class = task.cfg_class
-    cfg_class.check_keys(values, f"env option for task '{task.task_id}'", prefix)
-    return check_options(rules_for(cfg_class), values, prefix)
+    """Env options: fields of the task's env cfg (the family's options and the task's own), each checked by the cfg's
+    rules."""
+    check_env_options(task, values, prefix)
+    return check_options(rules_for(task.cfg_class), values, prefix)
 
 
 def video_section(values: dict) -> dict:

@@ -9,9 +9,9 @@ from pathlib import Path
 from typing import Any
 
 from refpo_warp.config.command_options import parse_options
-from refpo_warp.config.option_docs import shown_value
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import DEVICE_RULE, Flag, Int, OneOf, Real, Text
+from refpo_warp.utils.option_tables import shown_value
 from refpo_warp.utils.options import declared_options, option
 
 INITIAL_NOISE = ("random", "zero")  # eval.initial_noise's protocols

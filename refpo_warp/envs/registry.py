@@ -10,14 +10,25 @@ registered: ``make_env``, ``make_env_cfg`` and ``family_module`` take its ``Task
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import pkgutil
+from collections.abc import Iterable
 from typing import Any
 
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, unknown
 
-__all__ = ["family_module", "get_task", "list_tasks", "make_env", "make_env_cfg", "register_task", "task_families"]
+__all__ = [
+    "check_env_options",
+    "family_module",
+    "get_task",
+    "list_tasks",
+    "make_env",
+    "make_env_cfg",
+    "register_task",
+    "task_families",
+]
 
 TASK_ROOT = "refpo_warp.tasks"  # the package whose subpackages are the task families (the repository's tasks/)
 
@@ -80,10 +91,30 @@ def family_module(task: str | TaskSpec, name: str):
         return None
 
 
+def _option_names(spec: TaskSpec) -> list[str]:
+    return [f.name for f in dataclasses.fields(spec.cfg_class)]
+
+
+def check_env_options(spec: TaskSpec, keys: Iterable[str], prefix: str = "") -> None:
+    """Refuse a key that is no env option of the task's cfg class, naming the task, its options and, for an option
+    of other tasks (one task's own, e.g. dmc_point_mass_wall's ``wall_half_length``), the tasks that have it."""
+    valid = _option_names(spec)
+    for key in keys:
+        if key not in valid:
+            what, choices = f"env option for task '{spec.task_id}'", [f"{prefix}{k}" for k in valid]
+            owners = [t for t in list_tasks() if key in _option_names(get_task(t))]
+            if not owners:
+                raise unknown(what, f"{prefix}{key}", choices)
+            raise ConfigError(
+                f"Unknown {what} '{prefix}{key}': an env option of {', '.join(owners)} only. "
+                f"Valid choices: {', '.join(sorted(choices))}"
+            )
+
+
 def make_env_cfg(task: str | TaskSpec, /, **overrides: Any):
     """The env cfg dataclass of ``task`` with ``overrides`` applied (unknown fields raise with a suggestion)."""
     spec = _spec(task)
-    spec.cfg_class.check_keys(overrides, f"env option for task '{spec.task_id}'")
+    check_env_options(spec, overrides)
     return spec.cfg_class(**{**spec.cfg_overrides, **overrides})
 
 

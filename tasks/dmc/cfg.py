@@ -1,16 +1,20 @@
-"""DMC env options (Warp-free): the suite task, the solver iteration caps, Playground's tanh on actions, the reset
-bank."""
+"""The DMC family's env options (Warp-free), those every DMC task reads: the suite task, the solver iteration caps,
+Playground's tanh on actions. An option that only one task reads is in that task's cfg, a subclass of ``DmcCfg`` in
+``tasks/dmc/<task>_cfg.py`` (``tasks/dmc/__init__.py`` finds it by that name)."""
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
+from pathlib import Path
 
 from refpo_warp.envs.env_cfg import EnvCfg
 from refpo_warp.tasks.dmc.suite import task_names
+from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.option_rules import Int, OneOf
 from refpo_warp.utils.options import option
 
-MIN_RESET_BANK = 256
+TASK_CFG_SUFFIX = "_cfg"  # tasks/dmc/<task>_cfg.py: a task's own options
 
 
 @dataclass
@@ -29,13 +33,32 @@ class DmcCfg(EnvCfg):
     solver_ls_iterations: int = option(
         0, Int(0, 10_000), "MuJoCo line-search iterations; 0 keeps the model file's value"
     )
-    reset_bank_size: int = option(
-        0,
-        Int(0, 10_000_000),
-        "settled initial states pre-computed by tasks whose reset lets the model settle first (cheetah); "
-        f"0: max(num_envs, {MIN_RESET_BANK}) (reset_bank)",
-    )
 
-    def reset_bank(self, num_envs: int) -> int:
-        """The number of settled initial states to pre-compute for ``num_envs`` envs (``reset_bank_size``)."""
-        return self.reset_bank_size or max(num_envs, MIN_RESET_BANK)
+
+def task_cfg_class(name: str) -> type[DmcCfg]:
+    """The env cfg class of suite task ``name``: the one ``DmcCfg`` subclass that ``tasks/dmc/<name>_cfg.py`` defines,
+    or ``DmcCfg`` where the task has no options of its own."""
+    if not (Path(__file__).parent / f"{name}{TASK_CFG_SUFFIX}.py").is_file():
+        return DmcCfg
+    module = importlib.import_module(f"{__package__}.{name}{TASK_CFG_SUFFIX}")
+    found = [
+        c
+        for c in vars(module).values()
+        if isinstance(c, type) and issubclass(c, DmcCfg) and c.__module__ == module.__name__
+    ]
+    if len(found) != 1:
+        raise ConfigError(
+            f"{module.__file__} must define exactly one DmcCfg subclass (task {name}'s), found {len(found)}"
+        )
+    return found[0]
+
+
+def stray_cfg_modules(folder: Path = Path(__file__).parent) -> list[str]:
+    """``*_cfg.py`` files of ``folder`` (``tasks/dmc/``) that name no suite task (a misspelt task name would leave its
+    options unused)."""
+    names = set(task_names())
+    return sorted(
+        p.name
+        for p in folder.glob(f"*{TASK_CFG_SUFFIX}.py")
+        if p.name.removesuffix(f"{TASK_CFG_SUFFIX}.py") not in names
+    )

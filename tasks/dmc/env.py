@@ -15,8 +15,8 @@ import torch
 from refpo_warp.envs.warp_vec_env import WarpVecEnv
 from refpo_warp.sim import MuJoCoWorlds, world_state_finite
 from refpo_warp.tasks.dmc import suite
-from refpo_warp.tasks.dmc.cfg import DmcCfg
-from refpo_warp.utils.errors import unknown
+from refpo_warp.tasks.dmc.cfg import DmcCfg, task_cfg_class
+from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.warp_setup import wp
 
 
@@ -53,6 +53,8 @@ class DmcEnv(WarpVecEnv):
     def _spaces(self):
         if self.cfg.task not in suite.task_names():
             raise unknown("DMC task (env.task)", self.cfg.task, suite.task_names())
+        if not isinstance(self.cfg, own := task_cfg_class(self.cfg.task)):  # a spec registered with another cfg
+            raise ConfigError(f"DMC task {self.cfg.task} takes a {own.__name__}, got a {type(self.cfg).__name__}")
         self.task_class = suite.task_class(self.cfg.task)
         self.episode_metrics = DmcEnv.episode_metrics + self.task_class.episode_metrics
         self.curve_metrics = self.task_class.episode_metrics

@@ -74,6 +74,9 @@ class DmcTask:
     substeps: ClassVar[int]  # physics steps per control step (Playground ctrl_dt / sim_dt)
     num_obs: ClassVar[int]
     num_actions: ClassVar[int]
+    # One line each in docs/dmc.md's task table (tasks/dmc/doc_tables.py); the module docstring states them exactly.
+    reward_summary: ClassVar[str]
+    reset_summary: ClassVar[str]
     render_camera: ClassVar[str] = "fixed"  # refpo_warp/render: "fixed", "track" (track_body) or a camera of the file
     track_body: ClassVar[str | None] = None
     render_view: ClassVar[tuple[float, float]] = (-20.0, 90.0)  # camera elevation, azimuth (deg): the x-z plane

@@ -1,5 +1,6 @@
 """docs/create_new_task.md, followed step by step: a tiny task (its options, env, declaration and config file) and a
-ReFPO variant, registered here and trained for one iteration. The code below is the page's code."""
+ReFPO variant, registered here and trained for one iteration, and a task's own options (a second line task; the
+page's DMC example, which is the tree's code). The code below is the page's code."""
 
 from dataclasses import dataclass
 
@@ -210,3 +211,40 @@ def test_an_algo_file_derived_from_refpo_takes_every_tasks_refpo_settings(tmp_pa
     assert "  means   the cap on each action's CFM loss" in out
     assert "algorithm.reflow_coef = 0.1\n  set by  configs/task/gridworld.yaml by_algo.refpo" in out
     assert "algorithm.num_mc_samples = 50" in out
+
+
+# --- a task's own options: a subclass of the family's cfg, named by that task's TaskSpec
+@dataclass
+class FarLineCfg(LineCfg):
+    start_range: float = option(0.9, Real(0, 1), "half the range of the start")
+
+
+def test_a_tasks_own_option_is_accepted_by_that_task_only(line_task):
+    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.envs.registry import _TASKS, register_task
+    from refpo_warp.utils.errors import ConfigError
+
+    register_task(TaskSpec("line_far", f"{__name__}:LineEnv", FarLineCfg, config_file=line_task / "line.yaml"))
+    try:
+        cfg = resolve_config(["task=line_far", "algo=refpo", "device=cpu", "env.start_range=0.5"], device_type="cpu")
+        assert cfg["env"] == {"start_range": 0.5}
+        with pytest.raises(ConfigError, match=r"'env\.start_range': an env option of line_far only"):
+            resolve_config(["task=line", "algo=refpo", "device=cpu", "env.start_range=0.5"], device_type="cpu")
+    finally:
+        del _TASKS["line_far"]
+
+
+def test_the_pages_dmc_example_is_the_code_and_does_what_it_says():
+    import re
+
+    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.utils.errors import ConfigError
+    from refpo_warp.utils.paths import REPO_ROOT
+
+    page = (REPO_ROOT / "docs" / "create_new_task.md").read_text(encoding="utf-8")
+    (example,) = [b for b in re.findall(r"```python\n(.*?)```", page, re.DOTALL) if "class CheetahRunCfg" in b]
+    assert example in (REPO_ROOT / "tasks" / "dmc" / "cheetah_run_cfg.py").read_text(encoding="utf-8")
+    ok = resolve_config(["task=dmc_cheetah_run", "algo=ppo", "device=cpu", "env.reset_bank_size=512"], "cpu")
+    assert ok["env"] == {"reset_bank_size": 512}
+    with pytest.raises(ConfigError, match=r"'env\.reset_bank_size': an env option of dmc_cheetah_run only"):
+        resolve_config(["task=dmc_walker_walk", "algo=ppo", "device=cpu", "env.reset_bank_size=512"], "cpu")

@@ -11,6 +11,10 @@ import ast
 import importlib
 import pkgutil
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from refpo_warp.tasks.dmc.task import DmcTask
 
 SUITE_DIR = Path(__file__).resolve().parent
 
@@ -26,7 +30,7 @@ def describe(name: str) -> str:
     return doc.split("\n", 1)[0].replace("``", "").rstrip(".")
 
 
-def task_class(name: str) -> type:
+def task_class(name: str) -> type[DmcTask]:
     """The ``DmcTask`` subclass that the module ``name`` defines (importing the module, and so Warp)."""
     from refpo_warp.tasks.dmc.task import DmcTask
 

@@ -51,6 +51,8 @@ class AcrobotSwingup(DmcTask):
     substeps = 1  # ctrl_dt = sim_dt = 0.01
     num_obs = 6
     num_actions = 1
+    reward_summary = "tolerance(tip-target dist, (0,.2), margin 1)"
+    reset_summary = "both angles U(-pi, pi)"
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)

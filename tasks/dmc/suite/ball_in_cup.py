@@ -37,6 +37,8 @@ class BallInCup(DmcTask):
     substeps = 10  # ctrl_dt 0.02, sim_dt 0.002
     num_obs = 8
     num_actions = 2
+    reward_summary = "1 when the ball is in the cup"
+    reset_summary = "the model's rest pose"
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)

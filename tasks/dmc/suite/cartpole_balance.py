@@ -80,6 +80,8 @@ class CartpoleBalance(DmcTask):
     substeps = 1  # ctrl_dt 0.01 = sim_dt 0.01
     num_obs = 5
     num_actions = 1
+    reward_summary = "upright x centered x small_control x small_velocity"
+    reset_summary = "cart U(-.1,.1), pole U(-.034,.034), vel .01 N(0,1)"
     swing_up = 0  # the reset's distribution (cartpole_swingup.py sets 1)
 
     def __init__(self, sim, cfg, rng) -> None:

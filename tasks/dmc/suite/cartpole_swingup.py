@@ -11,3 +11,4 @@ from refpo_warp.tasks.dmc.suite.cartpole_balance import CartpoleBalance
 
 class CartpoleSwingup(CartpoleBalance):
     swing_up = 1
+    reset_summary = "cart .01 N, pole pi + .01 N, vel .01 N"

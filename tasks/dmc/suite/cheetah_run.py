@@ -5,7 +5,7 @@ Reward: tolerance(v, bounds=(10, inf), margin=10, value 0 at margin, linear) = c
 x velocity of the centre of mass (the torso's subtree linear velocity).
 Reset: root at zero, the six leg joints U(joint range), then 200 physics steps at zero control let the model settle
 (as in Playground and dm_control). Settling in the middle of a captured step is impossible, so ``prepare`` settles
-``reset_bank_size`` such states once and resets draw one of them uniformly.
+``reset_bank_size`` (``cheetah_run_cfg.py``) such states once and resets draw one of them uniformly.
 """
 
 from __future__ import annotations
@@ -70,6 +70,8 @@ class CheetahRun(DmcTask):
     substeps = 1  # ctrl_dt = sim_dt = 0.01
     num_obs = 17
     num_actions = 6
+    reward_summary = "clip(v_x / 10, 0, 1), v_x of the centre of mass"
+    reset_summary = "legs U(joint ranges), then 200 settling steps"
 
     def prepare(self) -> None:
         """Settle ``cfg.reset_bank(num_envs)`` random leg poses for SETTLE_STEPS physics steps at zero control."""

@@ -124,6 +124,8 @@ class FingerSpin(DmcTask):
     substeps = 4  # ctrl_dt 0.02, sim_dt 0.005
     num_obs = 9
     num_actions = 2
+    reward_summary = "1 when the spinner turns at <= -15 rad/s"
+    reset_summary = "fingers U(-110,110) deg, spinner U(-pi,pi)"
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)

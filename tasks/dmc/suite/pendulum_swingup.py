@@ -43,6 +43,8 @@ class PendulumSwingup(DmcTask):
     substeps = 2  # ctrl_dt 0.02, sim_dt 0.01
     num_obs = 3
     num_actions = 1
+    reward_summary = "1 within 8 deg of upright"
+    reset_summary = "angle U(0, pi)"
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)

@@ -41,6 +41,8 @@ class PointMass(DmcTask):
     substeps = 1  # ctrl_dt = sim_dt = 0.02
     num_obs = 4
     num_actions = 2
+    reward_summary = "tolerance(dist, (0,.015), margin .015) x small_control"
+    reset_summary = "x, y U(-.29,.29)"
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)

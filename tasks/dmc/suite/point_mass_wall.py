@@ -133,6 +133,8 @@ class PointMassWall(DmcTask):
     substeps = 1  # ctrl_dt = sim_dt = 0.02 (point_mass's)
     num_obs = 4
     num_actions = 2
+    reward_summary = "(point_mass's term + 1 - path length around the wall) / 2 x small_control"
+    reset_summary = "x -.2 + U(-s,s), y U(-s,s), s = .02"
     episode_metrics = ("success", "went_left", "went_right")
 
     def __init__(self, sim, cfg, rng) -> None:

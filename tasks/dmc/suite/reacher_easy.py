@@ -87,6 +87,8 @@ class ReacherEasy(DmcTask):
     substeps = 4  # ctrl_dt 0.02, sim_dt 0.005
     num_obs = 6
     num_actions = 2
+    reward_summary = "1 when fingertip-target distance <= .05 + .01"
+    reset_summary = "shoulder U(-pi,pi), wrist U(-160,160) deg, target r U(.05,.2)"
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)

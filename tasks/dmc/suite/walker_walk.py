@@ -67,6 +67,8 @@ class WalkerWalk(DmcTask):
     substeps = 10  # ctrl_dt 0.025, sim_dt 0.0025
     num_obs = 24
     num_actions = 6
+    reward_summary = "stand x (5 move + 1) / 6"
+    reset_summary = "pitch U(-pi,pi), legs U(joint ranges)"
 
     def __init__(self, sim, cfg, rng) -> None:
         super().__init__(sim, cfg, rng)
