@@ -143,9 +143,7 @@ def _train_and_evaluate(run: Resolution, env: Any, runner: Runner, run_dir: Path
         f"iterations {start}..{total - 1} ({steps:,} env steps), run dir {run_dir}",
         flush=True,
     )
-    if cfg["eval"]["interval"] is None:  # periodic evaluation on by default: 10 evaluations per run
-        cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
-    interval = int(cfg["eval"]["interval"])
+    interval = cfg["eval"]["interval"] = evaluation_interval(cfg, total)
     evaluate = periodic_evaluator(run, runner) if interval > 0 and rank.is_main else None  # rank 0 evaluates
     if evaluate is not None and cfg["video"].get("interval"):
         evaluate = with_videos(evaluate, run, runner, run_dir, interval)
@@ -178,6 +176,14 @@ def _train_and_evaluate(run: Resolution, env: Any, runner: Runner, run_dir: Path
     if notice:
         print(f"[refpo_warp] NOTE: {notice}", flush=True)
     return results
+
+
+def evaluation_interval(cfg: dict, total: int) -> int:
+    """Iterations between periodic evaluations of a run of ``total`` iterations: ``eval.interval``, or 10 per run when
+    it is null (0: off)."""
+    if cfg["eval"]["interval"] is None:
+        return max(1, math.ceil(total / 10))
+    return int(cfg["eval"]["interval"])
 
 
 def training_summary(cfg: dict, runner, run_dir: Path, results: dict) -> str:
