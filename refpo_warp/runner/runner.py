@@ -19,12 +19,15 @@
 
 from __future__ import annotations
 
+import os
+
 import torch
 from rsl_rl.runners import OnPolicyRunner
 
 from refpo_warp.runner.checkpoints import META_KEY, apply_checkpoint, check_fits, read_checkpoint
 from refpo_warp.runner.distributed import init_process_group, process_rank
 from refpo_warp.runner.logger import ProgressLogger
+from refpo_warp.runner.run_state import RUN_STATE_KEY, capture_run_state
 from refpo_warp.utils.atomic_files import atomic_write
 from refpo_warp.utils.console import quiet_stdout
 
@@ -130,9 +133,18 @@ class Runner(OnPolicyRunner):
             "env_steps": int(self.logger.tot_timesteps),
             "time_s": float(self.logger.tot_time),
         }
+        saved[RUN_STATE_KEY] = capture_run_state(self.env)  # for a resume that goes on bit for bit
         with atomic_write(path) as f:
             torch.save(saved, f)
         self.logger.save_model(path, self.current_learning_iteration)
+
+    def stop_here(self) -> None:
+        """End this call's piece of the run after the iteration just learned: write its checkpoint (outside
+        ``save_interval`` too) and close the logging writer; ``resume=true`` continues from it."""
+        self._final_chunk = self.logger.final_chunk = True
+        if self.logger.writer is not None:
+            self.save(os.path.join(self.logger.log_dir, f"model_{self.current_learning_iteration}.pt"))
+            self.logger.stop_logging_writer()
 
     def load(self, path: str, load_cfg: dict | None = None, strict: bool = True, map_location: str | None = None):
         """rsl_rl's ``load`` without unpickling arbitrary objects, refusing files of another task or shape."""
