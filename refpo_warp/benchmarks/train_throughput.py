@@ -200,9 +200,8 @@ def measure(overrides: dict[str, Any], algo: str, iterations: int, warmup: int, 
                 evaluate(total - 1, False)
                 evaluation = clock.now() - start
         per_iteration = env_steps_per_iteration(cfg)
-    return result_row(
-        cfg, algo, clock, whole, iterations, counted, per_iteration, evaluation, interval, str(env.device)
-    )
+    row = result_row(cfg, algo, clock, whole, iterations, counted, per_iteration, evaluation, interval, str(env.device))
+    return {**row, "warmup": warmup}
 
 
 def result_row(cfg, algo, clock: Clock, whole, iterations, counted, per_iteration, evaluation, interval, device):
@@ -260,6 +259,8 @@ def machine() -> dict[str, Any]:
         "torch_threads": torch.get_num_threads(),
         "torch": torch.__version__,
     }
+    with contextlib.suppress(OSError):  # how busy the machine was (other work may share it): 1, 5, 15 minutes
+        out["load_average"] = [round(x, 2) for x in os.getloadavg()]
     if torch.cuda.is_available():
         out["gpu"] = torch.cuda.get_device_name()
     return out

@@ -43,7 +43,15 @@ REPORT_KEYS = ("curve_methods", "ratio_tasks", "ratio_methods")
 # Run options the sweep sets itself; on the command line use the sweep-level key instead.
 MANAGED = {"task": "tasks=", "algo": "methods=", "seed": "seeds=", "run_dir": "out=", "resume": None}
 # Config keys that do not change what a run computes: a finished run whose config differs only here is kept.
-FINGERPRINT_IGNORED = ("device", "resume", "run_dir", "verbose", "config_dir")
+FINGERPRINT_IGNORED = (
+    "device",
+    "resume",
+    "run_dir",
+    "verbose",
+    "config_dir",
+    "stop_after_iterations",  # a run in pieces computes what the run in one call does (training/pieces.py)
+    "stop_after_minutes",
+)
 # Options that act only with init_from: without it a run computes the same whatever they say.
 FINE_TUNING_ONLY = ("critic_warmup_iterations", "clone_normalizer")
 
