@@ -17,6 +17,8 @@ Update (every algorithm's ``OnPolicyAlgorithm.update``): before (the whole-rollo
 losses), actor (``policy_loss``: the actor's forward and its loss), critic (``value_loss``), backward (one autograd
 pass over the summed loss, so the actor's and the critic's backward are one figure), optimizer (``optimizer.step``,
 by its step hooks) and other (minibatch indexing, gradient clipping, the statistics' one host read, normalisers).
+Host syncs: on CUDA every clock read waits for the device, so a part holds the device work it queued; the waits the
+run makes itself (the update's one read of its statistics, the logger's) fall in update/other and logging.
 
 The anchor is PPO at the same task, profile and device (added when not asked for): each algo's env steps/s is printed
 as a ratio to PPO's, measured in the same command.

@@ -1,5 +1,6 @@
 """The state a checkpoint needs beyond the models for a resumed run to go on bit for bit as if it had not stopped:
-the random generators (torch's CPU and CUDA ones, numpy's, Python's) and the env's state.
+the random generators (torch's CPU and CUDA ones, numpy's, Python's), the env's state and the logger's episode
+bookkeeping (its running episode sums and last finished episodes, so that the progress rows go on as they would).
 
 The env's state is every torch tensor and Warp array the env object reaches through its attributes (its buffers:
 observations, episode counters, the per-env random streams; the simulator's state, control and solver data), read
@@ -135,16 +136,51 @@ def _tuples(value: Any) -> Any:
     return tuple(_tuples(v) for v in value) if isinstance(value, list) else value
 
 
-def capture_run_state(env: Any) -> dict[str, Any]:
-    """What ``Runner.save`` writes under ``RUN_STATE_KEY``: the generators and the env's state."""
-    return {"version": ENV_STATE_VERSION, "generators": capture_generators(), "env": capture_env(env)}
+EPISODE_SUMS = ("cur_reward_sum", "cur_episode_length")  # the logger's running episodes, per env
+EPISODE_WINDOWS = ("rewbuffer", "lenbuffer")  # the logger's last finished episodes (the progress line's means)
 
 
-def restore_run_state(env: Any, saved: Any) -> str | None:
-    """Restore ``capture_run_state``'s dict; returns why the env could not be restored (its generators still are),
-    or None when all of it was."""
+def capture_logger(logger: Any) -> dict[str, Any]:
+    """The logger's episode bookkeeping: what the progress rows' episode means are computed from."""
+    out: dict[str, Any] = {k: getattr(logger, k).detach().to("cpu", copy=True) for k in EPISODE_SUMS}
+    out.update({k: [float(x) for x in getattr(logger, k)] for k in EPISODE_WINDOWS})
+    return out
+
+
+def restore_logger(logger: Any, saved: dict[str, Any]) -> None:
+    for key in EPISODE_SUMS:
+        if tuple(saved[key].shape) == tuple(getattr(logger, key).shape):
+            getattr(logger, key).copy_(saved[key])
+    for key in EPISODE_WINDOWS:
+        window = getattr(logger, key)
+        window.clear()
+        window.extend(saved[key])
+
+
+def capture_run_state(env: Any, logger: Any, eval_envs: dict[str, Any]) -> dict[str, Any]:
+    """What ``Runner.save`` writes under ``RUN_STATE_KEY``: the generators, the env's state, the periodic
+    evaluation's envs' states (their streams go on from one evaluation to the next) and the logger's episode
+    bookkeeping."""
+    return {
+        "version": ENV_STATE_VERSION,
+        "generators": capture_generators(),
+        "env": capture_env(env),
+        "eval_envs": {name: capture_env(e) for name, e in eval_envs.items()},
+        "logger": capture_logger(logger),
+    }
+
+
+def restore_run_state(env: Any, logger: Any, eval_envs: dict[str, Any], saved: Any) -> str | None:
+    """Restore ``capture_run_state``'s dict; returns why the training env could not be restored (its generators
+    still are), or None when all of it was. An evaluation env the checkpoint holds no fitting state of stays
+    fresh (its later periodic evaluations then differ from an unbroken run's)."""
     if not isinstance(saved, dict) or saved.get("version") != ENV_STATE_VERSION:
         return "the checkpoint holds no run state (written by an older refpo_warp or another writer)"
     why = restore_env(env, saved["env"])
     restore_generators(saved["generators"])
+    if why is None:
+        restore_logger(logger, saved["logger"])
+    for name, eval_env in eval_envs.items():
+        if name in saved["eval_envs"]:
+            restore_env(eval_env, saved["eval_envs"][name])
     return why

@@ -24,7 +24,7 @@ from refpo_warp.config.resolve import Resolution
 from refpo_warp.config.run_options import notice_text
 from refpo_warp.config.saved import RUN_CONFIG, resolve_run
 from refpo_warp.config.yaml_files import dump_config
-from refpo_warp.evaluation.evaluate_policy import Evaluator, periodic_evaluator
+from refpo_warp.evaluation.evaluate_policy import Evaluator, make_eval_envs, periodic_evaluator
 from refpo_warp.evaluation.evaluate_run import evaluate_run
 from refpo_warp.evaluation.videos import run_video, wants_video
 from refpo_warp.render.gl import select_gl_platform
@@ -151,7 +151,10 @@ def _train_and_evaluate(
         flush=True,
     )
     interval = cfg["eval"]["interval"] = evaluation_interval(cfg, total)
-    evaluate = periodic_evaluator(run, runner) if interval > 0 and rank.is_main else None  # rank 0 evaluates
+    evaluate = None
+    if interval > 0 and rank.is_main:  # rank 0 evaluates; its envs' streams go on from one evaluation to the next
+        runner.eval_envs = make_eval_envs(run, interval=True)  # so checkpoints hold their state too
+        evaluate = periodic_evaluator(run, runner, runner.eval_envs)
     if evaluate is not None and cfg["video"].get("interval"):
         evaluate = with_videos(evaluate, run, runner, run_dir, interval)
     stopped = None
@@ -236,7 +239,7 @@ def _restore(runner: Runner, saved_state: Any) -> bool:
     if process_rank().is_distributed:  # the checkpoint holds rank 0's envs only
         print("[refpo_warp] note: a run of several ranks resumes from fresh envs (not bit-identical)", flush=True)
         return False
-    why = restore_run_state(runner.env, saved_state)
+    why = restore_run_state(runner.env, runner.logger, runner.eval_envs, saved_state)
     if why is not None:
         print(f"[refpo_warp] note: resuming from fresh envs, not bit-identical to an unbroken run: {why}", flush=True)
     return why is None
@@ -267,7 +270,10 @@ def _learn_in_chunks(
         frozen = actor_frozen(runner.alg) if it < warmup else contextlib.nullcontext()
         with frozen:
             runner.learn_chunk(end - it, total, init_at_random_ep_len=init_at_random_ep_len and it == start)
-        runner.end_chunk(evaluate(end - 1, end == total) if evaluate is not None else {})
+        evaluated = evaluate(end - 1, end == total) if evaluate is not None else {}
+        runner.end_chunk(evaluated)
+        if evaluated and end < total:  # a checkpoint of this iteration was written before its evaluation
+            runner.save_again(end - 1)
         it = end
         why = piece.reason(it) if piece is not None and it < total else None
         if why is not None:

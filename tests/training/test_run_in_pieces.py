@@ -1,6 +1,7 @@
 """A run trained in pieces (``stop_after_iterations`` / ``stop_after_minutes``, then ``resume=true``) ends bit-identical
 to the same run trained in one call: every tensor of the final checkpoint (the models with their normalisers, the
-optimizer state, the env's state) is ``torch.equal`` to the unbroken run's."""
+optimizer state, the env's state) is ``torch.equal`` to the unbroken run's, and so is every progress row but its
+clock."""
 
 import contextlib
 import io
@@ -9,6 +10,7 @@ import pytest
 import torch
 
 from refpo_warp.runner.checkpoints import read_checkpoint
+from refpo_warp.runner.progress import read_rows
 from refpo_warp.training import train
 
 ITERATIONS = 4
@@ -62,6 +64,11 @@ def assert_bitwise_equal(whole_dir, pieces_dir) -> None:
     assert not differ, differ
     assert whole["iter"] == pieces["iter"] == ITERATIONS - 1
     assert whole["refpo_warp"]["env_steps"] == pieces["refpo_warp"]["env_steps"] == ITERATIONS * 4 * 8
+    # the progress rows too (losses, episode means, periodic evaluations), but for the clock's
+    clock = ("time_s", "steps_per_s")
+    rows = [[{k: v for k, v in r.items() if k not in clock} for r in read_rows(d)] for d in (whole_dir, pieces_dir)]
+    assert [r["iteration"] for r in rows[1]] == list(range(ITERATIONS))
+    assert rows[0] == rows[1] and "reward_mean" in rows[0][-1] and any(k.startswith("eval/") for k in rows[0][-1])
 
 
 @pytest.fixture(scope="module")
