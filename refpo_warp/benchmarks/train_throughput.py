@@ -68,7 +68,10 @@ DEFAULTS = {name: found.default for name, found in declared_options(TrainBenchOp
 
 def options_usage() -> str:
     declared = declared_options(TrainBenchOptions)
-    return "\n".join(f"    {n + '=' + str(d.default).replace(' ', ''):<26}{d.doc}" for n, d in declared.items())
+    from refpo_warp.config.option_docs import shown_value
+
+    given = {n: f"{n}={shown_value(d.default).replace('`', '').replace(' ', '')}" for n, d in declared.items()}
+    return "\n".join(f"    {given[n]:<26}{d.doc}" for n, d in declared.items())
 
 
 USAGE = f"""{__doc__.split(chr(10))[0].split(": ", 1)[1]}
