@@ -8,8 +8,8 @@ import importlib.util
 from refpo_warp.utils.command_line import Arguments, parse_arguments, wants_help
 from refpo_warp.utils.errors import ConfigError, unknown
 
-SUMMARY = "env speed vs gymnasium, action latency, update cost of every algorithm, rendering speed"
-USAGE = """Benchmarks: refpo bench <gridworld|dmc|humanoid|all|latency|algorithms|render> [key=value ...] [--explain]
+SUMMARY = "env speed vs gymnasium, action latency, update cost of every algorithm, rendering speed, training speed"
+USAGE = """Benchmarks: refpo bench <gridworld|dmc|humanoid|all|latency|algorithms|render|train> [key=value ...] [--explain]
 
 Each task family with a benchmark has it in tasks/<family>/bench.py (found there, not listed here);
 `refpo bench dmc --help` shows its options, key=value as in every refpo command (device=, num_envs=, tasks=[...]).
@@ -17,6 +17,8 @@ Each task family with a benchmark has it in tasks/<family>/bench.py (found there
 vs N = 1 for chosen tasks and algorithms; `out=PATH` writes the rows for `refpo report` (its latency=). `algorithms`
 (refpo_warp/benchmarks/update_time.py) times the update of every algorithm on one batch size, as ratios to FPO.
 `render` (refpo_warp/benchmarks/rendering.py): frames per second of each family's frames and the cost of a video.
+`train` (refpo_warp/benchmarks/train_throughput.py): training env steps/s of a task x algos, split into the
+iteration's and the update's parts, as ratios to PPO; key=value options (refpo bench train --help).
 """
 FLAGS = ()
 SUBJECTS = 1
@@ -25,6 +27,7 @@ OTHERS = {
     "latency": "refpo_warp.benchmarks.latency",
     "algorithms": "refpo_warp.benchmarks.update_time",
     "render": "refpo_warp.benchmarks.rendering",
+    "train": "refpo_warp.benchmarks.train_throughput",
 }  # not one family's
 
 

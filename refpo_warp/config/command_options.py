@@ -16,9 +16,9 @@ from collections.abc import Callable, Iterable
 from typing import Any, TypeVar
 
 from refpo_warp.config.dotted import parse_overrides
-from refpo_warp.utils.option_tables import shown_value
 from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError, unknown
+from refpo_warp.utils.option_tables import shown_value
 from refpo_warp.utils.options import declared_options, docs_for, rules_for
 from refpo_warp.utils.renamed_spellings import renamed_error
 

@@ -97,6 +97,14 @@ class RunOptions:
     )
     run_dir: str | None = option(rule=Text(optional=True), doc="the run's folder; null: a new one under runs/")
     resume: bool = option(rule=Flag(), doc="train on from the run dir's last checkpoint")
+    stop_after_iterations: int | None = option(
+        rule=Int(1, 10**8, optional=True),
+        doc="stop this call after that many iterations, at a checkpoint a resume continues bit for bit; null: never",
+    )
+    stop_after_minutes: float | None = option(
+        rule=Real(0, 10**6, lo_open=True, optional=True),
+        doc="stop this call at a checkpoint before that many minutes of training would pass; null: never",
+    )
     verbose: bool = option(rule=Flag(), doc="print every iteration's statistics")
     # the run dir itself is checked when training starts (training/init_from.py)
     init_from: str | None = option(rule=Text(optional=True), doc="a run dir whose weights start this run")

@@ -125,11 +125,13 @@ def evaluate_actor(
     return results, visited
 
 
-def periodic_evaluator(run: Resolution, runner: Any) -> Evaluator:
-    """``evaluate(iteration, is_last) -> {name: value}`` for the iterations an evaluation is due at ({} otherwise)."""
+def periodic_evaluator(run: Resolution, runner: Any, envs: dict[str, Any] | None = None) -> Evaluator:
+    """``evaluate(iteration, is_last) -> {name: value}`` for the iterations an evaluation is due at ({} otherwise);
+    ``envs``: the evaluation envs (``make_eval_envs(run, interval=True)``, built here when not given)."""
     from refpo_warp.models.flow_diagnostics import jacobian_statistics
 
-    cfg, envs = run.cfg, make_eval_envs(run, interval=True)
+    cfg = run.cfg
+    envs = envs if envs is not None else make_eval_envs(run, interval=True)
     interval = int(cfg["eval"]["interval"])
 
     def evaluate(it: int, is_last: bool) -> dict[str, float]:

@@ -19,12 +19,15 @@
 
 from __future__ import annotations
 
+import os
+
 import torch
 from rsl_rl.runners import OnPolicyRunner
 
 from refpo_warp.runner.checkpoints import META_KEY, apply_checkpoint, check_fits, read_checkpoint
 from refpo_warp.runner.distributed import init_process_group, process_rank
 from refpo_warp.runner.logger import ProgressLogger
+from refpo_warp.runner.run_state import RUN_STATE_KEY, capture_run_state
 from refpo_warp.utils.atomic_files import atomic_write
 from refpo_warp.utils.console import quiet_stdout
 
@@ -68,6 +71,8 @@ class Runner(OnPolicyRunner):
         self.run_info = dict(run_info or {})
         self._learned = False
         self._final_chunk = True
+        self._last_saved: int | None = None
+        self.eval_envs: dict = {}  # the periodic evaluation's envs, whose state checkpoints hold too
 
     def learn_chunk(self, num_iterations: int, run_iterations: int, init_at_random_ep_len: bool = False) -> None:
         """The next ``num_iterations`` of a run of ``run_iterations`` (rsl_rl's ``learn``, resumed where the last
@@ -130,9 +135,27 @@ class Runner(OnPolicyRunner):
             "env_steps": int(self.logger.tot_timesteps),
             "time_s": float(self.logger.tot_time),
         }
+        saved[RUN_STATE_KEY] = capture_run_state(
+            self.env, self.logger, self.eval_envs
+        )  # for a resume that goes on bit for bit
         with atomic_write(path) as f:
             torch.save(saved, f)
+        self._last_saved = self.current_learning_iteration
         self.logger.save_model(path, self.current_learning_iteration)
+
+    def save_again(self, iteration: int) -> None:
+        """Write the checkpoint of ``iteration`` again if this run wrote it: after the periodic evaluation that
+        followed it, whose envs' state a resume from it needs."""
+        if self._last_saved == iteration == self.current_learning_iteration and self.logger.writer is not None:
+            self.save(os.path.join(self.logger.log_dir, f"model_{iteration}.pt"))
+
+    def stop_here(self) -> None:
+        """End this call's piece of the run after the iteration just learned: write its checkpoint (outside
+        ``save_interval`` too) and close the logging writer; ``resume=true`` continues from it."""
+        self._final_chunk = self.logger.final_chunk = True
+        if self.logger.writer is not None:
+            self.save(os.path.join(self.logger.log_dir, f"model_{self.current_learning_iteration}.pt"))
+            self.logger.stop_logging_writer()
 
     def load(self, path: str, load_cfg: dict | None = None, strict: bool = True, map_location: str | None = None):
         """rsl_rl's ``load`` without unpickling arbitrary objects, refusing files of another task or shape."""

@@ -105,7 +105,15 @@ class SweepOptions:
 
 
 # Config keys that do not change what a run computes: a finished run whose config differs only here is kept.
-FINGERPRINT_IGNORED = ("device", "resume", "run_dir", "verbose", "config_dir")
+FINGERPRINT_IGNORED = (
+    "device",
+    "resume",
+    "run_dir",
+    "verbose",
+    "config_dir",
+    "stop_after_iterations",  # a run in pieces computes what the run in one call does (training/pieces.py)
+    "stop_after_minutes",
+)
 # Options that act only with init_from: without it a run computes the same whatever they say.
 FINE_TUNING_ONLY = ("critic_warmup_iterations", "clone_normalizer")
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import time
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +24,7 @@ from refpo_warp.config.resolve import Resolution
 from refpo_warp.config.run_options import notice_text
 from refpo_warp.config.saved import RUN_CONFIG, resolve_run
 from refpo_warp.config.yaml_files import dump_config
-from refpo_warp.evaluation.evaluate_policy import Evaluator, periodic_evaluator
+from refpo_warp.evaluation.evaluate_policy import Evaluator, make_eval_envs, periodic_evaluator
 from refpo_warp.evaluation.evaluate_run import evaluate_run
 from refpo_warp.evaluation.videos import run_video, wants_video
 from refpo_warp.render.gl import select_gl_platform
@@ -32,9 +33,11 @@ from refpo_warp.runner.checkpoints import checkpoint_progress, latest_checkpoint
 from refpo_warp.runner.distributed import process_rank
 from refpo_warp.runner.progress import progress_path, truncate_after
 from refpo_warp.runner.run_dir import RUN_FILES, check_new_run_dir, check_writable, run_lock
+from refpo_warp.runner.run_state import RUN_STATE_KEY, restore_run_state
 from refpo_warp.runner.runner import Runner
 from refpo_warp.training.fine_tuning import actor_frozen, clone_statistics_kept
 from refpo_warp.training.init_from import load_init_from
+from refpo_warp.training.pieces import PieceEnd
 from refpo_warp.utils.atomic_files import remove_stale_temp_files
 from refpo_warp.utils.errors import ConfigError, NonFiniteLossError, tag_run_dir
 
@@ -46,6 +49,7 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
     checkpoint (nothing is started from scratch behind the user's back). Without it, a run dir that already holds
     checkpoints is refused.
     """
+    started = time.monotonic()  # stop_after_minutes counts from here
     flat = parse_overrides(overrides) if isinstance(overrides, list) else dict(overrides or {})
     run = resolve_run(flat)
     cfg = run.cfg
@@ -73,9 +77,9 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
             select_gl_platform()  # before the envs import MuJoCo
         seed_everything(cfg["seed"] + rank.rank)
         env, runner = build_runner(run, run_dir)
-        start = 0
+        start, saved_state = 0, None
         if resume:  # every rank loads the checkpoint
-            start = _resume(runner, cfg, run_dir, flat, rank.world_size)
+            start, saved_state = _resume(runner, cfg, run_dir, flat, rank.world_size)
         elif cfg["init_from"]:  # a cloned actor that does not fit is refused here, before anything is written
             clone, warmup = load_init_from(runner, cfg, run.task), cfg["critic_warmup_iterations"]
             critic = f"; iterations 0..{warmup - 1} train the critic alone (critic_warmup_iterations)" if warmup else ""
@@ -97,12 +101,13 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
                 truncate_after(run_dir, start - 1)
             dump_config(cfg, run_dir / RUN_CONFIG)
         with tag_run_dir(run_dir):
-            return _train_and_evaluate(run, env, runner, run_dir, start)
+            piece = PieceEnd(cfg["stop_after_iterations"], cfg["stop_after_minutes"], start, started)
+            return _train_and_evaluate(run, env, runner, run_dir, start, piece, saved_state)
 
 
-def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: int = 1) -> int:
+def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: int = 1) -> tuple[int, Any]:
     """Load the newest usable checkpoint, apply a learning-rate override, restore the counters; returns the next
-    iteration."""
+    iteration and the checkpoint's run state (generators and env, restored when learning starts)."""
     path, data = load_latest(runner, run_dir, cfg["task"], cfg["algo"])
     iteration = int(data["iter"])
     env_steps, time_s = checkpoint_progress(data)
@@ -126,10 +131,12 @@ def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: in
     print(
         f"[refpo_warp] resuming {run_dir} from {path.name}: iteration {iteration}, {env_steps:,} env steps", flush=True
     )
-    return runner.continue_after(iteration, env_steps, time_s or 0.0)
+    return runner.continue_after(iteration, env_steps, time_s or 0.0), data.get(RUN_STATE_KEY)
 
 
-def _train_and_evaluate(run: Resolution, env: Any, runner: Runner, run_dir: Path, start: int) -> dict:
+def _train_and_evaluate(
+    run: Resolution, env: Any, runner: Runner, run_dir: Path, start: int, piece: PieceEnd, saved_state: Any
+) -> dict:
     cfg = run.cfg
     rank = process_rank()
     total = num_iterations(cfg, rank.world_size)
@@ -143,20 +150,23 @@ def _train_and_evaluate(run: Resolution, env: Any, runner: Runner, run_dir: Path
         f"iterations {start}..{total - 1} ({steps:,} env steps), run dir {run_dir}",
         flush=True,
     )
-    if cfg["eval"]["interval"] is None:  # periodic evaluation on by default: 10 evaluations per run
-        cfg["eval"]["interval"] = max(1, math.ceil(total / 10))
-    interval = int(cfg["eval"]["interval"])
-    evaluate = periodic_evaluator(run, runner) if interval > 0 and rank.is_main else None  # rank 0 evaluates
+    interval = cfg["eval"]["interval"] = evaluation_interval(cfg, total)
+    evaluate = None
+    if interval > 0 and rank.is_main:  # rank 0 evaluates; its envs' streams go on from one evaluation to the next
+        runner.eval_envs = make_eval_envs(run, interval=True)  # so checkpoints hold their state too
+        evaluate = periodic_evaluator(run, runner, runner.eval_envs)
     if evaluate is not None and cfg["video"].get("interval"):
         evaluate = with_videos(evaluate, run, runner, run_dir, interval)
+    stopped = None
     if total > start:
+        # a new run starts its envs at random points of their time-out; a resumed one goes on from the saved envs
+        restored = start > 0 and _restore(runner, saved_state)
+        random_start = cfg["runner"]["init_at_random_ep_len"] and not restored
         try:
             warmup = int(cfg["critic_warmup_iterations"]) if cfg["init_from"] else 0
             kept = cfg["init_from"] and cfg["clone_normalizer"] == "keep"
             with clone_statistics_kept(runner.alg) if kept else contextlib.nullcontext():
-                _learn_in_chunks(
-                    runner, start, total, interval, evaluate, cfg["runner"]["init_at_random_ep_len"], warmup
-                )
+                stopped = _learn_in_chunks(runner, start, total, interval, evaluate, random_start, warmup, piece)
         except NonFiniteLossError as err:  # the CLI's message says what survives and how to go on
             err.checkpoint, err.run_dir = latest_checkpoint(run_dir), run_dir
             err.learning_rate = float(runner.alg.learning_rate)
@@ -167,6 +177,16 @@ def _train_and_evaluate(run: Resolution, env: Any, runner: Runner, run_dir: Path
             f"(raise max_iterations or total_env_steps to continue)",
             flush=True,
         )
+    if stopped is not None:
+        it, why = stopped
+        runner.stop_here()
+        if rank.is_main:
+            print(
+                f"[refpo_warp] stopped after iteration {it - 1} of 0..{total - 1} ({why}): model_{it - 1}.pt holds "
+                f"the run's state; refpo train run_dir={run_dir} resume=true continues it",
+                flush=True,
+            )
+        return {}
     results = {}
     if cfg["eval"]["at_end"] and rank.is_main:
         results = evaluate_run(run_dir, run, runner=runner)
@@ -178,6 +198,14 @@ def _train_and_evaluate(run: Resolution, env: Any, runner: Runner, run_dir: Path
     if notice:
         print(f"[refpo_warp] NOTE: {notice}", flush=True)
     return results
+
+
+def evaluation_interval(cfg: dict, total: int) -> int:
+    """Iterations between periodic evaluations of a run of ``total`` iterations: ``eval.interval``, or 10 per run when
+    it is null (0: off)."""
+    if cfg["eval"]["interval"] is None:
+        return max(1, math.ceil(total / 10))
+    return int(cfg["eval"]["interval"])
 
 
 def training_summary(cfg: dict, runner, run_dir: Path, results: dict) -> str:
@@ -205,23 +233,52 @@ def with_videos(evaluate: Evaluator, run: Resolution, runner: Runner, run_dir: P
     return evaluate_and_record
 
 
+def _restore(runner: Runner, saved_state: Any) -> bool:
+    """Put the checkpoint's generators and env state back (just before learning: nothing after may draw from them);
+    returns whether the env's state was restored."""
+    if process_rank().is_distributed:  # the checkpoint holds rank 0's envs only
+        print("[refpo_warp] note: a run of several ranks resumes from fresh envs (not bit-identical)", flush=True)
+        return False
+    why = restore_run_state(runner.env, runner.logger, runner.eval_envs, saved_state)
+    if why is not None:
+        print(f"[refpo_warp] note: resuming from fresh envs, not bit-identical to an unbroken run: {why}", flush=True)
+    return why is None
+
+
 def _learn_in_chunks(
-    runner, start: int, total: int, interval: int, evaluate, init_at_random_ep_len: bool, warmup: int = 0
-) -> None:
+    runner,
+    start: int,
+    total: int,
+    interval: int,
+    evaluate,
+    init_at_random_ep_len: bool,
+    warmup: int = 0,
+    piece: PieceEnd | None = None,
+) -> tuple[int, str] | None:
     """Iterations ``start .. total - 1`` in chunks that end where periodic evaluation is due (every ``interval``
     iterations and at the last); the evaluation runs here, between chunks, and its numbers join the progress row
     of the chunk's last iteration (``eval/return_N<n>`` ...). Every rank learns in the same chunks. Iterations
-    below ``warmup`` (a fine-tuning run's critic warm-up) keep the actor frozen, in chunks of their own."""
+    below ``warmup`` (a fine-tuning run's critic warm-up) keep the actor frozen, in chunks of their own. ``piece``
+    may end the call early (``refpo_warp.training.pieces``): returns (the next iteration, why) then, else None."""
     it = start
     while it < total:
         end = min(total, (it // interval + 1) * interval) if interval > 0 else total
         if it < warmup:
             end = min(end, warmup)
+        if piece is not None:
+            end = piece.chunk_end(it, end)
         frozen = actor_frozen(runner.alg) if it < warmup else contextlib.nullcontext()
         with frozen:
             runner.learn_chunk(end - it, total, init_at_random_ep_len=init_at_random_ep_len and it == start)
-        runner.end_chunk(evaluate(end - 1, end == total) if evaluate is not None else {})
+        evaluated = evaluate(end - 1, end == total) if evaluate is not None else {}
+        runner.end_chunk(evaluated)
+        if evaluated and end < total:  # a checkpoint of this iteration was written before its evaluation
+            runner.save_again(end - 1)
         it = end
+        why = piece.reason(it) if piece is not None and it < total else None
+        if why is not None:
+            return it, why
+    return None
 
 
 def log_final_evaluation(runner, results: dict) -> None:

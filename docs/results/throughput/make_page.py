@@ -1,0 +1,127 @@
+#!/usr/bin/env python
+"""Training throughput at the CPU profile: ``README.md`` in this folder, written whole from ``README.template.md`` and
+the JSON files ``refpo bench train ... out=<task>.json`` wrote here (one per task, PPO and ReFPO in each):
+
+    python docs/results/throughput/make_page.py [--check]
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from refpo_warp.sweeps.results_page import main_args, write_page
+
+HERE = Path(__file__).resolve().parent
+TASKS = ("dmc_point_mass", "dmc_cartpole_swingup")
+NAMES = {"ppo": "PPO", "refpo": "ReFPO"}
+
+
+def load(task: str) -> dict:
+    return json.loads((HERE / f"{task}.json").read_text())
+
+
+def share(seconds: float, whole: float) -> str:
+    return f"{seconds:.2f} ({100 * seconds / whole:.0f} %)"
+
+
+def table(header: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
+
+
+def iteration_table(runs: dict[str, dict]) -> str:
+    rows = []
+    for task, data in runs.items():
+        for r in data["results"]:
+            it, whole = r["iteration"], r["seconds_per_iteration"]
+            evaluation = r["evaluation"]
+            rows.append(
+                [
+                    f"`{task}`",
+                    NAMES.get(r["algo"], r["algo"]),
+                    f"{r['env_steps_per_s']:,.0f}",
+                    f"{r['ratio_to_ppo']:.2f}",
+                    f"{whole:.2f}",
+                    share(it["collection"], whole),
+                    share(it["update"], whole),
+                    share(it["logging"] + it["checkpoint"], whole),
+                    share(it["returns"] + it["other"], whole),
+                    "off"
+                    if evaluation is None
+                    else f"{evaluation['per_iteration']:.2f} (every {evaluation['interval']})",
+                ]
+            )
+    header = ["task", "algo", "env steps/s", "ratio to PPO", "s / iteration", "collection", "update"]
+    return table(header + ["logging and checkpoint", "returns and other", "evaluation (s, amortised)"], rows)
+
+
+def update_table(runs: dict[str, dict]) -> str:
+    rows = []
+    for task, data in runs.items():
+        for r in data["results"]:
+            parts, whole = r["update"], r["iteration"]["update"]
+            rows.append(
+                [f"`{task}`", NAMES.get(r["algo"], r["algo"]), f"{whole:.2f}"]
+                + [share(parts[k], whole) for k in ("actor", "critic", "backward", "optimizer", "before", "other")]
+            )
+    header = ["task", "algo", "update (s)", "actor", "critic", "backward", "optimizer", "before", "other"]
+    return table(header, rows)
+
+
+def machine(runs: dict[str, dict]) -> str:
+    first = next(iter(runs.values()))["machine"]
+    loads = "; ".join(
+        f"`{t}`: {', '.join(str(x) for x in d['machine'].get('load_average', []))}" for t, d in runs.items()
+    )
+    return (
+        f"Machine: {first['cpu']}, {first['cpu_count']} cores, torch {first['torch']} with "
+        f"{first['torch_threads']} thread, shared with running studies while it measured (load average over the "
+        f"last 1, 5 and 15 minutes when each command ended: {loads}). The figures are of one measurement on a busy "
+        f"machine: other work's load moves them between commands and between the two algorithms of one command, so "
+        f"read them as sizes and shares, not as a ranking."
+    )
+
+
+def reading(runs: dict[str, dict]) -> str:
+    lines = []
+    for task, data in runs.items():
+        ppo, refpo = (next(r for r in data["results"] if r["algo"] == a) for a in ("ppo", "refpo"))
+        update = {a: r["iteration"]["update"] / r["seconds_per_iteration"] for a, r in (("ppo", ppo), ("refpo", refpo))}
+        critic = ppo["update"]["critic"] + ppo["update"]["backward"]
+        lines.append(
+            f"- `{task}`: the update takes {100 * update['ppo']:.0f} % of PPO's iteration and "
+            f"{100 * update['refpo']:.0f} % of ReFPO's; in PPO's update the critic's loss and the backward pass "
+            f"(the critic's and the actor's) together take {100 * critic / ppo['iteration']['update']:.0f} %: the "
+            f"critic is the larger network at this profile. ReFPO's env steps per second are "
+            f"{refpo['ratio_to_ppo']:.2f} times PPO's."
+        )
+    return "What the tables say:\n\n" + "\n".join(lines)
+
+
+def commands(runs: dict[str, dict]) -> str:
+    return "```\n" + "\n".join(d["command"] for d in runs.values()) + "\n```"
+
+
+def main() -> None:
+    args = main_args(__doc__.splitlines()[1]).parse_args()
+    runs = {task: load(task) for task in TASKS}
+    first = next(iter(runs.values()))["results"][0]
+    values = {
+        "sizes": f"{first['num_envs']} envs x {first['num_steps_per_env']} steps = "
+        f"{first['env_steps_per_iteration']:,} env steps per iteration",
+        "warmup": f"{first['warmup']} warm-up iteration{'s' if first['warmup'] != 1 else ''} (not timed)",
+        "iterations": f"{first['iterations']} iterations",
+        "machine": machine(runs),
+        "iteration_table": iteration_table(runs),
+        "update_table": update_table(runs),
+        "reading": reading(runs),
+        "commands": commands(runs),
+    }
+    same = write_page(HERE / "README.template.md", values, check=args.check)
+    sys.exit(0 if same or not args.check else 1)
+
+
+if __name__ == "__main__":
+    main()

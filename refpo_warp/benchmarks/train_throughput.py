@@ -1,0 +1,354 @@
+"""Training throughput: refpo bench train task=T algo=[ppo,refpo] device=D [iterations=3] [warmup=1] [out=PATH]
+
+Env steps per second of training, and where an iteration's time goes. Each algo's run is built as ``refpo train``
+builds it (``resolve_run``, ``build_runner``; every other ``key=value`` is a run option of ``refpo train``: ``task``,
+``device``, ``num_envs``, ``algorithm.*`` ...), in a temporary run dir, so that logging and checkpoints cost what they
+cost in a run. It learns ``warmup`` iterations (kernel compilation, graph capture; not measured), then ``iterations``
+iterations in one ``Runner.learn_chunk`` call timed whole (the device synchronised at both ends), then one periodic
+evaluation, timed, and charged to each iteration as the run would (one every ``eval.interval`` iterations).
+
+How the parts are measured: the run's own methods are wrapped by functions that read the clock around the call and
+change nothing it computes (the device is synchronised at each read on CUDA; ``detail=false`` keeps only the
+iteration's phases, for the throughput with the fewest added synchronisations). Iteration: collection (the rollout:
+from an iteration's first ``alg.act`` to ``alg.compute_returns``), returns, update (``alg.update``), logging
+(``logger.log``: statistics, progress row, TensorBoard), checkpoint (``Runner.save``) and other (the whole less these:
+the loop, ``learn``'s set-up). Collection: policy (``alg.act``), env (``env.step``), rest (storage, bookkeeping).
+Update (every algorithm's ``OnPolicyAlgorithm.update``): before (the whole-rollout pass, e.g. ReFPO's old CFM
+losses), actor (``policy_loss``: the actor's forward and its loss), critic (``value_loss``), backward (one autograd
+pass over the summed loss, so the actor's and the critic's backward are one figure), optimizer (``optimizer.step``,
+by its step hooks) and other (minibatch indexing, gradient clipping, the statistics' one host read, normalisers).
+Host syncs: on CUDA every clock read waits for the device, so a part holds the device work it queued; the waits the
+run makes itself (the update's one read of its statistics, the logger's) fall in update/other and logging.
+
+The anchor is PPO at the same task, profile and device (added when not asked for): each algo's env steps/s is printed
+as a ratio to PPO's, measured in the same command.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import platform
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from refpo_warp.utils.option_rules import Check, Flag, Int, Text, check_options
+from refpo_warp.utils.options import declared_options, option, rules_for
+
+ANCHOR = "ppo"
+
+
+def _algo_list(key: str, value: Any) -> list[str]:
+    from refpo_warp.utils.errors import ConfigError
+
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) and n for n in names):
+        raise ConfigError(f"{key}={value!r} is invalid; expected an algo (ppo) or a list of algos ([ppo,refpo])")
+    return list(dict.fromkeys(names))
+
+
+@dataclass(frozen=True)
+class TrainBenchOptions:
+    algo: list = option(["ppo", "refpo"], Check(_algo_list, "an algo or a list of algos"), "the algos timed")
+    iterations: int = option(3, Int(1, 1000), "iterations timed, after the warm-up")
+    warmup: int = option(1, Int(0, 1000), "iterations learned first and not timed (compilation, graph capture)")
+    detail: bool = option(True, Flag(), "time the parts of the rollout and the update (false: the phases only)")
+    out: str | None = option(None, Text(optional=True), "a JSON file the results are written to")
+
+
+RULES = rules_for(TrainBenchOptions)
+DEFAULTS = {name: found.default for name, found in declared_options(TrainBenchOptions).items()}
+
+
+def options_usage() -> str:
+    declared = declared_options(TrainBenchOptions)
+    from refpo_warp.config.option_docs import shown_value
+
+    given = {n: f"{n}={shown_value(d.default).replace('`', '').replace(' ', '')}" for n, d in declared.items()}
+    return "\n".join(f"    {given[n]:<26}{d.doc}" for n, d in declared.items())
+
+
+USAGE = f"""{__doc__.split(chr(10))[0].split(": ", 1)[1]}
+
+Env steps/s of training each algo, with the split of an iteration and of the update; ratios to PPO measured in the
+same command (refpo_warp/benchmarks/train_throughput.py). Options of the benchmark:
+{options_usage()}
+Every other key=value is a run option of refpo train (task=, device=, num_envs=, seed=, algorithm.<option>=...).
+"""
+
+
+class Clock:
+    """Seconds spent inside wrapped calls, per name, and their counts; the device is synchronised at each read."""
+
+    def __init__(self, device: str) -> None:
+        self.cuda = str(device).startswith("cuda")
+        self.seconds: dict[str, float] = {}
+        self.calls: dict[str, int] = {}
+
+    def now(self) -> float:
+        if self.cuda:
+            torch.cuda.synchronize()
+        return time.perf_counter()
+
+    def add(self, name: str, seconds: float) -> None:
+        self.seconds[name] = self.seconds.get(name, 0.0) + seconds
+        self.calls[name] = self.calls.get(name, 0) + 1
+
+    def wrap(self, name: str, fn):
+        def timed(*args, **kwargs):
+            start = self.now()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                self.add(name, self.now() - start)
+
+        return timed
+
+
+@contextlib.contextmanager
+def timing_hooks(runner, clock: Clock, detail: bool):
+    """Wrap the run's methods with clock reads (see the module docstring); all are removed on exit."""
+    alg, env, logger = runner.alg, runner.env, runner.logger
+    rollout = {"start": None}
+
+    def act(*args, **kwargs):
+        if rollout["start"] is None:
+            rollout["start"] = clock.now()
+        return plain_act(*args, **kwargs)
+
+    def compute_returns(*args, **kwargs):
+        start = clock.now()
+        clock.add("collection", start - rollout["start"])
+        rollout["start"] = None
+        try:
+            return alg_compute_returns(*args, **kwargs)
+        finally:
+            clock.add("returns", clock.now() - start)
+
+    alg_compute_returns = alg.compute_returns
+    plain_act = clock.wrap("collection/policy", alg.act) if detail else alg.act
+    patched: list[tuple[Any, str]] = []
+
+    def patch(owner, name: str, fn) -> None:
+        patched.append((owner, name))
+        setattr(owner, name, fn)
+
+    patch(alg, "act", act)
+    patch(alg, "compute_returns", compute_returns)
+    patch(alg, "update", clock.wrap("update", alg.update))
+    patch(logger, "log", clock.wrap("logging", logger.log))
+    patch(runner, "save", clock.wrap("checkpoint", runner.save))
+    handles = []
+    plain_backward = torch.Tensor.backward
+    if detail:
+        patch(env, "step", clock.wrap("collection/env", env.step))
+        for name in ("before_update", "policy_loss", "value_loss"):
+            if hasattr(alg, name):
+                patch(alg, name, clock.wrap(f"update/{name}", getattr(alg, name)))
+        step_start: list[float] = []
+        handles.append(alg.optimizer.register_step_pre_hook(lambda *_: step_start.append(clock.now())))
+        handles.append(
+            alg.optimizer.register_step_post_hook(
+                lambda *_: clock.add("update/optimizer", clock.now() - step_start.pop())
+            )
+        )
+        torch.Tensor.backward = clock.wrap("update/backward", plain_backward)  # type: ignore[method-assign]
+    try:
+        yield
+    finally:
+        torch.Tensor.backward = plain_backward  # type: ignore[method-assign]
+        for handle in handles:
+            handle.remove()
+        for owner, name in patched:
+            delattr(owner, name)  # the class's method again
+
+
+def measure(overrides: dict[str, Any], algo: str, iterations: int, warmup: int, detail: bool) -> dict[str, Any]:
+    """Build one algo's run as ``refpo train`` does and time it (see the module docstring); one result row."""
+    from refpo_warp.config.saved import resolve_run
+    from refpo_warp.evaluation.evaluate_policy import periodic_evaluator
+    from refpo_warp.runner.build import build_runner, env_steps_per_iteration, num_iterations, seed_everything
+    from refpo_warp.training.train_run import evaluation_interval
+
+    with tempfile.TemporaryDirectory(prefix="refpo_bench_train_") as tmp:
+        run = resolve_run({**overrides, "algo": algo, "run_dir": tmp})
+        cfg = run.cfg
+        profile_iterations = num_iterations(cfg)  # the run this profile describes: its evaluation interval
+        interval = evaluation_interval(cfg, profile_iterations)
+        total = warmup + iterations
+        seed_everything(cfg["seed"])
+        with contextlib.redirect_stdout(io.StringIO()):  # the progress lines of the iterations
+            env, runner = build_runner(run, Path(tmp))
+            random_start = bool(cfg["runner"]["init_at_random_ep_len"])
+            if warmup:
+                runner.learn_chunk(warmup, total, init_at_random_ep_len=random_start)
+                runner.end_chunk({})
+            clock = Clock(runner.device)
+            steps_before = int(runner.logger.tot_timesteps)
+            with timing_hooks(runner, clock, detail):
+                start = clock.now()
+                runner.learn_chunk(iterations, total, init_at_random_ep_len=random_start and not warmup)
+                whole = clock.now() - start
+                runner.end_chunk({})
+            counted = int(runner.logger.tot_timesteps) - steps_before
+            evaluation = None
+            if interval > 0:
+                cfg["eval"]["interval"] = 1  # due at the iteration it is called for
+                evaluate = periodic_evaluator(run, runner)
+                start = clock.now()
+                evaluate(total - 1, False)
+                evaluation = clock.now() - start
+        per_iteration = env_steps_per_iteration(cfg)
+    row = result_row(cfg, algo, clock, whole, iterations, counted, per_iteration, evaluation, interval, str(env.device))
+    return {**row, "warmup": warmup}
+
+
+def result_row(cfg, algo, clock: Clock, whole, iterations, counted, per_iteration, evaluation, interval, device):
+    """The numbers of one algo: per iteration, in seconds, and each part's share."""
+    s = {k: v / iterations for k, v in clock.seconds.items()}
+    phases = ("collection", "returns", "update", "logging", "checkpoint")
+    iteration = {k: s.get(k, 0.0) for k in phases}
+    iteration["other"] = whole / iterations - sum(iteration.values())
+    row: dict[str, Any] = {
+        "task": cfg["task"],
+        "algo": algo,
+        "device": device,
+        "num_envs": cfg["num_envs"],
+        "num_steps_per_env": cfg["runner"]["num_steps_per_env"],
+        "env_steps_per_iteration": per_iteration,
+        "iterations": iterations,
+        "env_steps_counted": counted,
+        "seconds": whole,
+        "seconds_per_iteration": whole / iterations,
+        "env_steps_per_s": counted / whole,
+        "iteration": iteration,
+        "calls": dict(clock.calls),
+        "evaluation": None,
+    }
+    if evaluation is not None:
+        row["evaluation"] = {"seconds": evaluation, "interval": interval, "per_iteration": evaluation / interval}
+    if "collection/env" in s:
+        policy, env = s.get("collection/policy", 0.0), s["collection/env"]
+        row["collection"] = {"policy": policy, "env": env, "other": iteration["collection"] - policy - env}
+    if "update/backward" in s:
+        parts = {
+            "before": s.get("update/before_update", 0.0),
+            "actor": s.get("update/policy_loss", 0.0),
+            "critic": s.get("update/value_loss", 0.0),
+            "backward": s["update/backward"],
+            "optimizer": s.get("update/optimizer", 0.0),
+        }
+        parts["other"] = iteration["update"] - sum(parts.values())
+        row["update"] = parts
+    return row
+
+
+def machine() -> dict[str, Any]:
+    import os
+
+    cpu = platform.processor() or platform.machine()
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    out: dict[str, Any] = {
+        "cpu": cpu,
+        "cpu_count": os.cpu_count(),
+        "torch_threads": torch.get_num_threads(),
+        "torch": torch.__version__,
+    }
+    with contextlib.suppress(OSError):  # how busy the machine was (other work may share it): 1, 5, 15 minutes
+        out["load_average"] = [round(x, 2) for x in os.getloadavg()]
+    if torch.cuda.is_available():
+        out["gpu"] = torch.cuda.get_device_name()
+    return out
+
+
+def print_results(rows: list[dict[str, Any]]) -> None:
+    from refpo_warp.utils.timing import print_table
+
+    anchor = next((r for r in rows if r["algo"] == ANCHOR), rows[0])
+    first = rows[0]
+    title = (
+        f"Training throughput on {first['task']}, {first['device']}: {first['num_envs']} envs x "
+        f"{first['num_steps_per_env']} steps = {first['env_steps_per_iteration']:,} env steps per iteration, "
+        f"{first['iterations']} iterations timed"
+    )
+    table = [
+        {
+            "algo": r["algo"],
+            "env steps/s": f"{r['env_steps_per_s']:,.0f}",
+            f"ratio to {anchor['algo']}": f"{r['env_steps_per_s'] / anchor['env_steps_per_s']:.2f}",
+            "s/iteration": f"{r['seconds_per_iteration']:.2f}",
+            **{k: _share(v, r["seconds_per_iteration"]) for k, v in r["iteration"].items()},
+            "evaluation (amortised)": _evaluation(r),
+        }
+        for r in rows
+    ]
+    columns = list(table[0])
+    print_table(table, columns, title=title)
+    detail = [r for r in rows if "update" in r]
+    if detail:
+        parts = [
+            {
+                "algo": r["algo"],
+                "update (s)": f"{r['iteration']['update']:.2f}",
+                **{f"update: {k}": _share(v, r["iteration"]["update"]) for k, v in r["update"].items()},
+                "collection (s)": f"{r['iteration']['collection']:.2f}",
+                **{f"collection: {k}": _share(v, r["iteration"]["collection"]) for k, v in r["collection"].items()},
+            }
+            for r in detail
+        ]
+        print_table(parts, list(parts[0]), title="The update's and the rollout's parts (seconds per iteration, share)")
+
+
+def _share(seconds: float, whole: float) -> str:
+    return f"{seconds:.3f} ({100 * seconds / whole:.0f}%)" if whole > 0 else f"{seconds:.3f}"
+
+
+def _evaluation(row: dict[str, Any]) -> str:
+    found = row["evaluation"]
+    if found is None:
+        return "off"
+    return f"{found['per_iteration']:.3f} ({found['seconds']:.2f} s every {found['interval']})"
+
+
+def main(argv: list[str]) -> list[dict[str, Any]]:
+    from refpo_warp.config.dotted import parse_overrides
+    from refpo_warp.utils.atomic_files import write_text
+    from refpo_warp.utils.device import set_torch_threads
+
+    set_torch_threads(cuda_cap=4)  # as refpo train sets them
+    flat = parse_overrides(argv)
+    own = {**DEFAULTS, **check_options(RULES, {k: v for k, v in flat.items() if k in RULES})}
+    run_options = {k: v for k, v in flat.items() if k not in RULES}
+    algos = own["algo"] if ANCHOR in own["algo"] else [ANCHOR, *own["algo"]]
+    from refpo_warp.config.saved import resolve_run
+    from refpo_warp.utils.errors import ConfigError
+
+    out = Path(own["out"]) if own["out"] is not None else None
+    if out is not None and (out.is_dir() or not out.parent.is_dir()):
+        raise ConfigError(f"out={out}: give the path of a JSON file in an existing folder")
+    for algo in algos:  # every run's options refused before the first is timed
+        resolve_run({**run_options, "algo": algo, "run_dir": tempfile.gettempdir()})
+    rows = [measure(run_options, a, own["iterations"], own["warmup"], own["detail"]) for a in algos]
+    print_results(rows)
+    if own["out"] is not None:
+        anchor = next(r for r in rows if r["algo"] == ANCHOR)
+        for r in rows:
+            r[f"ratio_to_{ANCHOR}"] = r["env_steps_per_s"] / anchor["env_steps_per_s"]
+        command = "refpo bench train " + " ".join(argv)
+        text = json.dumps({"command": command, "machine": machine(), "results": rows}, indent=2)
+        write_text(own["out"], text + "\n")
+        print(f"\nwritten: {own['out']}")
+    return rows
+
+
+__all__ = ["USAGE", "main", "measure"]
