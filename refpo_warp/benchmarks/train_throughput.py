@@ -68,7 +68,7 @@ DEFAULTS = {name: found.default for name, found in declared_options(TrainBenchOp
 
 def options_usage() -> str:
     declared = declared_options(TrainBenchOptions)
-    from refpo_warp.config.option_docs import shown_value
+    from refpo_warp.utils.option_tables import shown_value
 
     given = {n: f"{n}={shown_value(d.default).replace('`', '').replace(' ', '')}" for n, d in declared.items()}
     return "\n".join(f"    {given[n]:<26}{d.doc}" for n, d in declared.items())

@@ -9,7 +9,7 @@ from refpo_warp.utils.command_line import Arguments, parse_arguments, wants_help
 from refpo_warp.utils.errors import ConfigError, unknown
 
 SUMMARY = "env speed vs gymnasium, action latency, update cost of every algorithm, rendering speed, training speed"
-USAGE = """Benchmarks: refpo bench <gridworld|dmc|humanoid|all|latency|algorithms|render|train> [key=value ...] [--explain]
+USAGE = """Benchmarks: refpo bench <gridworld|dmc|humanoid|all|latency|algorithms|render|train> [key=value ...]
 
 Each task family with a benchmark has it in tasks/<family>/bench.py (found there, not listed here);
 `refpo bench dmc --help` shows its options, key=value as in every refpo command (device=, num_envs=, tasks=[...]).
