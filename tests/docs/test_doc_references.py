@@ -319,6 +319,6 @@ def test_the_command_table_of_docs_cli_is_the_command_list():
     from refpo_warp.cli.main import COMMANDS
 
     text = (ROOT / "docs/cli.md").read_text(encoding="utf-8")
-    table = text[text.index("## The `refpo` command") : text.index("All of them read one argument convention")]
+    table = text[text.index("## The `refpo` command") : text.index("All of them read one grammar")]
     listed = re.findall(r"^\| `refpo ([\w-]+)` \|", table, re.MULTILINE)
     assert listed == list(COMMANDS), f"docs/cli.md lists {listed}; refpo --help lists {list(COMMANDS)}"
