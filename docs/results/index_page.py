@@ -47,6 +47,7 @@ PAGES = {
     "cpu_onestep": "[one_step/search.md](one_step/search.md)",
     "cpu_humanoid": "[../humanoid.md](../humanoid.md)",
     "finetune_point_mass": "[finetuning/](finetuning/README.md)",
+    "finetune_point_mass_wall": "[multimodal/finetuning.md](multimodal/finetuning.md)",
     "finetune_reacher_easy": "[finetuning/](finetuning/README.md)",
     "finetune_scratch": "[finetuning/](finetuning/README.md)",
     "paper_dmc": "not run (CUDA)",

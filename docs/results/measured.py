@@ -540,8 +540,66 @@ def demonstrations() -> str:
     return grid + dmc
 
 
+def multimodal_page():
+    """The two-way task's fine-tuning page script (multimodal/finetuning.py), its functions read, not run."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("multimodal_finetuning", RESULTS / "multimodal" / "finetuning.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def multimodal() -> str:
+    page = multimodal_page()
+    flow, gauss = page.clone_numbers("clone_flow", "N=10"), page.clone_numbers("clone_gauss", "mean_action")
+    text = (
+        f"on `dmc_point_mass_wall`, a continuous task with two ways to its target, the flow clone of two-mode "
+        f"demonstrations reaches the target in {100 * flow['success']:.0f} % of {flow['episodes']} episodes, its "
+        f"rarer way {100 * flow['rarer']:.0f} % of its passes, and the Gaussian clone's mean action in "
+        f"{100 * gauss['success']:.0f} %"
+    )
+    outcomes, ppo = {"both ways": 0, "one way": 0, "lost": 0}, []
+    for method in page.methods():
+        for results in page.run_results(method["label"]).values():
+            n = page.numbers(results.get(page.setting_of(method["label"], 10), {}) if results else {})
+            if method["label"] == "ppo":
+                ppo.append(n["success"])
+            else:
+                outcomes[page.outcome(n)] += 1
+    runs = sum(outcomes.values())
+    if not runs:
+        return text
+    steps = page.load_yaml(page.SWEEP)["overrides"]["total_env_steps"]
+    seeds = sorted({s for m in page.methods() for s in page.run_results(m["label"])})
+    text += (
+        f"; fine-tuned from their clones for {steps_text(steps)} env steps (seed{'s' if len(seeds) > 1 else ''} "
+        f"{page.seeds_text(seeds)} so far), "
+        f"of {runs} flow-policy runs (ReFPO, ReFPO with adaptive λ, FPO, FPO++) {outcomes['both ways']} kept both "
+        f"ways, {outcomes['one way']} one way and {outcomes['lost']} lost the task (success below "
+        f"{100 * page.SUCCESS_FLOOR:.0f} % at N = 10)"
+    )
+    if ppo:
+        text += f", and PPO from the Gaussian clone ends at a success of {estimate([100 * v for v in ppo])} %"
+    if outcomes["lost"] > runs / 2:
+        return text + (
+            ": pick a flow policy to clone demonstrations that hold several ways; at these values, fine-tuning "
+            "it lost the task in most runs"
+        )
+    if outcomes["both ways"] > runs / 2:
+        return text + ": pick a flow policy for demonstrations that hold several ways, cloned and fine-tuned"
+    return text + ": pick a flow policy to clone demonstrations that hold several ways; fine-tuned, most runs keep one"
+
+
 # ------------------------------------------------------------------------------------------------ the page
-BLOCKS = {"gif": gif, "humanoid_gif": humanoid_gif, "budget": budget, "demonstrations": demonstrations, "table": table}
+BLOCKS = {
+    "gif": gif,
+    "humanoid_gif": humanoid_gif,
+    "budget": budget,
+    "demonstrations": demonstrations,
+    "multimodal": multimodal,
+    "table": table,
+}
 
 
 def render(text: str) -> str:
