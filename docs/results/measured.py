@@ -574,7 +574,7 @@ def multimodal() -> str:
     seeds = sorted({s for m in page.methods() for s in page.run_results(m["label"])})
     text += (
         f"; fine-tuned from their clones for {steps_text(steps)} env steps (seed{'s' if len(seeds) > 1 else ''} "
-        f"{page.seeds_text(seeds)} so far), "
+        f"{page.seeds_text(seeds)}{'' if seeds == page.load_yaml(page.SWEEP)['seeds'] else ' so far'}), "
         f"of {runs} flow-policy runs (ReFPO, ReFPO with adaptive λ, FPO, FPO++) {outcomes['both ways']} kept both "
         f"ways, {outcomes['one way']} one way and {outcomes['lost']} lost the task (success below "
         f"{100 * page.SUCCESS_FLOOR:.0f} % at N = 10)"
