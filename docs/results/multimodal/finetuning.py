@@ -12,6 +12,7 @@ Rows: ``finetune/runs.csv`` (``refpo sweep finetune_point_mass_wall``, then ``re
 
 from __future__ import annotations
 
+import functools
 import json
 import sys
 from pathlib import Path
@@ -60,10 +61,16 @@ def setting_of(label: str, n: int) -> str | None:
     return f"N={n}"
 
 
+@functools.cache
+def rows() -> tuple[dict, ...]:
+    """The committed runs' rows (``finetune/runs.csv``), read once per process."""
+    return tuple(read_rows(RUNS_CSV)) if RUNS_CSV.exists() else ()
+
+
 def run_results(label: str) -> dict[int, dict]:
     """seed -> the run's eval.json results (a failed run: None)."""
     out: dict[int, dict] = {}
-    for row in read_rows(RUNS_CSV) if RUNS_CSV.exists() else []:
+    for row in rows():
         if row["task"] != TASK or row["label"] != label:
             continue
         if row["status"] == "failed":
@@ -117,15 +124,15 @@ def clone_numbers(clone: str, setting: str) -> dict[str, float]:
     if (clone, setting) in MEASURED_CLONES:
         m = json.loads((HERE / "clones.json").read_text())["settings"][MEASURED_CLONES[clone, setting]]
         k = m["episodes"]
-        left, right = m["left"] / k, m["right"] / k
-        return {
-            "success": m["success"] / k,
-            "left": left,
-            "right": right,
-            "rarer": min(left, right) / (left + right) if left + right else 0.0,
-            "return": float(np.mean(m["returns"])),
-            "episodes": k,
-        }
+        return numbers(
+            {
+                "success_mean": m["success"] / k,
+                "went_left_mean": m["left"] / k,
+                "went_right_mean": m["right"] / k,
+                "return_mean": float(np.mean(m["returns"])),
+                "episodes": k,
+            }
+        )
     return numbers(json.loads((HERE / clone / "eval.json").read_text())["results"][setting])
 
 
@@ -224,7 +231,7 @@ def summary() -> str:
 # ------------------------------------------------------------------------------------------------ curves
 def curves(label: str) -> dict[int, list[dict]]:
     out = {}
-    for row in read_rows(RUNS_CSV) if RUNS_CSV.exists() else []:
+    for row in rows():
         if row["task"] == TASK and row["label"] == label and row["status"] == "ok":
             path = ROOT / row["run_dir"] / "progress_eval.jsonl"
             out[int(row["seed"])] = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
@@ -233,7 +240,7 @@ def curves(label: str) -> dict[int, list[dict]]:
 
 def warmup_env_steps() -> int:
     """Env steps of the critic's warm-up (``critic_warmup_iterations``, the actor held fixed), from a run's config."""
-    row = next(r for r in read_rows(RUNS_CSV) if r["status"] == "ok")
+    row = next(r for r in rows() if r["status"] == "ok")
     cfg = load_yaml(ROOT / row["run_dir"] / "config.yaml")
     return int(cfg["critic_warmup_iterations"]) * int(cfg["num_envs"]) * int(cfg["runner"]["num_steps_per_env"])
 
