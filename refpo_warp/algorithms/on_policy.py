@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import copy
 import math
+import warnings
 from dataclasses import dataclass
 
 import torch
@@ -48,7 +49,7 @@ from torch import nn
 
 from refpo_warp.algorithms.transition_store import TransitionStore, minibatch_indices
 from refpo_warp.models.ema import ActorEMA
-from refpo_warp.utils.device import flush_denormals_on_cpu
+from refpo_warp.utils.device import cpu_has_native_bfloat16, flush_denormals_on_cpu
 from refpo_warp.utils.errors import NonFiniteLossError
 from refpo_warp.utils.option_rules import Flag, Int, Real
 from refpo_warp.utils.options import option, option_values
@@ -173,6 +174,14 @@ class OnPolicyAlgorithm(RslPPO):
         super().__init__(actor, critic, storage, **ppo_kwargs)
         if not hasattr(self, "use_mixed_precision"):  # this update loop applies it on every rsl_rl version
             self.use_mixed_precision = bool(newer.get("use_mixed_precision", False))
+        if self.use_mixed_precision and torch.device(self.device).type == "cpu" and not cpu_has_native_bfloat16():
+            warnings.warn(
+                f"algorithm.use_mixed_precision=true on a CPU without native bfloat16 (torch sees "
+                f"{torch.backends.cpu.get_cpu_capability()}, no AVX512-BF16 or AMX): its bfloat16 matrix products "
+                "are emulated and the update runs many times slower than in float32 (about 30x on an AVX2 CPU, "
+                "docs/results/throughput/); set it to false on this machine",
+                stacklevel=2,
+            )
         for name, value in options.items():  # the options this class and its bases declare (typed attributes)
             setattr(self, name, value)
         if self.value_clip_param is None:
