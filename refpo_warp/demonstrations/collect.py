@@ -140,16 +140,7 @@ def _scripted_policy(options: dict, demo: dict, env_given: dict, device: str):
     """A task family's scripted demonstrator (``refpo_warp/tasks/<family>/demonstrator.py``) and an env of the task,
     both of the env options ``env_given`` over the task's defaults."""
     task = options["task"]
-    spec = get_task(task)  # an unknown task id names the closest one
-    env_options = env_section(spec, env_given)  # an option the task lacks names the task and its options
-    for key, value in env_options.items():
-        if key in spec.cfg_overrides and value != spec.cfg_overrides[key]:
-            raise ConfigError(f"env.{key}={value}: task={task} sets env.{key}={spec.cfg_overrides[key]}")
-    if int(env_options.get("action_chunk", 1)) > 1:
-        raise ConfigError(
-            f"env.action_chunk={env_options['action_chunk']}: a scripted demonstrator acts one env step at a time; "
-            "collect with env.action_chunk=1 (the default)"
-        )
+    env_options = _scripted_env_options(task, env_given)
     module = family_module(task, "demonstrator")
     if module is None:
         raise ConfigError(
@@ -170,3 +161,19 @@ def _scripted_policy(options: dict, demo: dict, env_given: dict, device: str):
     demonstrator = module.make_demonstrator(env_cfg, torch.Generator().manual_seed(seed), **demo)
     source = {**demonstrator.describe(), "kind": f"{task}'s scripted demonstrator", "algo": "scripted", "seed": seed}
     return demonstrator, env, ["policy"], source, task, env_options
+
+
+def _scripted_env_options(task: str, given: dict) -> dict:
+    """``given`` checked against ``task``'s env cfg (an option the task lacks names the task and its options), with
+    the options a scripted demonstrator cannot take refused: the task's own settings (DMC's ``task``), and chunks."""
+    spec = get_task(task)  # an unknown task id names the closest one
+    options = env_section(spec, given)
+    for key, value in options.items():
+        if key in spec.cfg_overrides and value != spec.cfg_overrides[key]:
+            raise ConfigError(f"env.{key}={value}: task={task} sets env.{key}={spec.cfg_overrides[key]}")
+    if int(options.get("action_chunk", 1)) > 1:
+        raise ConfigError(
+            f"env.action_chunk={options['action_chunk']}: a scripted demonstrator acts one env step at a time; "
+            "collect with env.action_chunk=1 (the default)"
+        )
+    return options
