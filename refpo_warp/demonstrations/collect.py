@@ -2,7 +2,9 @@
 with optional Gaussian action noise, and write the episodes as a Minari dataset (``dataset_file``).
 
 Every option (``collect_options.CollectOptions``) is checked and the policy loaded before the dataset is written; an
-existing ``out`` is refused unless ``overwrite=true``. The dataset's metadata records the task, its env options, the
+existing ``out`` is refused unless ``overwrite=true``. Env options (``env.<option>=``) apply over the run's own (a
+run's) or the task's defaults (a scripted demonstrator, which is built for the same env), each checked by the task's
+env cfg. The dataset's metadata records the task, its env options (those set over the task's defaults), the
 observation groups and the policy that made it (run dir, checkpoint, algorithm, flow steps, sampling, noise, seed),
 the env's ``action_transform`` and that the actions are the policy's own (``action_units: pre_squash``: before the
 env's tanh where it squashes; ``dataset_actions``).
@@ -18,6 +20,7 @@ from typing import Any
 import torch
 
 from refpo_warp.config.saved import load_run
+from refpo_warp.config.validate import env_section
 from refpo_warp.demonstrations.collect_options import MAX_DEFAULT_ENVS, collect_options
 from refpo_warp.demonstrations.dataset_actions import ACTION_TRANSFORM_KEY, ACTION_UNITS_KEY, PRE_SQUASH
 from refpo_warp.demonstrations.dataset_file import write_dataset
@@ -33,12 +36,12 @@ COLLECT_SEED_OFFSET = 20_000  # collection envs draw other initial states than t
 
 def collect(flat: dict[str, Any]) -> dict:
     """Collect and write the dataset; returns a summary (path, episodes, steps, returns, wall time)."""
-    options, demo = collect_options(flat)
+    options, demo, env_given = collect_options(flat)
     device = resolve_device(options["device"])
     if options["run_dir"]:
-        policy, env, groups, source, task, env_options = _run_policy(options, device)
+        policy, env, groups, source, task, env_options = _run_policy(options, env_given, device)
     else:
-        policy, env, groups, source, task, env_options = _scripted_policy(options, demo, device)
+        policy, env, groups, source, task, env_options = _scripted_policy(options, demo, env_given, device)
     generator = torch.Generator().manual_seed(env.seed)  # the action noise's own stream
     started = time.monotonic()
     print(
@@ -86,14 +89,16 @@ def _num_envs(options: dict) -> int:
     return int(options["num_envs"] or min(options["episodes"], MAX_DEFAULT_ENVS))
 
 
-def _run_policy(options: dict, device: str):
-    """The policy of a trained run (its newest usable checkpoint, or ``checkpoint``) and an env of its task."""
+def _run_policy(options: dict, env_given: dict, device: str):
+    """The policy of a trained run (its newest usable checkpoint, or ``checkpoint``) and an env of its task, with the
+    run's env options and ``env_given`` over them (checked as a resumed run's: one that would change the policy's
+    inputs or outputs is refused)."""
     from refpo_warp.evaluation.evaluate_policy import is_flow
     from refpo_warp.runner.build import build_runner
     from refpo_warp.runner.checkpoints import load_latest
 
     run_dir = Path(options["run_dir"])
-    run = load_run(run_dir, {"device": device})
+    run = load_run(run_dir, {"device": device, **{f"env.{k}": v for k, v in env_given.items()}})
     cfg = run.cfg
     seed = options["seed"] if options["seed"] is not None else cfg["seed"] + COLLECT_SEED_OFFSET
     env = make_env(run.task, num_envs=_num_envs(options), device=device, seed=seed, **cfg["env"])
@@ -131,10 +136,11 @@ def _run_policy(options: dict, device: str):
     return policy, env, list(cfg["runner"]["obs_groups"]["actor"]), source, cfg["task"], dict(cfg["env"])
 
 
-def _scripted_policy(options: dict, demo: dict, device: str):
-    """A task family's scripted demonstrator (``refpo_warp/tasks/<family>/demonstrator.py``) and an env of the task."""
+def _scripted_policy(options: dict, demo: dict, env_given: dict, device: str):
+    """A task family's scripted demonstrator (``refpo_warp/tasks/<family>/demonstrator.py``) and an env of the task,
+    both of the env options ``env_given`` over the task's defaults."""
     task = options["task"]
-    get_task(task)  # an unknown task id names the closest one
+    env_options = _scripted_env_options(task, env_given)
     module = family_module(task, "demonstrator")
     if module is None:
         raise ConfigError(
@@ -150,8 +156,24 @@ def _scripted_policy(options: dict, demo: dict, device: str):
         **check_options(rules_for(module.Options), demo, "demonstrator."),
     }
     seed = options["seed"] if options["seed"] is not None else 1
-    env_cfg = make_env_cfg(task)
-    env = make_env(task, num_envs=_num_envs(options), device=device, seed=seed)
+    env_cfg = make_env_cfg(task, **env_options)
+    env = make_env(task, num_envs=_num_envs(options), device=device, seed=seed, **env_options)
     demonstrator = module.make_demonstrator(env_cfg, torch.Generator().manual_seed(seed), **demo)
     source = {**demonstrator.describe(), "kind": f"{task}'s scripted demonstrator", "algo": "scripted", "seed": seed}
-    return demonstrator, env, ["policy"], source, task, {}
+    return demonstrator, env, ["policy"], source, task, env_options
+
+
+def _scripted_env_options(task: str, given: dict) -> dict:
+    """``given`` checked against ``task``'s env cfg (an option the task lacks names the task and its options), with
+    the options a scripted demonstrator cannot take refused: the task's own settings (DMC's ``task``), and chunks."""
+    spec = get_task(task)  # an unknown task id names the closest one
+    options = env_section(spec, given)
+    for key, value in options.items():
+        if key in spec.cfg_overrides and value != spec.cfg_overrides[key]:
+            raise ConfigError(f"env.{key}={value}: task={task} sets env.{key}={spec.cfg_overrides[key]}")
+    if int(options.get("action_chunk", 1)) > 1:
+        raise ConfigError(
+            f"env.action_chunk={options['action_chunk']}: a scripted demonstrator acts one env step at a time; "
+            "collect with env.action_chunk=1 (the default)"
+        )
+    return options

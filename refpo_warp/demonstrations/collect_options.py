@@ -64,15 +64,20 @@ def options_usage() -> str:
     return "\n".join(f"    {given[n]:<{width}}{declared[n].doc}" for n in names)
 
 
-def DEMONSTRATOR(key: str) -> bool:
-    """A scripted demonstrator's option (``demonstrator.<option>``), passed on unchecked."""
-    return key.startswith("demonstrator.")
+PASSED_ON = ("demonstrator.", "env.")  # checked where they apply: the demonstrator's fields, the task's env cfg
 
 
-def collect_options(flat: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """(checked options, demonstrator options); every problem a ``ConfigError`` naming the key and valid values."""
-    parsed, passed = parse_options("collect", CollectOptions, flat, DEMONSTRATOR, ["demonstrator.<option>"])
-    demo = {k.split(".", 1)[1]: v for k, v in passed.items()}
+def PASSED(key: str) -> bool:
+    """A scripted demonstrator's option (``demonstrator.<option>``) or an env option (``env.<option>``)."""
+    return key.startswith(PASSED_ON)
+
+
+def collect_options(flat: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
+    """(checked options, demonstrator options, env options); every problem a ``ConfigError`` naming the key and valid
+    values. The env options are checked against the task's env cfg by ``collect`` (a run's task is in its config)."""
+    parsed, passed = parse_options("collect", CollectOptions, flat, PASSED, [f"{p}<option>" for p in PASSED_ON])
+    demo = {k.split(".", 1)[1]: v for k, v in passed.items() if k.startswith("demonstrator.")}
+    env = {k.split(".", 1)[1]: v for k, v in passed.items() if k.startswith("env.")}
     options = asdict(parsed)
     if (options["run_dir"] is None) == (options["demonstrator"] is None):
         raise ConfigError("refpo collect needs either run_dir=<trained run> or task=<task> demonstrator=scripted")
@@ -89,4 +94,4 @@ def collect_options(flat: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any
         raise ConfigError(f"out={out} exists; pass overwrite=true to replace it, or choose another out")
     if out.exists() and not out.is_dir():
         raise ConfigError(f"out={out} is a file; a dataset is a folder: choose another out")
-    return options, demo
+    return options, demo, env

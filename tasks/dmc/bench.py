@@ -8,7 +8,8 @@ physics substeps plus rewards, resets and observations. Default: 256 envs on CPU
 MuJoCo C: the same MJCF file loaded with ``mujoco.MjModel.from_xml_path``, the same number of worlds started from
 the env's reset states, each control held for the same substeps. ``C rollout`` is ``mujoco.rollout`` with one
 thread (Warp's CPU backend also runs one thread), ``C loop`` a Python loop of ``mj_step(model, data, substeps)`` over
-one ``MjData`` per world. Physics only: no observation or reward work on the C side.
+one ``MjData`` per world. Physics only: no observation or reward work on the C side. Every suite task is measured
+by default, dmc_point_mass_wall included (its C side loads ``point_mass_wall.xml``: the default wall, as the env's).
 """
 
 from __future__ import annotations
@@ -99,10 +100,15 @@ class Options:
     mujoco_c: bool = option(True, Flag(), "also time MuJoCo C on the same model (false: ours only)")
 
 
-def run(options: Options, _: dict | None = None) -> None:
+def task_ids() -> list[str]:
+    """Every suite task's id (``tasks/dmc/suite/<task>.py``): the default ``tasks``, this project's tasks included."""
     from refpo_warp.tasks.dmc.suite import task_names
 
-    ids = [f"dmc_{t}" for t in task_names()]
+    return [f"dmc_{t}" for t in task_names()]
+
+
+def run(options: Options, _: dict | None = None) -> None:
+    ids = task_ids()
     chosen = options.tasks or ids
     unknown = [t for t in chosen if t not in ids]
     if unknown:
