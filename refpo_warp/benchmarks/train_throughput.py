@@ -252,6 +252,8 @@ def result_row(cfg, algo, clock: Clock, whole, iterations, counted, per_iteratio
 def machine() -> dict[str, Any]:
     import os
 
+    from refpo_warp.utils.device import cpu_has_native_bfloat16
+
     cpu = platform.processor() or platform.machine()
     with contextlib.suppress(OSError):
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -263,6 +265,9 @@ def machine() -> dict[str, Any]:
         "cpu_count": os.cpu_count(),
         "torch_threads": torch.get_num_threads(),
         "torch": torch.__version__,
+        # the widest vector instructions torch's CPU kernels use, and whether bfloat16 matrix products run natively
+        "cpu_capability": torch.backends.cpu.get_cpu_capability(),
+        "native_bfloat16": cpu_has_native_bfloat16(),
     }
     with contextlib.suppress(OSError):  # how busy the machine was (other work may share it): 1, 5, 15 minutes
         out["load_average"] = [round(x, 2) for x in os.getloadavg()]

@@ -16,6 +16,16 @@ from refpo_warp.sweeps.results_page import main_args, write_page
 HERE = Path(__file__).resolve().parent
 TASKS = ("dmc_point_mass", "dmc_cartpole_swingup")
 NAMES = {"ppo": "PPO", "refpo": "ReFPO"}
+# (folder, option, its default, what it changes; the before and after files: <task>_<before>.json, <task>_<after>.json)
+CHANGES = (
+    (
+        "bf16",
+        "algorithm.use_mixed_precision=true",
+        "false",
+        "bfloat16 autocast of the update's forward passes and losses",
+        ("float32", "bfloat16"),
+    ),
+)
 
 
 def load(task: str) -> dict:
@@ -104,6 +114,55 @@ def commands(runs: dict[str, dict]) -> str:
     return "```\n" + "\n".join(d["command"] for d in runs.values()) + "\n```"
 
 
+def change_rows() -> tuple[list[list[str]], list[str], list[str]]:
+    """One row per (change, task, algo); the commands; a sentence per change, from its before and after files."""
+    rows, lines, said = [], [], []
+    for folder, option, default, what, (before_name, after_name) in CHANGES:
+        for before_file in sorted((HERE / folder).glob(f"*_{before_name}.json")):
+            task = before_file.name[: -len(f"_{before_name}.json")]
+            before = json.loads(before_file.read_text())
+            after = json.loads((HERE / folder / f"{task}_{after_name}.json").read_text())
+            lines += [before["command"], after["command"]]
+            ratios = []
+            for b in before["results"]:
+                a = next(r for r in after["results"] if r["algo"] == b["algo"])
+                ratio = a["env_steps_per_s"] / b["env_steps_per_s"]
+                ratios.append(ratio)
+                rows.append(
+                    [
+                        f"`{option}` (default {default})",
+                        f"`{task}`",
+                        NAMES.get(b["algo"], b["algo"]),
+                        f"{b['env_steps_per_s']:,.0f}",
+                        f"{a['env_steps_per_s']:,.0f}",
+                        f"{ratio:.2f}",
+                        f"{b['seconds_per_iteration']:.2f} → {a['seconds_per_iteration']:.2f}",
+                    ]
+                )
+            cpu = after["machine"]
+            native = bool(cpu.get("native_bfloat16"))
+            said.append(
+                f"- `{option}` ({what}) {'pays' if min(ratios) > 1 else 'does not pay'} on this machine: "
+                f"{min(ratios):.2f} to {max(ratios):.2f} times the env steps per second of its default (the machine "
+                f"shared with running studies: load average {before['machine'].get('load_average', ['?'])[0]} and "
+                f"{cpu.get('load_average', ['?'])[0]} when the two commands ended). Its CPU "
+                f"(torch's capability: {cpu.get('cpu_capability', 'not recorded')}) has "
+                + (
+                    "native bfloat16 matrix products."
+                    if native
+                    else "no native bfloat16 (AVX512-BF16 or AMX): torch "
+                    "emulates the bfloat16 matrix products, and training warns when the option is set on such a CPU."
+                )
+            )
+    return rows, lines, said
+
+
+def changes() -> str:
+    rows, lines, said = change_rows()
+    header = ["change", "task", "algo", "env steps/s before", "after", "ratio", "s / iteration"]
+    return table(header, rows) + "\n\n" + "\n".join(said) + "\n\nMeasured by:\n\n```\n" + "\n".join(lines) + "\n```"
+
+
 def main() -> None:
     args = main_args(__doc__.splitlines()[1]).parse_args()
     runs = {task: load(task) for task in TASKS}
@@ -118,6 +177,7 @@ def main() -> None:
         "update_table": update_table(runs),
         "reading": reading(runs),
         "commands": commands(runs),
+        "changes": changes(),
     }
     same = write_page(HERE / "README.template.md", values, check=args.check)
     sys.exit(0 if same or not args.check else 1)
