@@ -16,7 +16,7 @@ class _Unset:
         return "UNSET"
 
 
-UNSET: Any = _Unset()  # a field's default is elsewhere: the constructor's (rsl_rl) or configs/default.yaml's
+UNSET: Any = _Unset()  # a field's default is elsewhere: the constructor's (rsl_rl's classes)
 MARK = "refpo_option"  # in a field's metadata: the field is an option
 T = TypeVar("T")
 
