@@ -18,20 +18,13 @@ from typing import Any
 
 from refpo_warp.models.sampled_policy import NOISE_PROTOCOLS_RULE, NUM_FLOW_STEPS
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_field import SECTION, section
 from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real, Rule, Text
 from refpo_warp.utils.options import docs_for, option, rules_for
 
 MAX_ENVS = 1 << 22  # 4M envs: far above what one GPU holds, low enough to catch a typo before allocating
 MAX_TRANSITIONS = 1 << 28  # num_envs x num_steps_per_env held in the rollout storage
 FLOW_STEPS = ListOf(NUM_FLOW_STEPS, min_len=1, max_len=32)
-SECTION = "refpo_section"  # in a field's metadata: the field is a section; its value, the dataclass of its options
-
-
-def section(doc: str, options: type | None = None) -> Any:
-    """A section of the config at its place among the options: the options of a dataclass of this file, or (None)
-    those of another class, which declares and checks them (the task's env cfg, the networks', the algorithm's, the
-    video options)."""
-    return dataclasses.field(default_factory=dict, metadata={SECTION: options, "doc": doc})
 
 
 def _check_device(key: str, value: Any) -> str:
@@ -225,7 +218,7 @@ class RunOptions:
     )
     notice: str | None = option(
         None,
-        Check(_check_notice, "null or a text ({task}, {algo}, {num_envs}, {env_steps}, ... filled in)", optional=True),
+        Check(_check_notice, "a text ({task}, {algo}, {num_envs}, {env_steps}, ... filled in)", optional=True),
         "a line printed when the run starts and ends, the run's values filled in for {task}, {algo}, "
         "{num_envs}, {env_steps}, {actor_hidden_dims} and {critic_hidden_dims}",
     )

@@ -8,11 +8,11 @@ import yaml
 
 from refpo_warp.config.classes import POSITIONAL, class_defaults, resolve_class
 from refpo_warp.config.resolve import resolve_config
-from refpo_warp.config.run_options import NOT_RULED, RUN_RULES, SECTION, SECTIONS
+from refpo_warp.config.run_options import NOT_RULED, RUN_RULES, SECTIONS
 from refpo_warp.config.saved import fixed_changes
 from refpo_warp.envs.registry import get_task, list_tasks
 from refpo_warp.utils.errors import ConfigError
-from refpo_warp.utils.option_field import UNSET
+from refpo_warp.utils.option_field import SECTION, UNSET
 from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real
 from refpo_warp.utils.options import rules_for
 from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR as CONFIG_DIR
