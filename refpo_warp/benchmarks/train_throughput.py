@@ -1,11 +1,12 @@
-"""Training throughput: refpo bench train task=T algo=[ppo,refpo] device=D [iterations=3] [warmup=1] [out=PATH]
+"""Training throughput: env steps per second of training each algo, with the split of an iteration and of the update,
+as ratios to PPO measured in the same command (refpo bench train task=T algo=[ppo,refpo] device=D).
 
-Env steps per second of training, and where an iteration's time goes. Each algo's run is built as ``refpo train``
-builds it (``resolve_run``, ``build_runner``; every other ``key=value`` is a run option of ``refpo train``: ``task``,
-``device``, ``num_envs``, ``algorithm.*`` ...), in a temporary run dir, so that logging and checkpoints cost what they
-cost in a run. It learns ``warmup`` iterations (kernel compilation, graph capture; not measured), then ``iterations``
-iterations in one ``Runner.learn_chunk`` call timed whole (the device synchronised at both ends), then one periodic
-evaluation, timed, and charged to each iteration as the run would (one every ``eval.interval`` iterations).
+Each algo's run is built as ``refpo train`` builds it (``resolve_run``, ``build_runner``; a run option of ``refpo
+train`` given here, ``task``, ``device``, ``num_envs``, ``algorithm.*`` ..., passes on to it), in a temporary run
+dir, so that logging and checkpoints cost what they cost in a run. It learns ``warmup`` iterations (kernel
+compilation, graph capture; not measured), then ``iterations`` iterations in one ``Runner.learn_chunk`` call timed
+whole (the device synchronised at both ends), then one periodic evaluation, timed, and charged to each iteration as
+the run would (one every ``eval.interval`` iterations).
 
 How the parts are measured: the run's own methods are wrapped by functions that read the clock around the call and
 change nothing it computes (the device is synchronised at each read on CUDA; ``detail=false`` keeps only the
@@ -38,8 +39,10 @@ from typing import Any
 
 import torch
 
-from refpo_warp.utils.option_rules import Check, Flag, Int, Text, check_options
-from refpo_warp.utils.options import declared_options, option, rules_for
+from refpo_warp.config.run_options import run_defaults
+from refpo_warp.utils.option_rules import Check, Flag, Int, Text
+from refpo_warp.utils.option_tables import shown_value
+from refpo_warp.utils.options import option
 
 ANCHOR = "ppo"
 
@@ -54,33 +57,26 @@ def _algo_list(key: str, value: Any) -> list[str]:
 
 
 @dataclass(frozen=True)
-class TrainBenchOptions:
-    algo: list = option(["ppo", "refpo"], Check(_algo_list, "an algo or a list of algos"), "the algos timed")
+class Options:
+    algo: list = option(
+        ["ppo", "refpo"], Check(_algo_list, "an algo or a list of algos"), "the algos timed (PPO, the anchor, added)"
+    )
     iterations: int = option(3, Int(1, 1000), "iterations timed, after the warm-up")
     warmup: int = option(1, Int(0, 1000), "iterations learned first and not timed (compilation, graph capture)")
     detail: bool = option(True, Flag(), "time the parts of the rollout and the update (false: the phases only)")
     out: str | None = option(None, Text(optional=True), "a JSON file the results are written to")
 
 
-RULES = rules_for(TrainBenchOptions)
-DEFAULTS = {name: found.default for name, found in declared_options(TrainBenchOptions).items()}
-
-
-def options_usage() -> str:
-    declared = declared_options(TrainBenchOptions)
-    from refpo_warp.utils.option_tables import shown_value
-
-    given = {n: f"{n}={shown_value(d.default).replace('`', '').replace(' ', '')}" for n, d in declared.items()}
-    return "\n".join(f"    {given[n]:<26}{d.doc}" for n, d in declared.items())
-
-
-USAGE = f"""{__doc__.split(chr(10))[0].split(": ", 1)[1]}
-
-Env steps/s of training each algo, with the split of an iteration and of the update; ratios to PPO measured in the
-same command (refpo_warp/benchmarks/train_throughput.py). Options of the benchmark:
-{options_usage()}
-Every other key=value is a run option of refpo train (task=, device=, num_envs=, seed=, algorithm.<option>=...).
-"""
+# The options passed on to each algo's run: every run option of refpo train but those the benchmark sets itself (its
+# algos, a temporary run dir, a new run).
+_RUN = run_defaults()
+REST_KEYS = tuple(k for k, v in _RUN.items() if not isinstance(v, dict) and k not in ("algo", "run_dir", "resume"))
+REST_PREFIXES = tuple(f"{k}." for k, v in _RUN.items() if isinstance(v, dict))
+REST_SYNOPSIS = " [run option=VALUE ...]"
+REST_DOC = (
+    "run option=VALUE: a run option of refpo train, passed on to each algo's run: task=, device=, num_envs=, seed=,\n"
+    "runner.<option>=, algorithm.<option>=, env.<option>=, ... (refpo train --help)"
+)
 
 
 class Clock:
@@ -325,35 +321,43 @@ def _evaluation(row: dict[str, Any]) -> str:
     return f"{found['per_iteration']:.3f} ({found['seconds']:.2f} s every {found['interval']})"
 
 
-def main(argv: list[str]) -> list[dict[str, Any]]:
-    from refpo_warp.config.dotted import parse_overrides
+def command_line(options: Options, run_options: dict[str, Any]) -> str:
+    """The command that repeats this measurement: the run options given, then every option of the benchmark."""
+    given = {**run_options, **{k: getattr(options, k) for k in Options.__dataclass_fields__}}
+    return "refpo bench train " + " ".join(f"{k}={_written(v)}" for k, v in given.items())
+
+
+def _written(value: Any) -> str:
+    """A value as the command line takes it (a list as [a,b])."""
+    text = shown_value(value).replace("`", "")
+    return text.replace(", ", ",") if isinstance(value, (list, tuple)) else text
+
+
+def run(options: Options, run_options: dict[str, Any]) -> list[dict[str, Any]]:
+    """Time each algo (PPO added) on the run that ``run_options`` describe (see the module docstring)."""
+    from refpo_warp.config.saved import resolve_run
     from refpo_warp.utils.atomic_files import write_text
     from refpo_warp.utils.device import set_torch_threads
-
-    set_torch_threads(cuda_cap=4)  # as refpo train sets them
-    flat = parse_overrides(argv)
-    own = {**DEFAULTS, **check_options(RULES, {k: v for k, v in flat.items() if k in RULES})}
-    run_options = {k: v for k, v in flat.items() if k not in RULES}
-    algos = own["algo"] if ANCHOR in own["algo"] else [ANCHOR, *own["algo"]]
-    from refpo_warp.config.saved import resolve_run
     from refpo_warp.utils.errors import ConfigError
 
-    out = Path(own["out"]) if own["out"] is not None else None
+    set_torch_threads(cuda_cap=4)  # as refpo train sets them
+    algos = options.algo if ANCHOR in options.algo else [ANCHOR, *options.algo]
+    out = Path(options.out) if options.out is not None else None
     if out is not None and (out.is_dir() or not out.parent.is_dir()):
         raise ConfigError(f"out={out}: give the path of a JSON file in an existing folder")
     for algo in algos:  # every run's options refused before the first is timed
         resolve_run({**run_options, "algo": algo, "run_dir": tempfile.gettempdir()})
-    rows = [measure(run_options, a, own["iterations"], own["warmup"], own["detail"]) for a in algos]
+    rows = [measure(run_options, a, options.iterations, options.warmup, options.detail) for a in algos]
     print_results(rows)
-    if own["out"] is not None:
+    if out is not None:
         anchor = next(r for r in rows if r["algo"] == ANCHOR)
         for r in rows:
             r[f"ratio_to_{ANCHOR}"] = r["env_steps_per_s"] / anchor["env_steps_per_s"]
-        command = "refpo bench train " + " ".join(argv)
+        command = command_line(options, run_options)
         text = json.dumps({"command": command, "machine": machine(), "results": rows}, indent=2)
-        write_text(own["out"], text + "\n")
-        print(f"\nwritten: {own['out']}")
+        write_text(out, text + "\n")
+        print(f"\nwritten: {out}")
     return rows
 
 
-__all__ = ["USAGE", "main", "measure"]
+__all__ = ["Options", "measure", "run"]

@@ -67,16 +67,22 @@ def run(args: Arguments) -> None:
         module.run(*parsed)
 
 
+def passed_on(module) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """What a benchmark passes on besides its own options: the keys ``REST_KEYS`` names and those starting with one of
+    ``REST_PREFIXES`` (``env.``: a humanoid env option; a run option of refpo train for ``bench train``)."""
+    return tuple(getattr(module, "REST_KEYS", ())), tuple(getattr(module, "REST_PREFIXES", ()))
+
+
 def parse_bench(name: str, module, argv: list[str]):
-    """(options, env options) of ``refpo bench <name>``: its ``Options`` fields and, for a benchmark with
-    ``REST_PREFIXES``, the options passed on (``env.<option>=``); None after ``--explain``."""
+    """(options, the options passed on) of ``refpo bench <name>``: its ``Options`` fields and what ``passed_on``
+    accepts; None after ``--explain``."""
     from refpo_warp.config.command_options import EXPLAIN, options_or_explain
 
     command = f"bench {name}"
     args = parse_arguments(command, argv, (EXPLAIN,))
-    prefixes = getattr(module, "REST_PREFIXES", ())
-    rest = (lambda key: key.startswith(prefixes)) if prefixes else None
-    return options_or_explain(command, module.Options, args, rest, [f"{p}<option>" for p in prefixes])
+    keys, prefixes = passed_on(module)
+    rest = (lambda key: key in keys or key.startswith(prefixes)) if keys or prefixes else None
+    return options_or_explain(command, module.Options, args, rest, [*keys, *(f"{p}<option>" for p in prefixes)])
 
 
 def bench_help(name: str, module) -> str:
@@ -85,7 +91,11 @@ def bench_help(name: str, module) -> str:
         return module.USAGE
     from refpo_warp.config.command_options import command_help
 
-    prefixes = getattr(module, "REST_PREFIXES", ())
-    passed = "".join(f" [{p}<option>=VALUE ...]" for p in prefixes)
-    summary = module.__doc__.split("\n\n")[0] + "".join(f"\n{p}<option>=VALUE: {module.REST_DOC}" for p in prefixes)
+    summary = module.__doc__.split("\n\n")[0]
+    if hasattr(module, "REST_SYNOPSIS"):  # one line for what it passes on
+        passed, summary = module.REST_SYNOPSIS, f"{summary}\n{module.REST_DOC}"
+    else:
+        prefixes = passed_on(module)[1]
+        passed = "".join(f" [{p}<option>=VALUE ...]" for p in prefixes)
+        summary += "".join(f"\n{p}<option>=VALUE: {module.REST_DOC}" for p in prefixes)
     return command_help(f"refpo bench {name} [key=value ...]{passed}", summary, module.Options)

@@ -56,14 +56,36 @@ FLAGS = (EXPLAIN,)
 SUBJECTS = 0
 RUN_KEYS = ("run_dir", "checkpoint", "device")  # a run's; the rest of its arguments are run options over its config
 AGENT_KEYS = ("task", "agent", "device", "out")
-VIDEO_KEYS = tuple(k for k in VideoOptions.__dataclass_fields__ if k not in ("at_end", "interval"))  # not training's
+TRAINING_ONLY = ("at_end", "interval")  # video options that say when a training run records
+VIDEO_KEYS = tuple(k for k in VideoOptions.__dataclass_fields__ if k not in TRAINING_ONLY)
 
 
-def _old_spelling(key: str, env_keys: tuple[str, ...]) -> str | None:
-    """The name a key has now, for a key spelled the way refpo play once took it (refused, with the new name)."""
+def spelling_error(key: str, env_keys: tuple[str, ...]) -> ConfigError | None:
+    """The refusal, naming what to write instead, of a key spelled the way refpo play once took it (a bare video or env
+    option, a renamed one) or of a video option that only a training run takes (``video.at_end``, bare ``at_end``)."""
+    renamed = renamed_error("play", f"{key}=")
+    if renamed is not None:
+        return renamed
+    name = key.removeprefix("video.")
+    if name in TRAINING_ONLY:
+        return ConfigError(
+            f"'{key}=': video.{name} says when a training run records (refpo train ... video.{name}=...); refpo play "
+            f"records now: leave it out (the video options refpo play takes: "
+            f"{', '.join(f'video.{k}' for k in VIDEO_KEYS)})"
+        )
     if key in VIDEO_KEYS:
-        return f"video.{key}"
-    return f"env.{key}" if key in env_keys else None
+        return ConfigError(f"'{key}=' is spelled 'video.{key}=' (refpo play names options as refpo train does)")
+    if key in env_keys:
+        return ConfigError(f"'{key}=' is spelled 'env.{key}=' (refpo play names options as refpo train does)")
+    return None
+
+
+def check_spellings(flat: dict[str, Any], own: tuple[str, ...], env_keys: tuple[str, ...] = ()) -> None:
+    """Every key but the command's own (``own``) checked by ``spelling_error``; the first refused raises."""
+    for key in (k for k in flat if k not in own):  # an env option may share a name of ours (DMC's `task`)
+        error = spelling_error(key, env_keys)
+        if error is not None:
+            raise error
 
 
 def split_arguments(args: list[str]) -> tuple[PlayOptions, VideoOptions, dict[str, Any]]:
@@ -82,15 +104,7 @@ def split_arguments(args: list[str]) -> tuple[PlayOptions, VideoOptions, dict[st
         spec = get_task(str(flat["task"]))
     env_keys = tuple(spec.cfg_class.defaults()) if spec is not None else ()
     own = RUN_KEYS if has_run else AGENT_KEYS
-    for key in (k for k in flat if k not in own):  # an env option may share a name of ours (DMC's `task`)
-        renamed = renamed_error("play", f"{key}=")
-        if renamed is not None:
-            raise renamed
-        new = _old_spelling(key, env_keys)
-        if new is not None:
-            raise ConfigError(f"'{key}=' is spelled '{new}=' (refpo play names options as refpo train does)")
-    if any(k.startswith("video.") and k[6:] in ("at_end", "interval") for k in flat):
-        raise ConfigError("video.at_end and video.interval say when a training run records; refpo play records now")
+    check_spellings(flat, own, env_keys)
     video = VideoOptions.from_dict({k[6:]: flat.pop(k) for k in list(flat) if k.startswith("video.")})
     if has_run:  # every other key is a run option, checked over the saved config (load_run)
         options, rest = parse_options("play", PlayOptions, flat, lambda key: key not in RUN_KEYS)
@@ -112,7 +126,9 @@ def split_arguments(args: list[str]) -> tuple[PlayOptions, VideoOptions, dict[st
 
 def run(args: Arguments) -> None:
     if "--explain" in args.flags:
-        rest = lambda key: key not in option_names(PlayOptions)  # noqa: E731  (run, video and env options: passed on)
+        own = tuple(option_names(PlayOptions))
+        check_spellings(parse_overrides(args.options), own)  # what refpo play would refuse, refused here too
+        rest = lambda key: key not in own  # noqa: E731  (run, video and env options: passed on)
         print(explain_options("play", PlayOptions, args.options, args.flag("--explain") or "", rest))
         return
     from refpo_warp.utils.device import set_torch_threads

@@ -14,9 +14,10 @@ stopping; evaluates the clone and writes model_0.pt (rsl_rl's checkpoint layout)
 row per epoch), TensorBoard events and eval.json into run_dir (default runs/<task>/pretrain_<algo>_seed<seed>).
 Fine-tune it with: refpo train task=<task> algo=<algo> init_from=<that run dir>  (docs/finetuning.md)
 
-Options (configs/default.yaml, pretrain section): pretrain.epochs=100 pretrain.batch_size=512
-pretrain.learning_rate=0.001 pretrain.validation_fraction=0.1 pretrain.patience=10 pretrain.num_pairs=null; any run
-option (seed, device, eval.flow_steps, the actor's sizes, ...) as for refpo train.
+Options: pretrain.<key>=VALUE (epochs, batch_size, learning_rate, validation_fraction, patience, num_pairs,
+dataset_actions, squash_margin: PretrainOptions in refpo_warp/config/run_options.py; `--explain pretrain` lists each
+with its default and meaning); any run option (seed, device, eval.flow_steps, the actor's sizes, ...) as for refpo
+train.
 Flags: --explain [KEY,KEY,...] (the value of each option and the layer that set it, as refpo train's; nothing is run).
 
 Examples:

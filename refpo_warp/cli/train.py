@@ -16,7 +16,7 @@ Examples:
     refpo train task=gridworld algo=fpo --explain algorithm.reflow_coef   # the value and the layer that set it
     refpo train --list-tasks [config_dir=DIR]                   # the task ids (those of your config folder too)
 
-Any config key can be overridden (the run options: configs/default.yaml, installed as refpo_warp/configs/);
+Any config key can be overridden (the run options and their defaults: refpo_warp/config/run_options.py);
 config_dir=DIR (or REFPO_CONFIG_PATH) adds your own task, algo and sweep files (docs/cli.md).
 Flags: --list-tasks, --explain [KEY,KEY,...] (without keys: every option; nothing is trained).
 """

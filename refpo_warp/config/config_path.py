@@ -6,7 +6,8 @@ its evaluation finds the files again) and by the environment variable ``REFPO_CO
 ``:``); its files are validated, explained and listed like the shipped ones (a task file that names no registered
 task adds one: ``refpo_warp.config.config_set``). Each name is found in one folder only: a file that repeats a
 name of another folder (a shipped one included) is an error; derive from it with ``base:`` instead. The run
-options' defaults are the shipped ``default.yaml``'s.
+options' defaults are their fields' (``refpo_warp/config/run_options.py``), the networks' shared settings the shipped
+``default.yaml``'s: a ``default.yaml`` in a user's folder is refused.
 """
 
 from __future__ import annotations
@@ -99,6 +100,7 @@ def _user_folder(value: str, where: str) -> Path:
     if (folder / DEFAULT_FILE.name).exists():
         raise ConfigError(
             f"{where}={value}: holds a {DEFAULT_FILE.name}, which is never read (the run options' "
-            f"defaults are the shipped ones); put your settings in a task or algo file"
+            f"defaults are their fields', in refpo_warp/config/run_options.py); put your settings in a task or algo "
+            f"file"
         )
     return folder

@@ -1,9 +1,10 @@
 """The layers a run's config is merged from, generic to specific, each named by the file (and section) it comes from.
 
 Their order and what each holds is described once, in ``docs/cli.md`` ("The layers, generic to specific");
-``run_layers`` below builds them in that order from files already read: ``default.yaml``,
-the task's and the algorithm's ``base`` chains (``refpo_warp/config/config_set.py``, which finds them along the config
-path: the user's folders, then the shipped ``configs/``).
+``run_layers`` below builds them in that order: the run options' fields (``refpo_warp/config/run_options.py``), then
+from files already read: ``default.yaml`` (the networks' shared settings), the task's and the algorithm's ``base``
+chains (``refpo_warp/config/config_set.py``, which finds them along the config path: the user's folders, then the
+shipped ``configs/``).
 """
 
 from __future__ import annotations
@@ -12,9 +13,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from refpo_warp.config.config_set import DEVICE_TYPES, PROFILE_KEYS, Chain, ConfigFile
+from refpo_warp.config.run_options import run_defaults
 from refpo_warp.utils.paths import shown
 
-__all__ = ["DEVICE_TYPES", "PROFILE_KEYS", "Layer", "run_layers"]
+__all__ = ["DEVICE_TYPES", "PROFILE_KEYS", "RUN_DEFAULTS", "Layer", "run_layers"]
+
+RUN_DEFAULTS = "the run options' defaults (refpo_warp/config/run_options.py)"  # the first layer's name
 
 
 @dataclass(frozen=True)
@@ -42,10 +46,11 @@ def _whole(file: ConfigFile) -> Layer:
 
 
 def run_layers(defaults: ConfigFile, task: Chain, algo: Chain, device_type: str) -> list[Layer]:
-    """The layers of a run, generic to specific: 1 and 2, the defaults and what the task's files set for every
-    algorithm and device; 3 and 4, the task's device profile, then each algorithm of the chain with the task's settings
-    for it (empty layers left out)."""
-    generic = [Layer(shown(defaults.path), defaults.data, defaults.comments)] + [_whole(file) for file in task]
+    """The layers of a run, generic to specific: 1 and 2, the defaults (the run options' fields, then ``default.yaml``)
+    and what the task's files set for every algorithm and device; 3 and 4, the task's device profile, then each
+    algorithm of the chain with the task's settings for it (empty layers left out)."""
+    generic = [Layer(RUN_DEFAULTS, run_defaults()), Layer(shown(defaults.path), defaults.data, defaults.comments)]
+    generic += [_whole(file) for file in task]
     profiles = [(file, dict((file.data.get("by_device") or {}).get(device_type) or {})) for file in task]
     device = f"by_device.{device_type}"
     layers = [

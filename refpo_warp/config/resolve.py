@@ -18,7 +18,7 @@ from typing import Any
 from refpo_warp.config.config_set import ConfigFile, ConfigSet, config_set
 from refpo_warp.config.dotted import flatten, merge, parse_overrides, set_dotted
 from refpo_warp.config.layers import PROFILE_KEYS, Layer, run_layers
-from refpo_warp.config.run_options import check_combinations
+from refpo_warp.config.run_options import check_combinations, run_defaults
 from refpo_warp.config.validate import validate
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError
@@ -47,9 +47,10 @@ def run_config_set(flat: dict[str, Any]) -> ConfigSet:
     return config_set(config_dir)
 
 
-def identity(flat: dict[str, Any], defaults: ConfigFile) -> tuple[str, str]:
-    """The task and algo a flat override dict asks for (default.yaml's when not given)."""
-    return str(flat.get("task", defaults.data["task"])), str(flat.get("algo", defaults.data["algo"]))
+def identity(flat: dict[str, Any]) -> tuple[str, str]:
+    """The task and algo a flat override dict asks for (their fields' defaults when not given)."""
+    defaults = run_defaults()
+    return str(flat.get("task", defaults["task"])), str(flat.get("algo", defaults["algo"]))
 
 
 def _with_env_prefix(flat: dict[str, Any], task: TaskSpec, defaults: dict) -> dict[str, Any]:
@@ -63,12 +64,12 @@ def _with_env_prefix(flat: dict[str, Any], task: TaskSpec, defaults: dict) -> di
     return out
 
 
-def _device_type(flat: dict[str, Any], files: tuple[ConfigFile, ...]) -> str:
-    """``cpu`` or ``cuda``: the type of the device the run asks for (the command line's, else the last of the
-    defaults and the task's files that sets one)."""
+def _device_type(flat: dict[str, Any], defaults: dict, files: tuple[ConfigFile, ...]) -> str:
+    """``cpu`` or ``cuda``: the type of the device the run asks for (the command line's, else the last of the task's
+    files that sets one, else the default)."""
     from refpo_warp.utils.device import resolve_device
 
-    device = "auto"
+    device = defaults["device"]
     for file in files:
         device = file.data.get("device", device)
     return resolve_device(str(flat.get("device", device))).split(":")[0]
@@ -85,16 +86,16 @@ def resolve(overrides: list[str] | dict[str, Any] | None = None, device_type: st
     configs = run_config_set(flat)
     if flat.get("config_dir"):  # saved with the run as an absolute path: its evaluation finds it from anywhere
         flat["config_dir"] = str(Path(flat["config_dir"]).expanduser().resolve())
-    task, algo = identity(flat, configs.defaults)
+    task, algo = identity(flat)
     flat = {k: v for k, v in flat.items() if k not in ("task", "algo")}
     for key in flat:
         if key.split(".")[0] in PROFILE_KEYS:
             raise ConfigError(f"'{key}' is a config-file key, not a run option")
     spec, task_files, algo_files = configs.run_files(task, algo)
-    defaults = configs.defaults.data
+    defaults = run_defaults()
     flat = _with_env_prefix(flat, spec, defaults)
     if device_type is None:
-        device_type = _device_type(flat, (configs.defaults, *task_files))
+        device_type = _device_type(flat, defaults, task_files)
     layers = run_layers(configs.defaults, task_files, algo_files, device_type)
     cfg: dict = {}
     sources: dict[str, list[tuple[str, Any]]] = {}

@@ -1,13 +1,16 @@
-"""The run options of ``configs/default.yaml`` (everything outside the class, env and video sections), declared like
-every other option: a field with its rule and doc (``refpo_warp/utils/options.py``), its default being
-``default.yaml``'s; a section of keys (``runner.*``) is a dataclass of its own. Also the checks that involve several
+"""The run options: every key of a run's config outside the class, env and video sections, declared like every other
+option, a field ``option(default, rule, doc)`` (``refpo_warp/utils/options.py``) holding its one default. A section of
+keys (``runner.*``) is a dataclass of its own, placed among the options by a ``section`` field; a section of another
+class's options (``env``, ``actor``, ``critic``, ``algorithm``, ``video``, ``eval.env``) is a ``section`` field too,
+empty here. ``run_defaults`` is the first layer of every run's config (``refpo_warp/config/layers.py``), in the order
+the fields stand, which is the order of the keys of a saved ``config.yaml``. Also the checks that involve several
 options.
-
-A new key in ``default.yaml`` gets its field here (``tests/utils/test_option_rules.py`` fails for a key without one).
 """
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import importlib.util
 from dataclasses import dataclass
 from enum import Enum
@@ -15,6 +18,7 @@ from typing import Any
 
 from refpo_warp.models.sampled_policy import NOISE_PROTOCOLS_RULE, NUM_FLOW_STEPS
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_field import SECTION, section
 from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real, Rule, Text
 from refpo_warp.utils.options import docs_for, option, rules_for
 
@@ -87,59 +91,22 @@ def _check_obs_groups(key: str, value: Any) -> dict:
 
 
 @dataclass(frozen=True)
-class RunOptions:
-    seed: int = option(rule=Int(0, 2**32 - 1), doc="seed of the run (numpy's seed range)")
-    device: str = option(rule=Check(_check_device, "auto, cpu, cuda or cuda:N"), doc="where the run trains")
-    num_envs: int = option(rule=Int(1, MAX_ENVS), doc="parallel envs")
-    total_env_steps: int = option(rule=Int(1, 10**13), doc="env steps of the run (all envs together)")
-    max_iterations: int | None = option(
-        rule=Int(1, 10**8, optional=True), doc="iterations of the run; null: from total_env_steps"
-    )
-    run_dir: str | None = option(rule=Text(optional=True), doc="the run's folder; null: a new one under runs/")
-    resume: bool = option(rule=Flag(), doc="train on from the run dir's last checkpoint")
-    stop_after_iterations: int | None = option(
-        rule=Int(1, 10**8, optional=True),
-        doc="stop this call after that many iterations, at a checkpoint a resume continues bit for bit; null: never",
-    )
-    stop_after_minutes: float | None = option(
-        rule=Real(0, 10**6, lo_open=True, optional=True),
-        doc="stop this call at a checkpoint before that many minutes of training would pass; null: never",
-    )
-    verbose: bool = option(rule=Flag(), doc="print every iteration's statistics")
-    # the run dir itself is checked when training starts (training/init_from.py)
-    init_from: str | None = option(rule=Text(optional=True), doc="a run dir whose weights start this run")
-    critic_warmup_iterations: int = option(rule=Int(0, 10**8), doc="iterations that train the critic alone first")
-    clone_normalizer: str = option(
-        rule=OneOf(("keep", "update")),
-        doc="with init_from: the observation normalisers keep the data's statistics (as DPPO fine-tunes) or update",
-    )
-    # the folder itself is checked when the config path is built
-    config_dir: str | None = option(rule=Text(optional=True), doc="a folder of config files that replaces configs/")
-    notice: str | None = option(
-        rule=Check(
-            _check_notice, "null or a text ({task}, {algo}, {num_envs}, {env_steps}, ... filled in)", optional=True
-        ),
-        doc="a line printed when the run starts and ends, the run's values filled in for {task}, {algo}, "
-        "{num_envs}, {env_steps}, {actor_hidden_dims} and {critic_hidden_dims}",
-    )
-
-
-@dataclass(frozen=True)
 class RunnerOptions:
-    num_steps_per_env: int = option(rule=Int(1, 1_000_000), doc="env steps per env and iteration (the rollout)")
-    save_interval: int = option(rule=Int(1, 10**8), doc="iterations between checkpoints")
-    logger: str = option(rule=Check(_check_logger, "tensorboard, wandb or neptune"), doc="where statistics go")
-    check_for_nan: bool = option(rule=Flag(), doc="rsl_rl's check of the observations and rewards for NaN")
+    num_steps_per_env: int = option(24, Int(1, 1_000_000), "env steps per env and iteration (the rollout)")
+    save_interval: int = option(50, Int(1, 10**8), "iterations between checkpoints (the final one is always written)")
+    logger: str = option("tensorboard", Check(_check_logger, "tensorboard, wandb or neptune"), "where statistics go")
+    check_for_nan: bool = option(True, Flag(), "rsl_rl's check of the observations and rewards for NaN")
     # rsl_rl refuses the CUDA-graph modes "reduce-overhead" and "max-autotune"
     torch_compile_mode: str | None = option(
-        rule=OneOf(None, "default", "max-autotune-no-cudagraphs"), doc="torch.compile's mode; null: not compiled"
+        None, OneOf(None, "default", "max-autotune-no-cudagraphs"), "torch.compile's mode; null: not compiled"
     )
     obs_groups: dict = option(
-        rule=Check(_check_obs_groups, "a mapping {set: [observation groups]}", fixed=True),
-        doc="the observation groups each of actor and critic reads",
+        {"actor": ["policy"], "critic": ["policy"]},
+        Check(_check_obs_groups, "a mapping {set: [observation groups]}", fixed=True),
+        "the observation groups each of actor and critic reads",
     )
-    init_at_random_ep_len: bool = option(rule=Flag(), doc="start the envs at random points of their time-out")
-    log_full: bool = option(rule=Flag(), doc="log every statistic rsl_rl has")
+    init_at_random_ep_len: bool = option(False, Flag(), "start the envs at random points of their time-out")
+    log_full: bool = option(False, Flag(), "print rsl_rl's full per-iteration report instead of one progress line")
 
 
 class DatasetActions(str, Enum):
@@ -152,46 +119,173 @@ class DatasetActions(str, Enum):
 
 @dataclass(frozen=True)
 class PretrainOptions:
+    """refpo pretrain's (behaviour cloning, docs/finetuning.md); refpo train ignores them."""
+
     # read and checked by refpo pretrain (demonstrations/dataset_file.py)
-    dataset: str | None = option(rule=Text(optional=True), doc="the demonstration file refpo pretrain reads")
+    dataset: str | None = option(
+        None, Text(optional=True), "the demonstration file refpo pretrain reads (a Minari dataset folder)"
+    )
     dataset_actions: str = option(
-        rule=OneOf(DatasetActions),
-        doc="what the dataset's actions are: pre_squash (the policy's, before a tanh env's squash: taken as they "
+        DatasetActions.AUTO.value,
+        OneOf(DatasetActions),
+        "what the dataset's actions are: pre_squash (the policy's, before a tanh env's squash: taken as they "
         "are), env_units (the env's, in [-1, 1]: atanh on a tanh task), auto (from the dataset; config.yaml keeps the "
         "choice)",
     )
     squash_margin: float = option(
-        rule=Real(1e-12, 0.5), doc="env_units on a tanh task: |a| clipped to 1 - squash_margin before atanh"
+        1e-6, Real(1e-12, 0.5), "env_units on a tanh task: |a| clipped to 1 - squash_margin before atanh"
     )
-    epochs: int = option(rule=Int(1, 10**6), doc="passes over the demonstrations")
-    batch_size: int = option(rule=Int(1, 1 << 24), doc="demonstrations per gradient step")
-    learning_rate: float = option(rule=Real(0, 10, lo_open=True), doc="the pre-training learning rate")
+    epochs: int = option(100, Int(1, 10**6), "passes over the demonstrations (at most; early stopping may end sooner)")
+    batch_size: int = option(512, Int(1, 1 << 24), "demonstrations per gradient step")
+    learning_rate: float = option(0.001, Real(0, 10, lo_open=True), "the pre-training learning rate (Adam)")
     validation_fraction: float = option(
-        rule=Real(0, 1, lo_open=True, hi_open=True), doc="share of the demonstrations held out"
+        0.1, Real(0, 1, lo_open=True, hi_open=True), "share of the demonstrations held out"
     )
-    patience: int = option(rule=Int(1, 10**6), doc="epochs without a better validation loss before it stops")
-    num_pairs: int | None = option(rule=Int(1, 4096, optional=True), doc="(tau, eps) pairs per demonstration")
+    patience: int = option(10, Int(1, 10**6), "epochs without a better validation loss before it stops")
+    num_pairs: int | None = option(
+        None,
+        Int(1, 4096, optional=True),
+        "flow actors: (tau, eps) pairs per demonstration; null: the algorithm's num_mc_samples (else 8)",
+    )
 
 
 @dataclass(frozen=True)
 class EvalOptions:
-    at_end: bool = option(rule=Flag(), doc="evaluate the final policy")
-    flow_steps: list[int] = option(rule=FLOW_STEPS, doc="flow-step counts N the final evaluation samples with")
-    num_envs: int | None = option(rule=Int(1, MAX_ENVS, optional=True), doc="envs of the final evaluation")
-    max_steps: int | None = option(rule=Int(1, 10**8, optional=True), doc="env steps of an evaluation")
-    initial_noise: list[str] = option(rule=NOISE_PROTOCOLS_RULE, doc="initial-noise protocols evaluated")
-    perturbation: bool = option(rule=Flag(), doc="evaluate with the actor's action perturbation")
-    interval: int | None = option(rule=Int(0, 10**8, optional=True), doc="iterations between periodic evaluations")
-    interval_flow_steps: list[int] = option(rule=FLOW_STEPS, doc="flow-step counts of the periodic evaluations")
-    interval_num_envs: int = option(rule=Int(1, MAX_ENVS), doc="envs of the periodic evaluations")
+    at_end: bool = option(True, Flag(), "evaluate the final policy (eval.json and figures in the run dir)")
+    flow_steps: list[int] = option([1, 10, 20], FLOW_STEPS, "flow-step counts N the final evaluation samples with")
+    num_envs: int | None = option(
+        64, Int(1, MAX_ENVS, optional=True), "envs of the final evaluation; null: the task decides"
+    )
+    env: dict = section("env options of the evaluation envs only (e.g. the humanoid's eval mode)")
+    max_steps: int | None = option(
+        None, Int(1, 10**8, optional=True), "env steps of an evaluation; null: the env's max_episode_length"
+    )
+    initial_noise: list[str] = option(
+        ["random"], NOISE_PROTOCOLS_RULE, "flow policies: initial-noise protocols evaluated (random or zero x_0)"
+    )
+    perturbation: bool = option(
+        False, Flag(), "flow policies: evaluate with the actor's action perturbation (as the rollout samples)"
+    )
+    interval: int | None = option(
+        None,
+        Int(0, 10**8, optional=True),
+        "iterations between periodic evaluations; null: 10 per run; 0: none",
+    )
+    interval_flow_steps: list[int] = option([10, 1], FLOW_STEPS, "flow-step counts of the periodic evaluations")
+    interval_num_envs: int = option(16, Int(1, MAX_ENVS), "envs of the periodic evaluations")
 
 
-SECTIONS = {"": RunOptions, "runner.": RunnerOptions, "pretrain.": PretrainOptions, "eval.": EvalOptions}
+@dataclass(frozen=True)
+class RunOptions:
+    """A run's config, every option at its place in config.yaml (a sweep compares saved files byte for byte)."""
+
+    # checked by name against the registered tasks and the algo files (refpo_warp/config/config_set.py)
+    task: str = option("gridworld", Text(), "the task id (refpo train --list-tasks)")
+    algo: str = option("refpo", Text(), "the algorithm: a file configs/algo/<algo>.yaml")
+    seed: int = option(1, Int(0, 2**32 - 1), "seed of the run (numpy's seed range)")
+    device: str = option(
+        "auto",
+        Check(_check_device, "auto, cpu, cuda or cuda:N"),
+        "where the run trains: auto (cuda:0 when available, else cpu), cpu or cuda:N",
+    )
+    num_envs: int = option(64, Int(1, MAX_ENVS), "parallel envs")
+    total_env_steps: int = option(
+        1_000_000,
+        Int(1, 10**13),
+        "env steps of the run (all envs together): ceil(total_env_steps / (num_envs x runner.num_steps_per_env x "
+        "env.action_chunk)) iterations",
+    )
+    max_iterations: int | None = option(
+        None,
+        Int(1, 10**8, optional=True),
+        "iterations of the run (the budget in iterations); null: from total_env_steps",
+    )
+    run_dir: str | None = option(None, Text(optional=True), "the run's folder; null: runs/<task>/<algo>_seed<seed>")
+    resume: bool = option(False, Flag(), "train on from the run dir's last checkpoint")
+    stop_after_iterations: int | None = option(
+        None,
+        Int(1, 10**8, optional=True),
+        "stop this call after that many iterations, at a checkpoint a resume continues bit for bit (a run in pieces, "
+        "docs/cli.md); null: never",
+    )
+    stop_after_minutes: float | None = option(
+        None,
+        Real(0, 10**6, lo_open=True, optional=True),
+        "stop this call at a checkpoint before that many minutes of training would pass; null: never",
+    )
+    verbose: bool = option(
+        False, Flag(), "also print rsl_rl's messages: observation sets, model structure, git state of the code"
+    )
+    notice: str | None = option(
+        None,
+        Check(_check_notice, "a text ({task}, {algo}, {num_envs}, {env_steps}, ... filled in)", optional=True),
+        "a line printed when the run starts and ends, the run's values filled in for {task}, {algo}, "
+        "{num_envs}, {env_steps}, {actor_hidden_dims} and {critic_hidden_dims}",
+    )
+    env: dict = section("options of the task's env cfg (its dataclass in refpo_warp/tasks/<family>/cfg.py)")
+    # the run dir itself is checked when training starts (training/init_from.py)
+    init_from: str | None = option(
+        None, Text(optional=True), "a refpo pretrain run dir whose cloned actor and normaliser start this run"
+    )
+    critic_warmup_iterations: int = option(
+        10, Int(0, 10**8), "with init_from: the first iterations, in the budget, train the critic alone"
+    )
+    clone_normalizer: str = option(
+        "keep",
+        OneOf(("keep", "update")),
+        "with init_from: the observation normalisers keep the data's statistics (as DPPO fine-tunes) or update",
+    )
+    # the folder itself is checked when the config path is built
+    config_dir: str | None = option(
+        None,
+        Text(optional=True),
+        "a folder of your own task/, algo/ and sweep/ files, searched before the shipped configs/ (docs/cli.md)",
+    )
+    runner: dict = section("rsl_rl's runner: the rollout, checkpoints, logging", RunnerOptions)
+    actor: dict = section("the actor's class_name and its options (configs/algo/<algo>.yaml)")
+    critic: dict = section("the critic's class_name and its options (configs/algo/<algo>.yaml)")
+    algorithm: dict = section("the algorithm's class_name and its options (configs/algo/<algo>.yaml)")
+    video: dict = section("videos of the policy during and after training (refpo_warp/render/options.py)")
+    pretrain: dict = section("refpo pretrain's options (behaviour cloning); refpo train ignores them", PretrainOptions)
+    eval: dict = section("the evaluation after training and during it", EvalOptions)
+
+
+def _sections(options: type, prefix: str = "") -> dict[str, type | None]:
+    """Every section of ``options``, by dotted prefix (``""``: the top), and the dataclass of its options (None: the
+    options of another class, which declares and checks them)."""
+    out: dict[str, type | None] = {prefix: options}
+    for f in dataclasses.fields(options):
+        if SECTION in f.metadata:
+            inner = f.metadata[SECTION]
+            out.update(_sections(inner, f"{prefix}{f.name}.") if inner is not None else {f"{prefix}{f.name}": None})
+    return out
+
+
+def _defaults(options: type) -> dict:
+    out: dict = {}
+    for f in dataclasses.fields(options):
+        if SECTION in f.metadata:
+            inner = f.metadata[SECTION]
+            out[f.name] = _defaults(inner) if inner is not None else {}
+        else:
+            out[f.name] = copy.deepcopy(
+                f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+            )
+    return out
+
+
+def run_defaults() -> dict:
+    """Every run option's default, nested by section and in config.yaml's order; the sections of other classes'
+    options (``env``, ``actor``, ``critic``, ``algorithm``, ``video``, ``eval.env``) empty."""
+    return _defaults(RunOptions)
+
+
+SECTIONS = {p: c for p, c in _sections(RunOptions).items() if c is not None}
 RUN_RULES: dict[str, Rule] = {f"{p}{k}": r for p, c in SECTIONS.items() for k, r in rules_for(c).items()}
 RUN_DOCS: dict[str, str] = {f"{p}{k}": d for p, c in SECTIONS.items() for k, d in docs_for(c).items()}
-# Keys checked elsewhere: task and algo (by name, against the registry and configs/algo), the sections env, actor,
-# critic, algorithm (against their classes' rules), eval.env (against the task's env cfg) and video (VideoOptions).
-NOT_RULED = ("task", "algo", "env", "actor", "critic", "algorithm", "eval.env", "video")
+# The sections that other classes declare and check: env and eval.env (the task's env cfg), actor, critic and
+# algorithm (their classes), video (VideoOptions).
+NOT_RULED = tuple(p for p, c in _sections(RunOptions).items() if c is None)
 
 
 def check_combinations(cfg: dict) -> None:

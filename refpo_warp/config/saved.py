@@ -15,7 +15,7 @@ from typing import Any
 from refpo_warp.config.classes import CLASS_SECTIONS, class_parameters, resolve_class
 from refpo_warp.config.dotted import flatten
 from refpo_warp.config.resolve import Resolution, identity, resolve, run_config_set
-from refpo_warp.config.run_options import RUN_RULES
+from refpo_warp.config.run_options import RUN_RULES, run_defaults
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, DataFileError
@@ -61,9 +61,9 @@ def resolve_run(flat: dict[str, Any]) -> Resolution:
 def _resumed_run_dir(flat: dict[str, Any]) -> Path:
     """The default run dir of the task, algo and seed that ``flat`` asks for (each checked)."""
     configs = run_config_set(flat)
-    task, algo = identity(flat, configs.defaults)
+    task, algo = identity(flat)
     configs.identity(task, algo)
-    return default_run_dir(task, algo, RUN_RULES["seed"].check("seed", flat.get("seed", configs.defaults.data["seed"])))
+    return default_run_dir(task, algo, RUN_RULES["seed"].check("seed", flat.get("seed", run_defaults()["seed"])))
 
 
 def load_run(run_dir: Path, overrides: dict[str, Any]) -> Resolution:

@@ -4,7 +4,7 @@
 - ``actor``, ``critic``, ``algorithm``: against the constructor of the class their ``class_name`` selects and that
   class's rules;
 - ``env`` and ``eval.env``: against the task's env cfg dataclass and its rules; ``video`` against ``VideoOptions``;
-- every other key: against ``configs/default.yaml`` and the fields of ``refpo_warp/config/run_options.py``.
+- every other key: against the fields of ``refpo_warp/config/run_options.py``.
 
 An unknown key is an error that names the closest valid one; a refused value names the key and the valid range or
 choices.
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from refpo_warp.config.classes import CLASS_SECTIONS, check_class_kind, section_options
 from refpo_warp.config.dotted import LEAF_KEYS
-from refpo_warp.config.run_options import RUN_RULES
+from refpo_warp.config.run_options import NOT_RULED, RUN_RULES
 from refpo_warp.envs.registry import check_env_options
 from refpo_warp.envs.task_spec import TaskSpec
 from refpo_warp.utils.errors import ConfigError, unknown
@@ -58,7 +58,8 @@ def video_section(values: dict) -> dict:
 
 
 def run_options(cfg: dict, schema: dict, prefix: str = "") -> None:
-    """Check (and normalise in place) every key of ``cfg`` against ``schema`` (default.yaml) and its run rule."""
+    """Check (and normalise in place) every key of ``cfg`` against ``schema`` (the run options' defaults) and its run
+    rule."""
     for key, value in cfg.items():
         dotted = f"{prefix}{key}"
         if key not in schema:
@@ -66,7 +67,7 @@ def run_options(cfg: dict, schema: dict, prefix: str = "") -> None:
         if isinstance(schema[key], dict) and schema[key] and isinstance(value, dict) and key not in LEAF_KEYS:
             run_options(value, schema[key], dotted + ".")
         elif isinstance(schema[key], dict) and not isinstance(value, dict) and key not in LEAF_KEYS:
-            raise ConfigError(f"'{dotted}' is a section; set its keys ({dotted}.<key>=...), not {dotted}={value!r}")
+            raise section_error(dotted, value)
         elif dotted in RUN_RULES:
             cfg[key] = RUN_RULES[dotted].check(dotted, value)
 
@@ -80,9 +81,18 @@ def _schema_keys(schema: dict, prefix: str = "") -> list[str]:
     return keys
 
 
+def section_error(key: str, value: object) -> ConfigError:
+    return ConfigError(f"'{key}' is a section; set its keys ({key}.<key>=...), not {key}={value!r}")
+
+
 def validate(cfg: dict, defaults: dict, task: TaskSpec) -> dict:
-    """The merged config with every section validated (see the module docstring); ``defaults`` is default.yaml,
-    ``task`` the spec of ``cfg["task"]``."""
+    """The merged config with every section validated (see the module docstring); ``defaults`` is the run options'
+    (``run_defaults``), ``task`` the spec of ``cfg["task"]``."""
+    for key in NOT_RULED:  # the sections other classes check: each a mapping
+        section, _, name = key.rpartition(".")
+        node = cfg.get(section) if section else cfg
+        if isinstance(node, dict) and node.get(name) is not None and not isinstance(node[name], dict):
+            raise section_error(key, node[name])
     for section in CLASS_SECTIONS:
         cfg[section] = class_section(section, cfg.get(section) or {})
     cfg["env"] = env_section(task, cfg.get("env") or {})

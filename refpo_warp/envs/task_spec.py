@@ -31,7 +31,7 @@ class TaskSpec:
     """Env cfg fields this id fixes (e.g. the DMC suite task)."""
     description: str = ""
     config_file: str | Path | None = None
-    """Its training config (YAML layers over ``configs/default.yaml``); None: ``configs/task/<task_id>.yaml``."""
+    """Its training config (a YAML layer over the run options' defaults); None: ``configs/task/<task_id>.yaml``."""
 
     def __post_init__(self) -> None:
         what = f"env option of {self.cfg_class.__name__} (task '{self.task_id}')"

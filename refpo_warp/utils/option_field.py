@@ -1,6 +1,6 @@
 """``option(default, rule, doc)``: the field that declares an option (see ``refpo_warp/utils/options.py``, which reads
-the fields; it re-exports ``option``). Apart so that rsl_rl's table (``refpo_warp/utils/rsl_rl_options.py``) can
-declare fields without importing the reader."""
+the fields; it re-exports ``option``), and ``section(doc, options)``, a field that holds a section of options. Apart
+so that rsl_rl's table (``refpo_warp/utils/rsl_rl_options.py``) can declare fields without importing the reader."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ class _Unset:
         return "UNSET"
 
 
-UNSET: Any = _Unset()  # a field's default is elsewhere: the constructor's (rsl_rl) or configs/default.yaml's
+UNSET: Any = _Unset()  # a field's default is elsewhere: the constructor's (rsl_rl's classes)
 MARK = "refpo_option"  # in a field's metadata: the field is an option
 T = TypeVar("T")
 
@@ -38,6 +38,16 @@ def option(default: Any = UNSET, rule: Rule | None = None, doc: str = "") -> Any
     if isinstance(default, (list, dict, set)):
         return dataclasses.field(default_factory=lambda: type(default)(default), metadata=metadata)
     return dataclasses.field(default=default, metadata=metadata)
+
+
+SECTION = "refpo_section"  # in a field's metadata: the field is a section; its value, the dataclass of its options
+
+
+def section(doc: str, options: type | None = None) -> Any:
+    """A section of a config (a mapping of options) at its place among an options dataclass's fields: the options of
+    the dataclass ``options``, or (None) those of another class, which declares and checks them (the run options'
+    ``env``: the task's env cfg)."""
+    return dataclasses.field(default_factory=dict, metadata={SECTION: options, "doc": doc})
 
 
 def choices(enum: type[Enum]) -> tuple[str, ...]:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from refpo_warp.utils.option_field import SECTION
 from refpo_warp.utils.options import declared_options, option_fields
 
 
@@ -17,6 +18,8 @@ def shown_value(value: Any) -> str:
         return str(value).lower()
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(shown_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}: {shown_value(v)}" for k, v in value.items()) + "}"
     if isinstance(value, float):
         short = f"{value:g}"
         return short if "e" in short else repr(value)
@@ -24,10 +27,13 @@ def shown_value(value: Any) -> str:
 
 
 def option_cells(cls: type) -> list[list[str]]:
-    """(option, default, valid values, meaning) of each option ``cls`` declares itself (not its bases')."""
+    """(option, default, valid values, meaning) of each option ``cls`` declares itself (not its bases'; a section is
+    no option: it has a table of its own)."""
     declared = declared_options(cls)
     rows = []
-    for name in option_fields(cls):
+    for name, f in option_fields(cls).items():
+        if SECTION in f.metadata:
+            continue
         found = declared[name]
         rule = found.rule
         valid = ("null or " if rule.optional else "") + rule.describe() if rule is not None else "any value"

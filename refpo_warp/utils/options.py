@@ -17,8 +17,8 @@ Where the fields stand (``option_fields``): in the body of an algorithm class (t
 ``self.num_samples`` is a typed attribute), in an env cfg / option dataclass itself, or in a model's ``Options``
 dataclass (a model is a ``torch.nn.Module``, whose class attributes would shadow its buffers; its constructor holds a
 typed ``Options`` instance). rsl_rl's classes, which cannot be edited, have theirs in one table of the same fields
-(``refpo_warp/utils/rsl_rl_options.py``), read here. A field without a default of its own (``option(rule=...)``) takes
-the constructor's (rsl_rl) or ``configs/default.yaml``'s (run options).
+(``refpo_warp/utils/rsl_rl_options.py``), read here. A field without a default of its own (``option(rule=...)``, only
+in that table) takes the constructor's.
 
 The same field is read by the config resolver (``refpo_warp/config/validate.py``, which names the dotted key in its
 error), ``--explain`` (``refpo_warp/config/explain.py``), the docs' tables (``refpo_warp/config/option_docs.py``) and

@@ -61,12 +61,34 @@ def test_the_parts_add_up_to_the_whole(results):
             assert -1e-3 <= inner["other"] <= total
     ppo, refpo = results["results"]
     assert refpo["ratio_to_ppo"] == pytest.approx(refpo["env_steps_per_s"] / ppo["env_steps_per_s"])
-    assert results["command"].startswith("refpo bench train task=gridworld")
+    # the command recorded repeats the measurement: read back, it gives the same options and run options
+    from refpo_warp.benchmarks import train_throughput
+    from refpo_warp.cli.bench import parse_bench
+
+    command = results["command"].split()
+    assert command[:4] == ["refpo", "bench", "train", "task=gridworld"]
+    options, run_options = parse_bench("train", train_throughput, command[3:])
+    assert options == train_throughput.Options(algo=["ppo", "refpo"], iterations=ITERATIONS, warmup=1, out=options.out)
+    assert run_options == {
+        "task": "gridworld",
+        "device": "cpu",
+        "num_envs": ENVS,
+        "runner.num_steps_per_env": STEPS,
+        "algorithm.num_mini_batches": MINIBATCHES,
+        "algorithm.num_learning_epochs": EPOCHS,
+    }
     assert results["machine"]["cpu_count"] >= 1
 
 
 def test_a_bad_option_names_the_key_and_writes_nothing(tmp_path, capsys):
     out = tmp_path / "x.json"
+    # the benchmark's own options and the run options it passes on, through the one parser: an unknown key is refused
+    # naming the valid ones, a run option the benchmark sets itself (its temporary run dir) included
+    for key in ("iteration=3", "run_dir=x", "train.iterations=3"):
+        assert main(["bench", "train", "task=gridworld", key, f"out={out}"]) == 2
+        err = capsys.readouterr().err
+        assert "Unknown option of refpo bench train" in err and "iterations, max_iterations" in err, err
+        assert "algorithm.<option>" in err and "Traceback" not in err and not out.exists()
     assert main(["bench", "train", "task=gridworld", "iterations=0", f"out={out}"]) == 2
     assert "iterations" in capsys.readouterr().err and not out.exists()
     assert main(["bench", "train", "task=gridworld", "algo=[ppo,refpoo]", f"out={out}"]) == 2

@@ -100,6 +100,7 @@ def test_every_renamed_spelling_is_refused_by_its_command():
         (["bench", "latency", "--help"], ["tasks=[dmc_cheetah_run]", "flow_steps=[10, 1]", "batch_sizes="]),
         (["bench", "algorithms", "--help"], ["num_mini_batches=8", "num_learning_epochs=2", "num_steps_per_env=60"]),
         (["bench", "render", "--help"], ["timed_frames=60", "video_seconds=10.0"]),
+        (["bench", "train", "--help"], ["algo=[ppo, refpo]", "iterations=3", "[run option=VALUE ...]", "num_envs="]),
         (["report", "--help"], ["curve_methods=null", "ratio_seed=null", "--explain"]),
         (["plot", "--help"], ["run_dirs=null", "out=null"]),
         (["play", "--help"], ["agent=null", "device=auto", "out=runs/videos"]),
@@ -122,6 +123,9 @@ def test_explain_says_where_each_option_comes_from(capsys):
     assert "repeats = 50\n  set by  the default (its field in refpo_warp.benchmarks.latency)" in out
     assert main(["report", "runs/x", "--explain", "ratio_seed", "ratio_seed=3"]) == 0
     assert "ratio_seed = 3\n  set by  the command line" in capsys.readouterr().out
+    assert main(["bench", "train", "--explain", "warmup", "task=gridworld", "warmup=0", "algorithm.lam=0.9"]) == 0
+    out = capsys.readouterr().out
+    assert "warmup = 0\n  set by  the command line" in out and "passed on: task=gridworld algorithm.lam=0.9" in out
     assert main(["collect", "--explain", "device", "episodes=1", "out=x"]) == 0
     assert "device = auto" in capsys.readouterr().out
     assert main(["sweep", "cpu_dmc", "--explain", "seeds", "seeds=[21,22]", "methods=ppo"]) == 0

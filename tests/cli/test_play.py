@@ -93,6 +93,10 @@ def test_bad_options_and_a_missing_gl_platform_get_one_message_and_an_exit_code(
         (("agent=zero", "flow_steps=[1]"), "'flow_steps=' is spelled 'video.flow_steps='"),
         (("agent=zero", "action_transform=tanh"), "'action_transform=' is spelled 'env.action_transform='"),
         (("agent=zero", "initial_noise=zero"), "'initial_noise=' is spelled 'eval.initial_noise='"),
+        (("agent=zero", "fps=30"), "'fps=' is spelled 'video.fps='"),
+        # the video options that say when a training run records, bare or not: refpo play's own refusal
+        (("agent=zero", "at_end=true"), "'at_end=': video.at_end says when a training run records"),
+        (("agent=zero", "video.interval=3"), "'video.interval=': video.interval says when a training run records"),
     ]
     for options, message in bad:
         code = main(["play", "task=dmc_cartpole_balance", *options, f"out={tmp_path}"])
@@ -103,3 +107,23 @@ def test_bad_options_and_a_missing_gl_platform_get_one_message_and_an_exit_code(
     assert proc.returncode == 5 and "no OpenGL platform" in proc.stderr and "MUJOCO_GL=egl needs" in proc.stderr
     assert "Traceback" not in proc.stderr
     assert not list(tmp_path.glob("*.mp4"))
+
+
+def test_a_runs_video_keys_are_refused_by_play_before_the_run_is_read(tmp_path, capsys):
+    """The same refusals for a trained run's video (checked before its run dir is read: this one does not exist) and
+    under --explain, instead of passing a bare key on as a run option."""
+    missing = f"run_dir={tmp_path / 'none'}"
+    for argv, message in [
+        ((missing, "at_end=true"), "'at_end=': video.at_end says when a training run records"),
+        ((missing, "interval=5"), "'interval=': video.interval says when a training run records"),
+        ((missing, "video.at_end=true"), "'video.at_end=': video.at_end says when a training run records"),
+        ((missing, "fps=30"), "'fps=' is spelled 'video.fps='"),
+        (("--explain", missing, "fps=30"), "'fps=' is spelled 'video.fps='"),
+        (("--explain", "task=gridworld", "agent=zero", "at_end=true"), "video.at_end says when a training run"),
+    ]:
+        assert main(["play", *argv]) == 2
+        err = capsys.readouterr().err
+        assert message in err, (argv, err)
+        assert "Traceback" not in err and "no such run directory" not in err, (argv, err)
+    assert main(["play", "--explain", "device", missing, "video.fps=30"]) == 0  # the right spelling passes on
+    assert "passed on: video.fps=30" in capsys.readouterr().out

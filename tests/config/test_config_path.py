@@ -5,6 +5,7 @@ import pytest
 
 from refpo_warp.cli.main import main
 from refpo_warp.config.config_path import ENV_VAR, config_path
+from refpo_warp.config.layers import RUN_DEFAULTS
 from refpo_warp.config.resolve import resolve
 from refpo_warp.sweeps.spec import load_sweep
 from refpo_warp.utils.errors import ConfigError
@@ -31,7 +32,7 @@ def test_a_user_task_and_algo_resolve_over_the_shipped_layers(user_configs):
     assert cfg["algorithm"]["reflow_coef"] == 0.3 and cfg["algorithm"]["num_mc_samples"] == 50  # its base's by_algo
     assert cfg["config_dir"] == str(user_configs)  # absolute: the run's evaluation finds it from anywhere
     sources = [layer.source for layer in res.layers]
-    assert sources[:2] == ["configs/default.yaml", "configs/task/gridworld.yaml"]
+    assert sources[:3] == [RUN_DEFAULTS, "configs/default.yaml", "configs/task/gridworld.yaml"]
     assert str(user_configs / "task" / "grid_small.yaml") in sources
     assert f"{user_configs / 'task' / 'grid_small.yaml'} by_algo.refpo" not in sources  # the variant sets none
     assert str(user_configs / "algo" / "my_refpo.yaml") in sources

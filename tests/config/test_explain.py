@@ -8,7 +8,7 @@ import pytest
 from constructor_config import effective_config  # tests/ is on sys.path under pytest
 
 from refpo_warp.config.explain import explain
-from refpo_warp.config.layers import PROFILE_KEYS
+from refpo_warp.config.layers import PROFILE_KEYS, RUN_DEFAULTS
 from refpo_warp.config.resolve import resolve, resolve_config
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import REPO_ROOT
@@ -17,6 +17,7 @@ from refpo_warp.utils.paths import REPO_ROOT
 def test_layers_go_generic_to_specific_and_fpo_is_refpo_with_reflow_off():
     res = resolve(["task=gridworld", "algo=fpo", "seed=3"], device_type="cpu")
     assert [layer.source for layer in res.layers] == [
+        RUN_DEFAULTS,
         "configs/default.yaml",
         "configs/task/gridworld.yaml",
         "configs/algo/refpo.yaml",
@@ -28,7 +29,7 @@ def test_layers_go_generic_to_specific_and_fpo_is_refpo_with_reflow_off():
         ("configs/task/gridworld.yaml by_algo.refpo", 0.1),
         ("configs/algo/fpo.yaml", 0.0),
     ]
-    assert res.sources["seed"] == [("configs/default.yaml", 1), ("command line", 3)]
+    assert res.sources["seed"] == [(RUN_DEFAULTS, 1), ("command line", 3)]
     refpo = resolve_config(["task=gridworld", "algo=refpo"], device_type="cpu")
     assert {k: v for k, v in res.cfg["algorithm"].items() if k != "reflow_coef"} == {
         k: v for k, v in refpo["algorithm"].items() if k != "reflow_coef"
@@ -152,5 +153,8 @@ def test_the_cli_explains_without_writing_anything(tmp_path):
         check=False,
     )
     assert proc.returncode == 0, proc.stderr
-    assert "num_envs = 16\n  set by  configs/task/gridworld.yaml\n  over    64 from configs/default.yaml" in proc.stdout
+    assert (
+        "num_envs = 16\n  set by  configs/task/gridworld.yaml\n  over    64 from the run options' defaults "
+        "(refpo_warp/config/run_options.py)\n  means   parallel envs"
+    ) in proc.stdout
     assert not run_dir.exists()

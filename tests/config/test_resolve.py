@@ -19,7 +19,7 @@ def test_layers_task_over_algo_over_default():
     assert cfg["algorithm"]["reflow_coef"] == 0.1  # task by_algo.refpo over algo/refpo.yaml's 0.04
     assert cfg["algorithm"]["num_mc_samples"] == 50
     assert cfg["actor"]["class_name"] == "refpo_warp.models:FlowActor"  # algo file
-    assert cfg["eval"]["at_end"] is True  # default.yaml
+    assert cfg["eval"]["at_end"] is True  # its field's default (refpo_warp/config/run_options.py)
     fpo = resolve_config(["task=gridworld", "algo=fpo"], device_type="cpu")
     assert fpo["algorithm"]["reflow_coef"] == 0.0
     assert {k: v for k, v in fpo["algorithm"].items() if k != "reflow_coef"} == {

@@ -206,7 +206,9 @@ def test_an_algo_file_derived_from_refpo_takes_every_tasks_refpo_settings(tmp_pa
     )
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout
-    assert f"  5. {configs / 'algo' / 'capped_reflow.yaml'}\n" in out
+    assert (
+        f"  6. {configs / 'algo' / 'capped_reflow.yaml'}\n" in out
+    )  # after the run options' defaults and default.yaml
     assert f"algorithm.reflow_cap = 1.0\n  set by  the default of {__name__}.CappedReflowReFPO" in out
     assert "  means   the cap on each action's CFM loss" in out
     assert "algorithm.reflow_coef = 0.1\n  set by  configs/task/gridworld.yaml by_algo.refpo" in out

@@ -8,10 +8,11 @@ import yaml
 
 from refpo_warp.config.classes import POSITIONAL, class_defaults, resolve_class
 from refpo_warp.config.resolve import resolve_config
-from refpo_warp.config.run_options import NOT_RULED, RUN_RULES
+from refpo_warp.config.run_options import NOT_RULED, RUN_RULES, SECTIONS
 from refpo_warp.config.saved import fixed_changes
 from refpo_warp.envs.registry import get_task, list_tasks
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.option_field import SECTION, UNSET
 from refpo_warp.utils.option_rules import Check, Flag, Int, ListOf, OneOf, Real
 from refpo_warp.utils.options import rules_for
 from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR as CONFIG_DIR
@@ -63,19 +64,31 @@ def test_every_env_option_has_a_rule(task):
     )
 
 
-def test_every_run_option_has_a_rule():
-    def keys(node, prefix=""):
-        for key, value in node.items():
-            dotted = prefix + key
-            if dotted in NOT_RULED:
-                continue
-            if isinstance(value, dict) and value and dotted != "runner.obs_groups":
-                yield from keys(value, dotted + ".")
-            else:
-                yield dotted
+def test_every_run_option_has_a_rule_and_its_default_in_its_field():
+    """Each field of the run options is a ruled option or a section; default.yaml sets none of them (one default, in
+    the field), only the networks' shared settings."""
+    for prefix, options in SECTIONS.items():
+        for f in dataclasses.fields(options):
+            if SECTION not in f.metadata:
+                assert f"{prefix}{f.name}" in RUN_RULES, f"{prefix}{f.name} has no rule"
+                assert f.default is not UNSET, f"{prefix}{f.name} has no default of its own"
+    assert set(NOT_RULED) == {"env", "actor", "critic", "algorithm", "video", "eval.env"}
+    default_yaml = yaml.safe_load((CONFIG_DIR / "default.yaml").read_text())
+    assert set(default_yaml) <= {"actor", "critic", "algorithm"}, "a run option's default belongs in its field"
 
-    missing = sorted(set(keys(yaml.safe_load((CONFIG_DIR / "default.yaml").read_text()))) - set(RUN_RULES))
-    assert not missing, f"configs/default.yaml keys without a rule in refpo_warp/config/run_options.py: {missing}"
+
+def test_a_saved_config_lists_the_run_options_in_their_fields_order():
+    """config.yaml's keys in the order the fields stand, the sections of other classes' options among them (sweeps
+    compare saved files byte for byte)."""
+    cfg = resolve_config(["task=dmc_cheetah_run", "algo=ppo"], device_type="cpu")
+    assert list(cfg) == [
+        "task", "algo", "seed", "device", "num_envs", "total_env_steps", "max_iterations", "run_dir", "resume",
+        "stop_after_iterations", "stop_after_minutes", "verbose", "notice", "env", "init_from",
+        "critic_warmup_iterations", "clone_normalizer", "config_dir", "runner", "actor", "critic", "algorithm",
+        "video", "pretrain", "eval",
+    ]  # fmt: skip
+    assert list(cfg["eval"])[:5] == ["at_end", "flow_steps", "num_envs", "env", "max_steps"]
+    assert list(cfg["critic"])[:2] == ["class_name", "obs_normalization"]  # default.yaml's order
 
 
 @pytest.mark.parametrize(
