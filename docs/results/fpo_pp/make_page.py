@@ -405,6 +405,11 @@ def poi_rows(pairs, ms, data, settings=("multi", "headline")) -> tuple[list[str]
             if all(p is None for p in ps.values()):
                 continue
             where = short(task) if task else "the three tasks"
+            if task is not None and min(len(data[x][settings[0]][task]), len(data[y][settings[0]][task])) < 2:
+                # one seed's bootstrap is that seed: its interval is a point, whatever the runs are
+                cells = " | ".join("--" for _ in settings)
+                rows.append(f"| {where} | {label[0]} over {label[1]} | {cells} | one seed on a side: not compared |")
+                continue
             cells = []
             for s in settings:
                 p = ps[s]
@@ -523,9 +528,8 @@ def what_ran() -> tuple[str, str]:
         where = "the three tasks" if len(tasks) == len(TASKS) else ", ".join(short(t) for t in tasks)
         failed = sum(r["status"] == "failed" for r in mine)
         parts.append(
-            f"`{m['label']}` on {where}, seeds {seeds_text(seeds)} ({len(mine)} runs"
-            + (f", {failed} failed" if failed else "")
-            + ")"
+            f"`{m['label']}` on {where}, seed{'s' if len(seeds) > 1 else ''} {seeds_text(seeds)} "
+            f"({len(mine)} run{'s' if len(mine) > 1 else ''}" + (f", {failed} failed" if failed else "") + ")"
         )
     missing = [f"`{m['label']}`" for m in spec["methods"] if not any(r["label"] == m["label"] for r in rows)]
     return "; ".join(parts), (", ".join(missing) if missing else "none")
