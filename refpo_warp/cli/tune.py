@@ -6,7 +6,7 @@ import signal
 
 from refpo_warp.cli.guard import EXIT_INTERRUPTED
 from refpo_warp.config.command_options import EXPLAIN, explain_options, options_help
-from refpo_warp.sweeps.tune_spec import TuneOptions
+from refpo_warp.studies.tuning.spec import TuneOptions
 from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
 
@@ -53,8 +53,8 @@ def run(args: Arguments) -> int | None:
         raise ConfigError(
             "refpo tune needs a tuning: a name (configs/tune/<name>.yaml) or a YAML file; see refpo tune --help"
         )
-    from refpo_warp.sweeps.tune import Tuner
-    from refpo_warp.sweeps.tune_spec import load_tuning
+    from refpo_warp.studies.tuning.spec import load_tuning
+    from refpo_warp.studies.tuning.study import Tuner
 
     tuner = Tuner(load_tuning(args.subjects[0], args.options), jobs=args.flag("--jobs"))
     signal.signal(signal.SIGTERM, signal.default_int_handler)  # stop the runs cleanly on SIGTERM too

@@ -27,11 +27,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from refpo_warp.sweeps.launch import hostname, start_training, stop_training, train_command, train_env
-from refpo_warp.sweeps.spec import Run, fingerprint
-from refpo_warp.sweeps.state import LOG_FILE, run_state
-from refpo_warp.sweeps.tables import run_metrics
-from refpo_warp.sweeps.tune_spec import CONFIG_VALUES, Dimension, TunedMethod, Tuning
+from refpo_warp.studies.grid.launch import hostname, start_training, stop_training, train_command, train_env
+from refpo_warp.studies.grid.run_metrics import run_metrics
+from refpo_warp.studies.grid.spec import Run, fingerprint
+from refpo_warp.studies.grid.state import LOG_FILE, run_state
+from refpo_warp.studies.tuning.spec import CONFIG_VALUES, Dimension, TunedMethod, Tuning
 from refpo_warp.utils.atomic_files import write_text
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.rng import stream_seed
@@ -65,7 +65,7 @@ def run_config(tuning: Tuning, run: Run) -> dict:
     """A trial run's config, resolved as its ``refpo train`` process will."""
     from refpo_warp.config.dotted import parse_overrides
     from refpo_warp.config.resolve import resolve_config
-    from refpo_warp.sweeps.spec import device_type
+    from refpo_warp.studies.grid.spec import device_type
 
     return resolve_config(
         parse_overrides([*run.args, f"device={tuning.device}"]), device_type=device_type(tuning.device)
@@ -359,7 +359,7 @@ class Tuner:
                     + ", ".join(f"{d.key} {d.describe()}" for d in method.space)
                 )
             return True
-        from refpo_warp.sweeps.run import SweepLock
+        from refpo_warp.studies.grid.lock import SweepLock
 
         lock = SweepLock(t.out_dir)  # one tuner per folder: another one's running trials are not cut off
         try:

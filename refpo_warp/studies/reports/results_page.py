@@ -12,7 +12,7 @@ A template begins with its header, a YAML comment::
     -->
 
 ``README.template.md`` writes ``README.md`` (the template's name less ``.template``). Every page at once:
-``python -m refpo_warp.sweeps.results_page [--check]`` (the pages under docs/results/).
+``python -m refpo_warp.studies.reports.results_page [--check]`` (the pages under docs/results/).
 """
 
 from __future__ import annotations

@@ -9,10 +9,11 @@ import json
 import optuna
 import pytest
 import yaml
-from tiny_runs import TINY  # tests/sweeps/tiny_runs.py
+from tiny_runs import TINY  # tests/studies/tiny_runs.py
 
-from refpo_warp.sweeps.spec import load_sweep
-from refpo_warp.sweeps.tune import (
+from refpo_warp.studies.grid.spec import load_sweep
+from refpo_warp.studies.tuning.spec import Objective, load_tuning
+from refpo_warp.studies.tuning.study import (
     CHOSEN_FILE,
     EVALUATION_FILE,
     JOURNAL_FILE,
@@ -22,7 +23,6 @@ from refpo_warp.sweeps.tune import (
     evaluation_sweep,
     periodic_returns,
 )
-from refpo_warp.sweeps.tune_spec import Objective, load_tuning
 from refpo_warp.utils.errors import ConfigError
 
 LR = {"algorithm.learning_rate": {"low": 1.0e-4, "high": 3.0e-3, "log": True}}

@@ -21,11 +21,11 @@ import ray
 import yaml
 
 from refpo_warp.config.dotted import parse_overrides
-from refpo_warp.sweeps import ray_backend
-from refpo_warp.sweeps.launch import STOP_GRACE_S
-from refpo_warp.sweeps.ray_backend import RayOptions
-from refpo_warp.sweeps.run import run_sweep
-from refpo_warp.sweeps.spec import load_sweep
+from refpo_warp.studies.grid.launch import STOP_GRACE_S
+from refpo_warp.studies.grid.spec import load_sweep
+from refpo_warp.studies.ray import backend as ray_backend
+from refpo_warp.studies.ray.backend import RayOptions
+from refpo_warp.studies.sweep import run_sweep
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import REPO_ROOT
 
@@ -179,7 +179,7 @@ def test_ray_options_are_checked_and_ray_is_imported_only_when_asked_for(tmp_pat
     script = f"""
 import sys
 sys.modules["ray"] = None  # as if Ray were not installed: `import ray` raises ImportError
-import refpo_warp.sweeps.ray_node  # what a Ray worker imports to run a task: no torch (seconds per fresh worker)
+import refpo_warp.studies.ray.node  # what a Ray worker imports to run a task: no torch (seconds per fresh worker)
 print("TORCH", "torch" in sys.modules)
 from refpo_warp.cli.main import main
 local = main(["sweep", {str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "--dry-run"])
