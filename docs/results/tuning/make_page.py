@@ -206,7 +206,7 @@ def chosen() -> dict:
 def profile_values() -> dict[str, dict]:
     """Each method's values of its searched options at the CPU profile as the configs resolve them today."""
     from refpo_warp.studies.tuning.spec import load_tuning
-    from refpo_warp.studies.tuning.study import config_values
+    from refpo_warp.studies.tuning.values import config_values
 
     tuning = load_tuning(str(TUNING_FILE))
     return {m.label: config_values(tuning, m) for m in tuning.methods}

@@ -108,6 +108,7 @@ class SweepExecutor:
         self.sweep, self.launcher, self.retries, self.echo = sweep, launcher, retries, echo
         self.origin, self.tag = origin or f"sweep {sweep.name}", tag
         self.jobs = max(1, launcher.jobs)
+        sweep.out_dir.mkdir(parents=True, exist_ok=True)  # a Ray task makes its run dir only once it starts
         status_path = sweep.out_dir / STATUS_FILE
         self.status: dict[str, dict] = json.loads(status_path.read_text()) if status_path.exists() else {}
         self.durations: dict[str, float] = {}
