@@ -33,19 +33,20 @@ def main(argv: list[str]) -> int:
     counts = Counter(m.split(".")[1] for m in graph if layer_of(m))
     shown: dict[str, str] = {}
     layers = list(LAYERS)
-    fig, ax = plt.subplots(figsize=(11, 5.6))
+    width = 14.6  # the bands: the app layer's folders in one line
+    fig, ax = plt.subplots(figsize=(15.5, 5.6))
     height, gap = 0.8, 0.45
     y = {layer: (len(layers) - 1 - i) * (height + gap) for i, layer in enumerate(layers)}
     for layer in layers:
-        ax.add_patch(plt.Rectangle((0, y[layer]), 11.6, height, facecolor="#e8eef7", edgecolor="#345"))
+        ax.add_patch(plt.Rectangle((0, y[layer]), width, height, facecolor="#e8eef7", edgecolor="#345"))
         ax.text(0.12, y[layer] + height / 2, layer, fontsize=13, weight="bold", va="center")
         text = "   ".join(f"{shown.get(f, f + '/')} {counts[f]}" for f in LAYERS[layer])
         ax.text(1.3, y[layer] + height / 2, text, fontsize=9.5, va="center", family="monospace")
     for k, ((a, b), count) in enumerate(sorted(edges.items(), key=lambda e: (layers.index(e[0][0]), e[0][1]))):
-        x = 11.9 + 0.42 * k
+        x = width + 0.3 + 0.42 * k
         ax.annotate("", xy=(x, y[b] + height), xytext=(x, y[a]), arrowprops={"arrowstyle": "->", "color": "#345"})
         ax.text(x + 0.04, (y[a] + y[b] + height) / 2, str(count), fontsize=7.5, rotation=90, va="center")
-    ax.set_xlim(-0.1, 12.0 + 0.42 * len(edges))
+    ax.set_xlim(-0.1, width + 0.4 + 0.42 * len(edges))
     ax.set_ylim(-0.2, y[layers[0]] + height + 0.2)
     ax.axis("off")
     upward = len(upward_imports(graph))

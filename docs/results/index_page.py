@@ -4,12 +4,13 @@
     python docs/results/index_page.py [--check]
 
 - the named sweeps' table: every ``configs/sweep/*.yaml`` expanded as ``refpo sweep --dry-run`` expands it
-  (``refpo_warp.sweeps.spec.load_sweep``), each (task, method)'s env steps resolved as ``refpo train`` resolves them;
+  (``refpo_warp.studies.grid.spec.load_sweep``), each (task, method)'s env steps resolved as ``refpo train`` resolves
+  them;
 - the sweep's constants the page names (Ray's retries of a lost task, the stop's grace) from their modules;
 - the CPU-scale reproduction from ``cpu_dmc/runs.csv`` (one row per run): per task and method the mean over the seeds
-  the file holds with its 95 % stratified-bootstrap interval (``refpo_warp/sweeps/intervals.py``), the diagnostics'
-  means, the Appendix C means, and which of the paper's directions hold, counted over the (task, seed) pairs, in words
-  chosen here from the numbers.
+  the file holds with its 95 % stratified-bootstrap interval (``refpo_warp/studies/reports/intervals.py``), the
+  diagnostics' means, the Appendix C means, and which of the paper's directions hold, counted over the (task, seed)
+  pairs, in words chosen here from the numbers.
 
 The helpers for seeds, intervals and runs.csv rows are ``docs/results/measured.py``'s (imported from beside this
 file).
@@ -35,7 +36,7 @@ from measured import (  # noqa: E402  (docs/results/measured.py)
     steps_text,
 )
 
-from refpo_warp.sweeps.results_page import main_args, write_page  # noqa: E402
+from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
 
 TEMPLATE = HERE / "README.template.md"
 CPU_DMC = HERE / "cpu_dmc" / "runs.csv"
@@ -59,7 +60,7 @@ ONE_STEP_NEAR = 0.75  # "ReFPO's 1-step ≈ 10-step" for a run: its 1-step retur
 # ------------------------------------------------------------------------------------------------ sweeps
 def _steps(sweep) -> list[int]:
     from refpo_warp.config.resolve import resolve_config
-    from refpo_warp.sweeps.spec import device_type
+    from refpo_warp.studies.grid.spec import device_type
 
     dtype = device_type(sweep.device) if sweep.device != "auto" else "cpu"
     out = set()
@@ -74,7 +75,7 @@ def _steps(sweep) -> list[int]:
 
 
 def sweeps() -> tuple[str, dict]:
-    from refpo_warp.sweeps.spec import load_sweep
+    from refpo_warp.studies.grid.spec import load_sweep
 
     lines = [
         "| sweep | its description | methods (labels) | tasks | seeds | device | env steps a run | runs | results |",
@@ -129,7 +130,7 @@ def _pooled(runs: dict[str, dict[int, dict]], key: str):
     """The method's (seeds x tasks) scores pooled: the mean with its stratified-bootstrap interval (rliable)."""
     import numpy as np
 
-    from refpo_warp.sweeps.intervals import aggregate
+    from refpo_warp.studies.reports.intervals import aggregate
 
     tasks = sorted(runs)
     n = min(len(runs[t]) for t in tasks)
@@ -342,8 +343,8 @@ def directions(data) -> tuple[str, str, str]:
 
 # ------------------------------------------------------------------------------------------------ the page
 def values() -> dict[str, object]:
-    from refpo_warp.sweeps.launch import STOP_GRACE_S
-    from refpo_warp.sweeps.ray_backend import SYSTEM_RETRIES
+    from refpo_warp.studies.grid.launch import STOP_GRACE_S
+    from refpo_warp.studies.ray.backend import SYSTEM_RETRIES
 
     table, paper = sweeps()
     data = cpu_runs()

@@ -31,7 +31,7 @@ from measure import RECORDS, RESULTS, current, read_records  # noqa: E402
 from measured import profile, seeds_text, steps_text  # noqa: E402  (docs/results/measured.py)
 from table import LEARNING_RUNS, NULL_RUNS, fmt, table_markdown  # noqa: E402
 
-from refpo_warp.sweeps.results_page import main_args, write_page  # noqa: E402
+from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
 
 TEMPLATE = HERE / "learning_checks.template.md"
 LOG_LINE = re.compile(r"^\[learning check\] (\S+): (.*?); bounds")

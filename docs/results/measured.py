@@ -14,8 +14,8 @@ Rewrites each block of README.md between ``<!-- measured: NAME ... -->`` and ``<
 - ``table``: what the methods learn at the shipped CPU profiles, from
   ``learning_checks/records/gridworld_refpo.jsonl`` (ReFPO on GridWorld), the per-run rows (``runs.csv``) of the DMC
   sweeps listed in ``SWEEPS`` (each cell the mean over the seeds the file holds with its 95 % stratified-bootstrap
-  interval, ``refpo_warp/sweeps/intervals.py``; a failed run counts as return 0, as the tuning page counts it) and
-  the fine-tuning runs.
+  interval, ``refpo_warp/studies/reports/intervals.py``; a failed run counts as return 0, as the tuning page counts
+  it) and the fine-tuning runs.
 
 Nothing in a block is typed in by hand: every number is read from the file the block names, and where a verdict
 depends on the data the words are chosen here from the numbers. ``--check`` writes nothing and exits 1 with the
@@ -36,7 +36,7 @@ import re
 import sys
 from pathlib import Path
 
-from refpo_warp.sweeps.committed_runs import seeds_text
+from refpo_warp.studies.reports.committed_runs import seeds_text
 
 RESULTS = Path(__file__).resolve().parent
 ROOT = RESULTS.parents[1]
@@ -87,7 +87,7 @@ def number(text: str | None) -> float | None:
 def _interval(values: tuple[float, ...]):
     import numpy as np
 
-    from refpo_warp.sweeps.intervals import aggregate
+    from refpo_warp.studies.reports.intervals import aggregate
 
     return aggregate({"x": np.array([[v] for v in values])})["x"]["mean"]
 
@@ -355,7 +355,7 @@ def _matrix(runs: dict[str, dict[int, dict]], tasks: list[str]):
 def fresh_standing() -> dict | None:
     """Each tuned flow method against tuned PPO on the fresh seeds: the tasks where its interval reaches PPO's, and
     P(improvement) with its interval (``intervals.improvement``, as the tuning page computes it)."""
-    from refpo_warp.sweeps.intervals import improvement
+    from refpo_warp.studies.reports.intervals import improvement
 
     path = TUNING / "fresh" / "runs.csv"
     rows = read_csv(path)

@@ -5,7 +5,7 @@
 
 One row per entry: the results folder (linked to the page that gives its command), its runs (committed of those the
 command makes), the command, and whether its runs' ``config.yaml`` match what the command resolves to on today's code
-or, where not, the commit that added them and each key that differs (``refpo_warp/sweeps/provenance.py``).
+or, where not, the commit that added them and each key that differs (``refpo_warp/studies/reports/provenance.py``).
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from pathlib import Path
 
 import yaml
 
-from refpo_warp.sweeps.provenance import ABSENT, Checked, check_all
-from refpo_warp.sweeps.results_page import main_args, write_page
+from refpo_warp.studies.reports.provenance import ABSENT, Checked, check_all
+from refpo_warp.studies.reports.results_page import main_args, write_page
 
 HERE = Path(__file__).resolve().parent
 

@@ -51,7 +51,7 @@ def run(args: Arguments) -> None:
             f"got {' '.join(args.subjects + args.options) or 'nothing'}"
         )
     from refpo_warp.evaluation.curves import plot_runs
-    from refpo_warp.sweeps.figures import sweep_curves
+    from refpo_warp.studies.reports.figures import sweep_curves
 
     if sweep and not Path(sweep).is_dir():
         raise DataFileError(f"{sweep}: no such directory (a refpo sweep output dir, e.g. runs/sweeps/cpu_humanoid)")

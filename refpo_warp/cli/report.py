@@ -62,7 +62,7 @@ def run(args: Arguments) -> None:
     if not args.subjects:
         raise ConfigError("refpo report needs a sweep dir (written by refpo sweep); see refpo report --help")
     options = parsed[0]
-    from refpo_warp.sweeps.report import write_report
+    from refpo_warp.studies.reports.report import write_report
 
     written = write_report(
         args.subjects[0],

@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import signal
 
+from refpo_warp.cli.backend_flags import BACKEND_FLAGS, BACKEND_HELP, BACKEND_USAGE, backend_arguments
 from refpo_warp.cli.guard import EXIT_INTERRUPTED, EXIT_UNEXPECTED
 from refpo_warp.config.command_options import EXPLAIN, explain_options, options_help
-from refpo_warp.sweeps.spec import SweepOptions
+from refpo_warp.studies.grid.spec import SweepOptions
 from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
 
 SUMMARY = "a grid of tasks x methods x seeds, each run a training process (local or on a Ray cluster)"
-USAGE = f"""Run a sweep: refpo sweep <sweep name or file> [key=value ...] [--jobs N] [--dry-run] [--launcher CMD]
-                              [--backend local|ray] [--ray-address ADDR] [--gpus-per-run G] [--cpus-per-run C]
+USAGE = f"""Run a sweep: refpo sweep <sweep name or file> [key=value ...] [--jobs N] [--dry-run]
+      {BACKEND_USAGE}
 
 A grid of tasks x methods x seeds (x list-valued overrides), each run a separate `python -m refpo_warp train`
 process in <sweep dir>/<task>/<label>/seed<k> (default sweep dir: runs/sweeps/<name>). Every run's config is
@@ -36,26 +37,15 @@ Sweep-level options (key=value; lists as key=[a,b]):
 Any other key=value is a run option for every run (refpo train's keys, config_dir= included); a list expands the
 grid unless the option itself takes a list.
 Flags: --explain [KEYS] (the sweep-level options' values and where they come from), --jobs N runs at a time
-(default: the CPU cores; on CUDA one per GPU; more share the GPUs round-robin), --retries N (default 1),
---launcher "CMD" prefixes each training command, --dry-run.
-
---backend ray: every run is one Ray task, on the node and GPU Ray picks (pip install "refpo-warp[ray]"; every node
-needs the package installed and must share the sweep dir and the working directory: docs/results/README.md, "On a
-cluster"). --ray-address auto or HOST:PORT (default: RAY_ADDRESS, else a new local Ray); --gpus-per-run G (default 1
-on CUDA, 0 on CPU; 0.5 packs two runs on a GPU); --cpus-per-run C (default 1: a CPU run's torch threads); --jobs then
-defaults to the runs the cluster fits at once. A lost worker or node is re-run by Ray, not counted as one of the
-run's --retries. Exit code 1: some run failed (the summary names it and its log).
+(default: the CPU cores; on CUDA one per GPU; more share the GPUs round-robin), --dry-run.
+{BACKEND_HELP}
+Exit code 1: some run failed (the summary names it and its log).
 """
 FLAGS = (
     Flag("--jobs", int, "runs at a time"),
-    Flag("--retries", int, "retries of a failed run"),
-    Flag("--launcher", str, "a command that prefixes each training command"),
     Flag("--dry-run", doc="list the runs and their states, train nothing"),
     EXPLAIN,
-    Flag("--backend", str, "local or ray"),
-    Flag("--ray-address", str, "auto or HOST:PORT"),
-    Flag("--gpus-per-run", float, "GPUs per run on Ray"),
-    Flag("--cpus-per-run", float, "CPUs per run on Ray"),
+    *BACKEND_FLAGS,
 )
 SUBJECTS = 1
 
@@ -69,22 +59,15 @@ def run(args: Arguments) -> int | None:
         raise ConfigError(
             "refpo sweep needs a sweep: a name (configs/sweep/<name>.yaml) or a YAML file; see refpo sweep --help"
         )
-    from refpo_warp.sweeps.ray_backend import RayOptions
-    from refpo_warp.sweeps.run import run_sweep
-    from refpo_warp.sweeps.spec import load_sweep
+    from refpo_warp.studies.grid.spec import load_sweep
+    from refpo_warp.studies.sweep import run_sweep
 
-    ray = None
-    if any(f in args.flags for f in ("--ray-address", "--gpus-per-run", "--cpus-per-run")):  # refused without ray
-        ray = RayOptions(args.flag("--ray-address"), args.flag("--gpus-per-run"), args.flag("--cpus-per-run", 1.0))
     signal.signal(signal.SIGTERM, signal.default_int_handler)  # stop the runs cleanly on SIGTERM too
     summary = run_sweep(
         load_sweep(args.subjects[0], args.options),
         jobs=args.flag("--jobs"),
-        retries=args.flag("--retries", 1),
-        launcher=args.flag("--launcher", ""),
         dry_run=args.flag("--dry-run", False),
-        backend=args.flag("--backend", "local"),
-        ray=ray,
+        **backend_arguments(args),
     )
     if summary.interrupted:
         return EXIT_INTERRUPTED

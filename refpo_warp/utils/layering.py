@@ -17,7 +17,7 @@ PACKAGE = "refpo_warp"
 # refpo_warp/__main__.py (python -m refpo_warp) is the command line too.
 LAYERS = {
     "cli": ["cli", "__main__"],
-    "app": ["training", "evaluation", "demonstrations", "sweeps", "benchmarks", "integrations"],
+    "app": ["training", "evaluation", "demonstrations", "studies", "benchmarks", "integrations"],
     "run": ["config", "runner"],
     "core": ["algorithms", "models", "envs", "sim", "motion", "render", "tasks"],
     "base": ["utils"],

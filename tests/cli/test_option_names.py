@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from refpo_warp.cli.main import main
-from refpo_warp.sweeps.spec import fingerprint
+from refpo_warp.studies.grid.spec import fingerprint
 
 
 @pytest.mark.parametrize(

@@ -7,7 +7,7 @@ from refpo_warp.cli.main import main
 from refpo_warp.config.config_path import ENV_VAR, config_path
 from refpo_warp.config.layers import RUN_DEFAULTS
 from refpo_warp.config.resolve import resolve
-from refpo_warp.sweeps.spec import load_sweep
+from refpo_warp.studies.grid.spec import load_sweep
 from refpo_warp.utils.errors import ConfigError
 
 VARIANT = "base: gridworld\nnum_envs: 8\nenv: {max_episode_length: 50}\n"

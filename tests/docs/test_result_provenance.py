@@ -2,7 +2,7 @@
 config.yaml) is made by one command of ``docs/results/provenance.yaml``, and that command, resolved on today's code,
 gives the run's config, or the registry records the commit the run was made at and exactly how it differs. A profile
 that moves under a committed result fails here until its page is rerun or pins the old values
-(``refpo_warp/sweeps/provenance.py``)."""
+(``refpo_warp/studies/reports/provenance.py``)."""
 
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ import pytest
 import yaml
 
 from refpo_warp.config.resolve import resolve_config
-from refpo_warp.sweeps import provenance
-from refpo_warp.sweeps.provenance import ABSENT, RESULTS, Entry, check, config_difference
+from refpo_warp.studies.reports import provenance
+from refpo_warp.studies.reports.provenance import ABSENT, RESULTS, Entry, check, config_difference
 
 ENTRIES = provenance.read_registry()
 IDS = [f"{i:02d}:{e.folder}" for i, e in enumerate(ENTRIES)]

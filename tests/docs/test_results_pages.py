@@ -1,6 +1,6 @@
 """Every results page is what its script writes from the committed data files, and no page types a number by hand:
-each page under docs/results/ comes from a template (``refpo_warp/sweeps/results_page.py``) whose prose holds no
-digit outside its fields and the phrases it allows, and its script, run with ``--check``, finds the page on disk
+each page under docs/results/ comes from a template (``refpo_warp/studies/reports/results_page.py``) whose prose holds
+no digit outside its fields and the phrases it allows, and its script, run with ``--check``, finds the page on disk
 unchanged."""
 
 import subprocess
@@ -8,7 +8,14 @@ from pathlib import Path
 
 import pytest
 
-from refpo_warp.sweeps.results_page import SUFFIX, load_template, render, script_command, templates, typed_numbers
+from refpo_warp.studies.reports.results_page import (
+    SUFFIX,
+    load_template,
+    render,
+    script_command,
+    templates,
+    typed_numbers,
+)
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import REPO_ROOT
 

@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.sweeps.committed_runs import append_runs, seeds_text
-from refpo_warp.sweeps.intervals import aggregate, improvement
-from refpo_warp.sweeps.results_page import main_args, write_page
+from refpo_warp.studies.reports.committed_runs import append_runs, seeds_text
+from refpo_warp.studies.reports.intervals import aggregate, improvement
+from refpo_warp.studies.reports.results_page import main_args, write_page
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent

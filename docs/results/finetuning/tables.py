@@ -19,7 +19,7 @@ the sweeps of DMC_SOURCES under runs/sweeps) into dmc/, normalizers_updated/ and
 remedy tried against its collapse). ``--check`` writes nothing: it compares the page with what the files say.
 
 Intervals: the mean over seeds with rliable's 95 % stratified bootstrap interval, and rliable's probability of
-improvement (refpo_warp/sweeps/intervals.py).
+improvement (refpo_warp/studies/reports/intervals.py).
 """
 
 from __future__ import annotations
@@ -39,8 +39,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from refpo_warp.sweeps.committed_runs import seeds_text
-from refpo_warp.sweeps.intervals import Estimate, aggregate, improvement
+from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[2]
@@ -1222,7 +1222,7 @@ def page_values() -> dict:
 
 
 def main() -> None:
-    from refpo_warp.sweeps.results_page import main_args, write_page
+    from refpo_warp.studies.reports.results_page import main_args, write_page
 
     parser = main_args(__doc__)
     parser.formatter_class = argparse.RawDescriptionHelpFormatter

@@ -19,7 +19,7 @@ What it reads (every seed each file holds):
   values the CPU profile sets for fpo_pp), ``fpo_pp_reference.yaml`` (FPO++'s locomotion run sizes, with their
   places in FPO++'s code), ``../tuning/criteria.yaml`` (the N = 1 share the project tests) and ``gpu_h200/``.
 
-Intervals: rliable's stratified bootstrap (``refpo_warp/sweeps/intervals.py``: ``aggregate``'s mean and
+Intervals: rliable's stratified bootstrap (``refpo_warp/studies/reports/intervals.py``: ``aggregate``'s mean and
 ``improvement``).
 """
 
@@ -37,9 +37,9 @@ from pathlib import Path
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.sweeps.committed_runs import append_runs, seeds_text
-from refpo_warp.sweeps.intervals import Estimate, aggregate, improvement
-from refpo_warp.sweeps.results_page import main_args, write_page
+from refpo_warp.studies.reports.committed_runs import append_runs, seeds_text
+from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
+from refpo_warp.studies.reports.results_page import main_args, write_page
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent

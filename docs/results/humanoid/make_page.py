@@ -16,7 +16,7 @@ import re
 import sys
 from pathlib import Path
 
-from refpo_warp.sweeps.results_page import main_args, write_page
+from refpo_warp.studies.reports.results_page import main_args, write_page
 
 HERE = Path(__file__).resolve().parent
 DOC = HERE.parents[2] / "docs" / "humanoid.md"

@@ -296,7 +296,7 @@ def pct(k: int, n: int) -> str:
 
 
 def mean_return(returns: list[float]) -> str:
-    from refpo_warp.sweeps.intervals import aggregate
+    from refpo_warp.studies.reports.intervals import aggregate
 
     return aggregate({"r": np.array(returns, dtype=float)[:, None]})["r"]["mean"].text(0)
 
@@ -652,7 +652,7 @@ def values() -> dict:
 
 
 def main() -> None:
-    from refpo_warp.sweeps.results_page import main_args, write_page
+    from refpo_warp.studies.reports.results_page import main_args, write_page
 
     parser = main_args(__doc__.splitlines()[0])
     parser.add_argument("--measure", type=Path, metavar="RUNS_DIR", help="roll the clones of RUNS_DIR out first")

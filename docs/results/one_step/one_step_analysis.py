@@ -235,7 +235,7 @@ def one_sign(minibatches, sign: str):
 def screen(seeds: dict[str, dict[int, Path]], task: str, options: dict, out: Path) -> Path:
     """The ``screen=`` mode (module docstring): every seed of the "refpo" runs, ReFPO's own rule and every candidate
     of the sweep; writes ``<task>_screen.md`` and ``screen.json``, returns the Markdown file."""
-    from refpo_warp.sweeps.spec import load_sweep
+    from refpo_warp.studies.grid.spec import load_sweep
 
     runs = seeds.get("refpo")
     if not runs:
@@ -1194,7 +1194,7 @@ def page_values() -> dict:
 
 
 def write_readme(argv: list[str]) -> int:
-    from refpo_warp.sweeps.results_page import main_args, write_page
+    from refpo_warp.studies.reports.results_page import main_args, write_page
 
     parser = main_args("README.md of docs/results/one_step from its template and the committed data files")
     parser.add_argument("--page", action="store_true", help="write the page (the default when --check is not given)")

@@ -31,8 +31,8 @@ RESULTS = HERE.parent
 ROOT = RESULTS.parents[1]
 sys.path.insert(0, str(ROOT))  # refpo_warp, when run from anywhere
 
-from refpo_warp.sweeps.committed_runs import seeds_text  # noqa: E402
-from refpo_warp.sweeps.results_page import main_args, write_page  # noqa: E402
+from refpo_warp.studies.reports.committed_runs import seeds_text  # noqa: E402
+from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
 
 SEARCH_RUNS = HERE / "search" / "report" / "runs.csv"
 CPU_DMC_RUNS = RESULTS / "cpu_dmc" / "runs.csv"
@@ -114,7 +114,7 @@ def intervals(named: dict[str, list[float]]):
     """name -> the mean over the values with its 95 % stratified-bootstrap interval (rliable, one call for all)."""
     import numpy as np
 
-    from refpo_warp.sweeps.intervals import aggregate
+    from refpo_warp.studies.reports.intervals import aggregate
 
     estimates = aggregate({k: np.asarray(v, dtype=float).reshape(-1, 1) for k, v in named.items()})
     return {k: e["mean"] for k, e in estimates.items()}

@@ -11,7 +11,7 @@ import json
 import sys
 from pathlib import Path
 
-from refpo_warp.sweeps.results_page import main_args, write_page
+from refpo_warp.studies.reports.results_page import main_args, write_page
 
 HERE = Path(__file__).resolve().parent
 TASKS = ("dmc_point_mass", "dmc_cartpole_swingup")

@@ -7,8 +7,9 @@ the committed data files (nothing typed in by hand):
 ``--sync`` first copies a study's small files here (``study/``: the Optuna journal, trials.csv, chosen.yaml,
 evaluate.yaml, and each trial run's config.yaml, eval.json and periodic-evaluation rows); ``--sync-fresh`` the
 fresh-seed sweep's report (``fresh/runs.csv``, from ``refpo report``) and its runs' small files; ``--sync-budget``
-the budget sweep's runs' small files (``budget/``). Then it writes README.md (``refpo_warp/sweeps/results_page.py``)
-and ``budget_curves.png``; ``--check`` only compares the page with what the data says (exit 1 if it differs).
+the budget sweep's runs' small files (``budget/``). Then it writes README.md
+(``refpo_warp/studies/reports/results_page.py``) and ``budget_curves.png``; ``--check`` only compares the page with
+what the data says (exit 1 if it differs).
 
 What it reads: ``configs/tune/cpu_dmc.yaml`` (the search), ``study/`` (trials, chosen values, journal times, trial run
 configs), ``fresh/runs.csv`` and ``fresh/runs/`` (the chosen values on fresh seeds: every seed the file holds), the
@@ -33,7 +34,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from refpo_warp.sweeps.committed_runs import copy_run, seeds_text
+from refpo_warp.studies.reports.committed_runs import copy_run, seeds_text
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
@@ -204,8 +205,8 @@ def chosen() -> dict:
 
 def profile_values() -> dict[str, dict]:
     """Each method's values of its searched options at the CPU profile as the configs resolve them today."""
-    from refpo_warp.sweeps.tune import config_values
-    from refpo_warp.sweeps.tune_spec import load_tuning
+    from refpo_warp.studies.tuning.spec import load_tuning
+    from refpo_warp.studies.tuning.values import config_values
 
     tuning = load_tuning(str(TUNING_FILE))
     return {m.label: config_values(tuning, m) for m in tuning.methods}
@@ -411,7 +412,7 @@ class Fresh:
 
 
 def fresh_analysis() -> Fresh | None:
-    from refpo_warp.sweeps.intervals import aggregate, improvement
+    from refpo_warp.studies.reports.intervals import aggregate, improvement
 
     fresh_csv = FRESH / "runs.csv"
     if not fresh_csv.exists():
@@ -1105,7 +1106,7 @@ def page_values(check: bool) -> dict[str, object]:
 
 
 def main() -> int:
-    from refpo_warp.sweeps.results_page import main_args, write_page
+    from refpo_warp.studies.reports.results_page import main_args, write_page
 
     parser = main_args(__doc__.split("\n\n")[0])
     parser.add_argument("--sync", type=Path, help="a refpo tune out dir, e.g. runs/tune/cpu_dmc")

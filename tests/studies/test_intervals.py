@@ -4,7 +4,7 @@ with more runs, and the probability of improvement of separated and of identical
 import numpy as np
 import pytest
 
-from refpo_warp.sweeps.intervals import aggregate, improvement
+from refpo_warp.studies.reports.intervals import aggregate, improvement
 
 
 def test_point_estimates_by_hand_and_intervals_around_them():
@@ -50,7 +50,7 @@ def test_probability_of_improvement_is_rliables_exactly():
     """The NumPy statistic is rliable's (SciPy's Mann-Whitney U over n x m), float for float, ties included."""
     from rliable import metrics
 
-    from refpo_warp.sweeps.intervals import probability_of_improvement
+    from refpo_warp.studies.reports.intervals import probability_of_improvement
 
     rng = np.random.default_rng(0)
     for _ in range(200):

@@ -1,4 +1,4 @@
-"""What the Ray backend runs on a node (``ray_backend.py`` submits these as Ray tasks): one run's
+"""What the Ray backend runs on a node (``backend.py`` submits these as Ray tasks): one run's
 ``python -m refpo_warp train`` process (the package installed on the node), started exactly as the local backend
 starts it, on the GPU Ray assigned (the run sees it as ``cuda:0``); and the check that a node sees the sweep dir and
 the working directory at the paths the head sees.
@@ -15,14 +15,14 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from refpo_warp.sweeps.launch import hostname, start_training, stop_training, train_command, train_env
+from refpo_warp.studies.grid.launch import hostname, start_training, stop_training, train_command, train_env
 
 
 @dataclass(frozen=True)
 class TrainTask:
     """Everything a node needs to train one run; paths are the head's (a shared filesystem has them everywhere)."""
 
-    sweep: str
+    origin: str  # what heads the log: sweep <name>, or a tuning trial
     key: str
     attempt: int
     args: tuple[str, ...]
@@ -95,7 +95,7 @@ def train_run(task: TrainTask) -> dict:
     result["reruns"] = _earlier_executions(run_dir, task_id)
     cmd = train_command(task.args, "cuda:0" if task.cuda else "cpu", task.launcher)
     env = train_env(os.environ, None if task.cuda else task.threads)
-    header = f"sweep {task.sweep}, attempt {task.attempt} on {host} (Ray task {task_id})"
+    header = f"{task.origin}, attempt {task.attempt} on {host} (Ray task {task_id})"
     start = time.monotonic()
     proc = None
     try:

@@ -21,7 +21,9 @@ import yaml
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.runner.progress import read_rows
-from refpo_warp.sweeps.figures import (
+from refpo_warp.studies.grid.run_metrics import headline_setting, run_metrics
+from refpo_warp.studies.grid.spec import fingerprint
+from refpo_warp.studies.reports.figures import (
     CURVE_KEYS,
     latency_bars,
     ratio_key,
@@ -30,8 +32,7 @@ from refpo_warp.sweeps.figures import (
     seed_mean,
     series,
 )
-from refpo_warp.sweeps.spec import fingerprint
-from refpo_warp.sweeps.tables import (
+from refpo_warp.studies.reports.tables import (
     AGGREGATION,
     APPENDIX_C_METRICS,
     MAIN_METRICS,
@@ -41,10 +42,8 @@ from refpo_warp.sweeps.tables import (
     RunRecord,
     appendix_c_markdown,
     cliffs_markdown,
-    headline_setting,
     main_markdown,
     method_rows,
-    run_metrics,
     task_markdown,
     task_rows,
     to_csv,

@@ -12,7 +12,7 @@ A template begins with its header, a YAML comment::
     -->
 
 ``README.template.md`` writes ``README.md`` (the template's name less ``.template``). Every page at once:
-``python -m refpo_warp.sweeps.results_page [--check]`` (the pages under docs/results/).
+``python -m refpo_warp.studies.reports.results_page [--check]`` (the pages under docs/results/).
 """
 
 from __future__ import annotations
@@ -27,13 +27,13 @@ import yaml
 
 from refpo_warp.utils.atomic_files import write_text
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.paths import REPO_ROOT
 
 SUFFIX = ".template.md"
 FIELD = re.compile(r"\{\{\s*([A-Za-z_][A-Za-z0-9_]*)\s*\}\}")
 HEADER = re.compile(r"\A<!-- page\n(.*?)\n-->\n", re.DOTALL)
 # What the prose check leaves out: fenced blocks, code spans, link and image targets, HTML comments.
 NOT_PROSE = re.compile(r"```.*?```|`[^`\n]*`|\]\([^)\s]*\)|<!--.*?-->", re.DOTALL)
-REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
 @dataclass(frozen=True)

@@ -9,12 +9,12 @@ from pathlib import Path
 import pytest
 import torch
 import yaml
-from tiny_runs import TINY  # tests/sweeps/tiny_runs.py
+from tiny_runs import TINY  # tests/studies/tiny_runs.py
 
 from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.config.resolve import resolve_config
-from refpo_warp.sweeps.run import run_sweep
-from refpo_warp.sweeps.spec import cli_value, fingerprint, load_sweep, validate
+from refpo_warp.studies.grid.spec import cli_value, fingerprint, load_sweep, validate
+from refpo_warp.studies.sweep import run_sweep
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import REPO_ROOT
 

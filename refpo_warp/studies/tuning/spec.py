@@ -38,7 +38,7 @@ from typing import Any
 from refpo_warp.config.command_options import parse_options, read_section
 from refpo_warp.config.config_path import config_path
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.sweeps.spec import Method, Run, _flat_overrides, cli_value, device_type
+from refpo_warp.studies.grid.spec import Method, Run, _flat_overrides, cli_value, device_type
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.option_rules import DEVICE_RULE, Check, Int, ListOf, Real, Rule, Text, mapping_or_none
 from refpo_warp.utils.options import option

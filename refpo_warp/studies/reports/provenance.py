@@ -40,7 +40,7 @@ import yaml
 
 from refpo_warp.config.dotted import flatten, parse_overrides
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.sweeps.spec import computed_part, device_type
+from refpo_warp.studies.grid.spec import computed_part, device_type
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.paths import REPO_ROOT
 
@@ -229,7 +229,7 @@ def command_runs(entry: Entry) -> dict[str, Planned]:
     if not rest:
         raise ConfigError(f"{entry.folder}: 'refpo {kind}' needs the sweep or tuning it runs")
     if kind == "sweep":
-        from refpo_warp.sweeps.spec import load_sweep
+        from refpo_warp.studies.grid.spec import load_sweep
 
         sweep = load_sweep(_source(rest[0]), rest[1:])
         runs, device, out_dir = sweep.runs, sweep.device, sweep.out_dir
@@ -244,7 +244,7 @@ def command_runs(entry: Entry) -> dict[str, Planned]:
 
 def _trial_runs(entry: Entry, args: list[str]) -> tuple[list, str, Path]:
     """The runs of every trial in the study's ``trials.csv`` (the entry's ``trials``), at the trial's values."""
-    from refpo_warp.sweeps.tune_spec import load_tuning
+    from refpo_warp.studies.tuning.spec import load_tuning
 
     if not entry.trials:
         raise ConfigError(f"{entry.folder}: a 'refpo tune' entry names the study's trials.csv (trials: <file>)")

@@ -5,24 +5,20 @@ done."""
 
 import csv
 import json
+import sys
+from pathlib import Path
 
 import optuna
 import pytest
 import yaml
-from tiny_runs import TINY  # tests/sweeps/tiny_runs.py
+from tiny_runs import TINY  # tests/studies/tiny_runs.py
 
-from refpo_warp.sweeps.spec import load_sweep
-from refpo_warp.sweeps.tune import (
-    CHOSEN_FILE,
-    EVALUATION_FILE,
-    JOURNAL_FILE,
-    TRIALS_FILE,
-    Tuner,
-    config_values,
-    evaluation_sweep,
-    periodic_returns,
-)
-from refpo_warp.sweeps.tune_spec import Objective, load_tuning
+from refpo_warp.studies.grid.spec import load_sweep
+from refpo_warp.studies.tuning.records import CHOSEN_FILE, EVALUATION_FILE, TRIALS_FILE, evaluation_sweep
+from refpo_warp.studies.tuning.spec import Objective, load_tuning
+from refpo_warp.studies.tuning.study import JOURNAL_FILE, Tuner
+from refpo_warp.studies.tuning.trial import periodic_returns
+from refpo_warp.studies.tuning.values import config_values
 from refpo_warp.utils.errors import ConfigError
 
 LR = {"algorithm.learning_rate": {"low": 1.0e-4, "high": 3.0e-3, "log": True}}
@@ -165,3 +161,44 @@ def test_a_tiny_study_resumes_a_cut_off_trial_and_writes_its_records(tmp_path):
     assert [m.label for m in sweep.methods] == ["ppo", "refpo", "onestep"] and sweep.seeds == [11]
     assert sweep.methods[2].algo == "refpo_onestep" and sweep.methods[2].overrides == chosen["refpo"]["overrides"]
     assert "max_iterations" not in sweep.methods[0].overrides
+
+
+@pytest.mark.slow(minutes=0.4)
+def test_a_trial_run_that_fails_is_retried_by_the_executor_and_without_retries_fails_the_trial(tmp_path):
+    """The trials run through the sweep's executor: a run that exits non-zero (its first start, through the launcher
+    prefix fail_once.py) is retried from scratch and the trial completes; with --retries 0 the trial fails, says why
+    and counts against the budget."""
+    fail_once = f"{sys.executable} {Path(__file__).with_name('fail_once.py')}"
+    spec = write_tuning(tmp_path / "tiny.yaml", pruner=None)
+    out = tmp_path / "out"
+    lines: list[str] = []
+    tuner = Tuner(load_tuning(str(spec), [f"out={out}"]), echo=lines.append, launcher=f"{fail_once} {tmp_path / 'a'}")
+    assert tuner.run(), "\n".join(lines)
+    trial, run_dir = out / "ppo" / "trial00", out / "ppo" / "trial00" / "gridworld"
+    status = json.loads((trial / "status.json").read_text())["gridworld/ppo/seed101"]
+    assert (status["state"], status["attempts"], status["exit_codes"]) == ("done", 2, [3, 0]), lines
+    first = (run_dir / "train.attempt1.log").read_text().splitlines()
+    assert first[0].startswith("# tune tiny, ppo trial 00, attempt 1 on ") and "fail_once.py" in first[0]
+    assert first[1] == "error: fail_once.py fails the first run it starts"
+    assert (run_dir / "train.log").read_text().startswith("# tune tiny, ppo trial 00, attempt 2 on ")
+    assert any("FAILED gridworld/ppo/seed101 (attempt 1, exit 3" in line for line in lines), lines
+    rows = list(csv.DictReader((out / TRIALS_FILE).open()))
+    assert [(r["state"], r["why"]) for r in rows] == [("complete", "")]
+    assert float(rows[0]["score"]) == pytest.approx(float(rows[0]["gridworld/return_multi"]) / 20.0)
+    report = json.loads((run_dir / "eval.json").read_text())
+    assert (
+        float(rows[0]["gridworld/return_multi"]) == report["results"]["mean_action"]["return_mean"]
+    )  # PPO: its mean action
+
+    # No retries: the first start fails the trial, which is spent (the budget of 1 is used up), with its log named.
+    out = tmp_path / "no_retries"
+    tuner = Tuner(
+        load_tuning(str(spec), [f"out={out}"]), echo=lines.append, retries=0, launcher=f"{fail_once} {tmp_path / 'b'}"
+    )
+    assert tuner.run()
+    rows = list(csv.DictReader((out / TRIALS_FILE).open()))
+    log = out / "ppo" / "trial00" / "gridworld" / "train.log"
+    assert [(r["state"], r["score"], r["why"]) for r in rows] == [("fail", "", f"gridworld exited 3; log {log}")]
+    assert (
+        json.loads((out / "ppo" / "trial00" / "status.json").read_text())["gridworld/ppo/seed101"]["state"] == "failed"
+    )

@@ -12,10 +12,11 @@ from pathlib import Path
 import pytest
 import yaml
 
-from refpo_warp.sweeps.figures import seed_mean
-from refpo_warp.sweeps.report import write_report
-from refpo_warp.sweeps.spec import fingerprint
-from refpo_warp.sweeps.tables import aggregate, fmt_number, headline_setting, run_metrics
+from refpo_warp.studies.grid.run_metrics import headline_setting, run_metrics
+from refpo_warp.studies.grid.spec import fingerprint
+from refpo_warp.studies.reports.figures import seed_mean
+from refpo_warp.studies.reports.report import write_report
+from refpo_warp.studies.reports.tables import aggregate, fmt_number
 from refpo_warp.utils.paths import REPO_ROOT
 
 ROOT = REPO_ROOT

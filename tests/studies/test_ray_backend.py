@@ -5,6 +5,7 @@ lacks the working directory stops the sweep before anything starts, Ctrl-C leave
 real tiny ``refpo train`` run. The training command is the stand-in ``stand_in_train.py`` where speed demands it (the
 real command line, with it in front: ``--launcher``)."""
 
+import csv
 import itertools
 import json
 import os
@@ -21,11 +22,11 @@ import ray
 import yaml
 
 from refpo_warp.config.dotted import parse_overrides
-from refpo_warp.sweeps import ray_backend
-from refpo_warp.sweeps.launch import STOP_GRACE_S
-from refpo_warp.sweeps.ray_backend import RayOptions
-from refpo_warp.sweeps.run import run_sweep
-from refpo_warp.sweeps.spec import load_sweep
+from refpo_warp.studies.grid.launch import STOP_GRACE_S
+from refpo_warp.studies.grid.spec import load_sweep
+from refpo_warp.studies.ray import backend as ray_backend
+from refpo_warp.studies.ray.backend import RayOptions
+from refpo_warp.studies.sweep import run_sweep
 from refpo_warp.utils.errors import ConfigError
 from refpo_warp.utils.paths import REPO_ROOT
 
@@ -179,7 +180,7 @@ def test_ray_options_are_checked_and_ray_is_imported_only_when_asked_for(tmp_pat
     script = f"""
 import sys
 sys.modules["ray"] = None  # as if Ray were not installed: `import ray` raises ImportError
-import refpo_warp.sweeps.ray_node  # what a Ray worker imports to run a task: no torch (seconds per fresh worker)
+import refpo_warp.studies.ray.node  # what a Ray worker imports to run a task: no torch (seconds per fresh worker)
 print("TORCH", "torch" in sys.modules)
 from refpo_warp.cli.main import main
 local = main(["sweep", {str(tmp_path / "cpu.yaml")!r}, "out={tmp_path / "a"}", "--dry-run"])
@@ -269,3 +270,41 @@ def test_a_real_training_run_on_ray(local_ray, tmp_path, quick_run):
     report = json.loads((run_dir / "eval.json").read_text())
     assert (report["task"], report["algo"]) == ("gridworld", "refpo") and "N=1" in report["results"]
     assert json.loads((out / "status.json").read_text())["gridworld/refpo/seed1"]["ray_node_id"] == local_ray
+
+
+@pytest.mark.slow(minutes=0.3)
+def test_a_tuning_study_on_ray(local_ray, tmp_path):
+    """refpo tune --backend ray: a trial's run is a Ray task under the same executor as a sweep's (status.json names
+    its node), and the trial is scored from the run it trained."""
+    from tiny_runs import TINY  # tests/studies/tiny_runs.py
+
+    from refpo_warp.studies.tuning.spec import load_tuning
+    from refpo_warp.studies.tuning.study import Tuner
+
+    lr = {"algorithm.learning_rate": {"low": 1.0e-4, "high": 3.0e-3, "log": True}}
+    spec = tmp_path / "tiny.yaml"
+    spec.write_text(
+        yaml.safe_dump(
+            {
+                "device": "cpu",
+                "tasks": ["gridworld"],
+                "trials": 1,
+                "overrides": TINY,
+                "pruner": None,
+                "objective": {"metric": "return_multi", "reference": {"gridworld": 20.0}},
+                "methods": [{"label": "ppo", "algo": "ppo", "space": lr}],
+            }
+        )
+    )
+    out = tmp_path / "out"
+    lines: list[str] = []
+    assert Tuner(load_tuning(str(spec), [f"out={out}"]), backend="ray", echo=lines.append).run(), "\n".join(lines)
+    trial = out / "ppo" / "trial00"
+    status = json.loads((trial / "status.json").read_text())["gridworld/ppo/seed101"]
+    assert (status["state"], status["exit_codes"], status["ray_node_id"]) == ("done", [0], local_ray)
+    header = (trial / "gridworld" / "train.log").read_text().splitlines()[0]
+    assert header.startswith("# tune tiny, ppo trial 00, attempt 1 on ") and "(Ray task " in header
+    rows = list(csv.DictReader((out / "trials.csv").open()))
+    report = json.loads((trial / "gridworld" / "eval.json").read_text())
+    assert [r["state"] for r in rows] == ["complete"]
+    assert float(rows[0]["score"]) == pytest.approx(report["results"]["mean_action"]["return_mean"] / 20.0)

@@ -10,7 +10,7 @@ from pathlib import Path
 import yaml
 
 from refpo_warp.config.yaml_files import dump_config, load_yaml
-from refpo_warp.sweeps.spec import Run, Sweep, fingerprint
+from refpo_warp.studies.grid.spec import Run, Sweep, fingerprint
 from refpo_warp.utils.errors import ConfigError
 
 SPEC_FILE = "sweep.yaml"

@@ -13,8 +13,8 @@ import ray
 import yaml
 from ray.cluster_utils import Cluster
 
-from refpo_warp.sweeps.run import run_sweep
-from refpo_warp.sweeps.spec import load_sweep
+from refpo_warp.studies.grid.spec import load_sweep
+from refpo_warp.studies.sweep import run_sweep
 
 STAND_IN = f"{sys.executable} {Path(__file__).with_name('stand_in_train.py')}"
 

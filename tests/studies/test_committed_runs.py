@@ -4,7 +4,7 @@ rows kept; and the pages' names for sets of seeds."""
 import csv
 import json
 
-from refpo_warp.sweeps.committed_runs import append_runs, eval_rows, seeds_text
+from refpo_warp.studies.reports.committed_runs import append_runs, eval_rows, seeds_text
 
 
 def test_seeds_text_writes_runs_of_consecutive_seeds_as_ranges():

@@ -1,7 +1,7 @@
 """The Ray backend of a sweep (``refpo sweep <sweep> --backend ray``): every run is one Ray task that runs the same
-``python -m refpo_warp train`` process as the local backend, on a node and GPU Ray picks (``ray_node.py``); every
+``python -m refpo_warp train`` process as the local backend, on a node and GPU Ray picks (``node.py``); every
 node needs the package installed (not a checkout); the queue, retries,
-records and report stay the executor's (``executor.py``). Ray Tune is not used: it would duplicate them.
+records and report stay the executor's (``studies/grid/executor.py``). Ray Tune is not used: it would duplicate them.
 
 - Where: ``address`` (``auto``, ``HOST:PORT``), else ``RAY_ADDRESS``, else a new local Ray on this machine (which
   sends no usage statistics unless ``RAY_USAGE_STATS_ENABLED`` says otherwise).
@@ -32,10 +32,10 @@ import threading
 import time
 from dataclasses import dataclass
 
-from refpo_warp.sweeps.executor import Job, Launcher, Outcome
-from refpo_warp.sweeps.launch import STOP_GRACE_S
-from refpo_warp.sweeps.ray_node import TrainTask, see_paths, train_run
-from refpo_warp.sweeps.spec import Run, Sweep, device_type
+from refpo_warp.studies.grid.executor import Job, Launcher, Outcome
+from refpo_warp.studies.grid.launch import STOP_GRACE_S
+from refpo_warp.studies.grid.spec import Run, Sweep, device_type
+from refpo_warp.studies.ray.node import TrainTask, see_paths, train_run
 from refpo_warp.utils.atomic_files import write_text
 from refpo_warp.utils.errors import ConfigError
 
@@ -236,10 +236,10 @@ class RayLauncher(Launcher):
         )
 
     # ------------------------------------------------------------------------------------------------ the runs
-    def start(self, run: Run, attempt: int, slot: int):
+    def start(self, run: Run, attempt: int, slot: int, origin: str):
         cwd = os.getcwd()
         task = TrainTask(
-            self.sweep.name,
+            origin,
             run.key,
             attempt,
             tuple(run.args),
@@ -311,7 +311,7 @@ class RayLauncher(Launcher):
             return
         left, deadline = refs, time.monotonic() + STOP_GRACE_S + 10
         while left and time.monotonic() < deadline:
-            for ref in left:  # queued: never starts; running: KeyboardInterrupt in the task (ray_node)
+            for ref in left:  # queued: never starts; running: KeyboardInterrupt in the task (node.py)
                 ray.cancel(ref, force=False)  # again every few seconds: a busy worker may miss the first
             _, left = ray.wait(left, num_returns=len(left), timeout=3)
         for ref in left:  # a task that did not end: kill its worker, and the training process with it

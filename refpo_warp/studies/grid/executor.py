@@ -1,25 +1,29 @@
-"""What every sweep backend shares: the queue of runs, ``jobs`` of them at a time, a failed run reported with its log
-and retried from scratch, one progress line with the ETA per finished run, ``status.json`` kept up to date, and the
+"""What every backend shares: the queue of runs, ``jobs`` of them at a time, a failed run reported with its log and
+retried from scratch, one progress line with the ETA per finished run, ``status.json`` kept up to date, and the
 summary. A backend is a ``Launcher``: it starts one run, reports the runs that ended and stops the others
-(``local.py``: subprocesses of this machine; ``ray_backend.py``: one Ray task per run)."""
+(``local.py``: subprocesses of this machine; ``studies/ray/backend.py``: one Ray task per run). A sweep runs its whole
+grid through one executor; a tuning study runs each trial's runs through one (``studies/tuning/study.py``), whose
+``watch`` stops them early (a pruned or failed trial).
+"""
 
 from __future__ import annotations
 
 import json
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from refpo_warp.sweeps.spec import Run, Sweep
-from refpo_warp.sweeps.state import LOG_FILE, STATUS_FILE, run_state
+from refpo_warp.studies.grid.spec import Run, Sweep
+from refpo_warp.studies.grid.state import LOG_FILE, STATUS_FILE, run_state
 from refpo_warp.utils.atomic_files import write_text
 
 POLL_S = 0.2
 
 
-def _duration(seconds: float) -> str:
+def duration(seconds: float) -> str:
     seconds = round(seconds)
     h, rest = divmod(seconds, 3600)
     return f"{h}h{rest // 60:02d}m" if h else f"{rest // 60}m{rest % 60:02d}s"
@@ -57,10 +61,11 @@ class Summary:
     finished: list[str] = field(default_factory=list)
     failed: list[tuple[str, str]] = field(default_factory=list)  # (run key, why + log)
     interrupted: list[str] = field(default_factory=list)
+    stopped: str = ""  # why ``watch`` stopped the runs left (their state in status.json: stopped)
 
     @property
     def ok(self) -> bool:
-        return not self.failed and not self.interrupted
+        return not self.failed and not self.interrupted and not self.stopped
 
 
 class Launcher:
@@ -74,7 +79,8 @@ class Launcher:
     def prepare(self, sweep: Sweep) -> None:
         pass
 
-    def start(self, run: Run, attempt: int, slot: int) -> Any:
+    def start(self, run: Run, attempt: int, slot: int, origin: str) -> Any:
+        """Start ``run``; ``origin`` heads its log (``sweep <name>``, ``tune <name>, <method> trial <k>``)."""
         raise NotImplementedError
 
     def wait(self, jobs: list[Job], timeout: float) -> list[tuple[Job, Outcome]]:
@@ -89,12 +95,20 @@ class Launcher:
         pass
 
 
-class SweepExecutor:
-    """Launches the runs (``launcher.jobs`` at a time), retries failures, prints progress and writes ``status.json``."""
+Watch = Callable[["Summary"], str]  # called after every poll: a reason to stop the runs left, or ""
 
-    def __init__(self, sweep: Sweep, launcher: Launcher, retries: int = 1, echo=print) -> None:
+
+class SweepExecutor:
+    """Launches the runs (``launcher.jobs`` at a time), retries failures, prints progress and writes ``status.json``
+    (in ``sweep.out_dir``). ``origin`` heads each run's log (default ``sweep <name>``), ``tag`` the progress lines."""
+
+    def __init__(
+        self, sweep: Sweep, launcher: Launcher, retries: int = 1, echo=print, origin: str = "", tag: str = "sweep"
+    ) -> None:
         self.sweep, self.launcher, self.retries, self.echo = sweep, launcher, retries, echo
+        self.origin, self.tag = origin or f"sweep {sweep.name}", tag
         self.jobs = max(1, launcher.jobs)
+        sweep.out_dir.mkdir(parents=True, exist_ok=True)  # a Ray task makes its run dir only once it starts
         status_path = sweep.out_dir / STATUS_FILE
         self.status: dict[str, dict] = json.loads(status_path.read_text()) if status_path.exists() else {}
         self.durations: dict[str, float] = {}
@@ -136,7 +150,11 @@ class SweepExecutor:
         return "  ".join(f"{k} {v['return_mean']:.1f}" for k, v in results.items() if "return_mean" in v)
 
     # ------------------------------------------------------------------------------------------------ main loop
-    def execute(self, todo: list[Run], prints: dict[str, str], skipped: list[Run]) -> Summary:
+    def execute(
+        self, todo: list[Run], prints: dict[str, str], skipped: list[Run], watch: Watch | None = None
+    ) -> Summary:
+        """Train ``todo`` (``prints``: each run's config fingerprint by key; ``skipped``: runs already done). ``watch``
+        may stop the runs left: they are stopped as on Ctrl-C, and the summary says why."""
         summary = Summary(total=len(todo) + len(skipped), skipped=[r.key for r in skipped])
         for run in skipped:
             self._record(run, state="done")
@@ -149,7 +167,9 @@ class SweepExecutor:
                 while queue and len(running) < self.jobs:
                     run, attempt = queue.popleft()
                     slot = min(set(range(self.jobs)) - {j.slot for j in running})
-                    running.append(Job(run, attempt, slot, self.launcher.start(run, attempt, slot), time.monotonic()))
+                    running.append(
+                        Job(run, attempt, slot, self.launcher.start(run, attempt, slot, self.origin), time.monotonic())
+                    )
                     self._record(run, state="running", attempts=attempt, log=str(run.run_dir / LOG_FILE))
                 for job, out in self.launcher.wait(running, POLL_S):
                     running.remove(job)
@@ -167,29 +187,36 @@ class SweepExecutor:
                         self._record(job.run, state="done")
                         eta = self._eta(queue, running)
                         self.echo(
-                            f"[sweep {done_count}/{len(todo)}] done {job.run.key} in {_duration(out.seconds)}"
+                            f"[{self.tag} {done_count}/{len(todo)}] done {job.run.key} in {duration(out.seconds)}"
                             f"{where}  {self._returns(job.run)} | running {len(running)}, queued {len(queue)} | "
-                            f"elapsed {_duration(time.monotonic() - start)}"
-                            + (f", ETA {_duration(eta)}" if eta is not None else "")
+                            f"elapsed {duration(time.monotonic() - start)}"
+                            + (f", ETA {duration(eta)}" if eta is not None else "")
                         )
                         continue
                     why = out.error or (f"exit {rc}" if rc else "exit 0 without a matching eval.json")
                     self.echo(
-                        f"[sweep] FAILED {job.run.key} (attempt {job.attempt}, {why}, {_duration(out.seconds)}"
+                        f"[{self.tag}] FAILED {job.run.key} (attempt {job.attempt}, {why}, {duration(out.seconds)}"
                         f"{where}): {self._last_error(job.log)}\n        log: {job.log}"
                     )
                     if job.attempt <= self.retries:
-                        self.echo(f"[sweep] retrying {job.run.key} from scratch (attempt {job.attempt + 1})")
+                        self.echo(f"[{self.tag}] retrying {job.run.key} from scratch (attempt {job.attempt + 1})")
                         queue.appendleft((job.run, job.attempt + 1))
                     else:
                         done_count += 1
                         earlier = " (earlier attempts: train.attempt*.log beside it)" if job.attempt > 1 else ""
                         summary.failed.append((job.run.key, f"{why}, {job.attempt} attempt(s); log {job.log}{earlier}"))
                         self._record(job.run, state="failed")
+                summary.stopped = watch(summary) if watch is not None else ""
+                if summary.stopped:
+                    self._stop(running, "stopped")
+                    break
         except KeyboardInterrupt:
-            self.echo(f"[sweep] interrupted: stopping {len(running)} running run(s)")
-            self.launcher.stop(running)
-            for job in running:
-                summary.interrupted.append(job.run.key)
-                self._record(job.run, state="interrupted")
+            self.echo(f"[{self.tag}] interrupted: stopping {len(running)} running run(s)")
+            self._stop(running, "interrupted")
+            summary.interrupted += [job.run.key for job in running]
         return summary
+
+    def _stop(self, running: list[Job], state: str) -> None:
+        self.launcher.stop(running)
+        for job in running:
+            self._record(job.run, state=state)

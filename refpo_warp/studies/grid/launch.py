@@ -3,7 +3,8 @@ installed package, wherever it is: a node needs the package, not a checkout), it
 log (``train.log``; an earlier attempt's run dir cleared, its logs kept) and how it is stopped. The local backend
 starts it from the sweep process, the Ray backend from a Ray task on the node that trains it.
 
-Light on purpose: a Ray worker imports this (through ``ray_node``) to run a task, and needs no config machinery.
+Light on purpose: a Ray worker imports this (through ``studies/ray/node.py``) to run a task, and needs no config
+machinery.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from refpo_warp.sweeps.state import LOG_FILE, clear_run_dir
+from refpo_warp.studies.grid.state import LOG_FILE, clear_run_dir
 
 STOP_GRACE_S = 30.0  # a run's time to exit after SIGINT (checkpoint, summary) before it is killed
 PR_SET_PDEATHSIG = 1
