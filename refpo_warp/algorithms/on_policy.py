@@ -178,7 +178,7 @@ class OnPolicyAlgorithm(RslPPO):
             warnings.warn(
                 f"algorithm.use_mixed_precision=true on a CPU without native bfloat16 (torch sees "
                 f"{torch.backends.cpu.get_cpu_capability()}, no AVX512-BF16 or AMX): its bfloat16 matrix products "
-                "are emulated and the update runs many times slower than in float32 (about 30x on an AVX2 CPU, "
+                "are emulated and the update runs many times slower than in float32 (12 to 21 times on an AVX2 CPU, "
                 "docs/results/throughput/); set it to false on this machine",
                 stacklevel=2,
             )

@@ -1,9 +1,14 @@
 """Run a sweep: every run of the grid as its own ``refpo train`` process, several at a time, resumable.
 
 - A run whose ``eval.json`` exists and whose ``config.yaml`` is the run's current config is skipped.
-- A run that is unfinished (interrupted earlier) or stale (its config changed) is trained again from scratch; only
-  its log files are kept. Runs are short enough that a clean rerun is cheaper than reasoning about a resumed one.
-- A run that exits non-zero is reported with its log and retried once from scratch (``retries``).
+- A run of the current config with a checkpoint but no ``eval.json`` (paused at a piece's end by ``stop_after_minutes``
+  / ``stop_after_iterations``, or interrupted) is continued from its newest checkpoint (``resume=true``: a run in
+  pieces ends bit-identical to one trained in one call), so a long run advances over several sweep calls; a run that
+  stops at its piece's end is reported paused, not failed.
+- A run that is unfinished with nothing to continue, or stale (its config changed), is trained again from scratch;
+  only its log files are kept.
+- A run that exits non-zero is reported with its log and retried once from scratch (``retries``), a continued one
+  too.
 - The sweep dir holds ``sweep.yaml`` (the resolved spec: methods, runs, their arguments and config fingerprints,
   merged over earlier invocations) and ``status.json`` (per run: state, attempts, exit codes, seconds, node, log).
 - Backends (``backends.py``): ``local`` (subprocesses of this machine, ``grid/local.py``) and ``ray`` (one Ray task per
@@ -43,6 +48,7 @@ def run_sweep(
     words = {
         "done": "done (skipped)",
         "new": "new",
+        "paused": "paused (continued from its newest checkpoint)",
         "unfinished": "unfinished (rerun from scratch)",
         "stale": "stale: config changed (rerun from scratch)",
     }
@@ -72,7 +78,9 @@ def run_sweep(
         runner.close()
     echo(
         f"[sweep] finished {len(summary.finished)} run(s), skipped {len(summary.skipped)} already done, "
-        f"failed {len(summary.failed)}" + (f", interrupted {len(summary.interrupted)}" if summary.interrupted else "")
+        f"failed {len(summary.failed)}"
+        + (f", interrupted {len(summary.interrupted)}" if summary.interrupted else "")
+        + (f", paused {len(summary.paused)} (run the sweep again to continue them)" if summary.paused else "")
     )
     for key, why in summary.failed:
         echo(f"  failed {key}: {why}")

@@ -65,5 +65,5 @@ def flush_denormals_on_cpu(device: str | torch.device) -> None:
 def cpu_has_native_bfloat16() -> bool:
     """Whether this CPU multiplies bfloat16 matrices in hardware (AVX512-BF16 or AMX). Without either, torch emulates
     bfloat16 matrix products: on a 2-core AMD EPYC with AVX2 an iteration of the CPU profile under bfloat16 autocast
-    took about 30 times as long as in float32 (``docs/results/throughput/``)."""
+    took 12 to 21 times as long as in float32 (``docs/results/throughput/``)."""
     return bool(torch.cpu._is_avx512_bf16_supported() or torch.cpu._is_amx_tile_supported())

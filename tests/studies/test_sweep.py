@@ -190,7 +190,7 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     assert "2 done (skipped)" in "\n".join(lines)
     assert {label: path.stat().st_mtime_ns for label, path in evals.items()} == stamps
 
-    # A changed config makes a finished run stale; a run without its eval.json is unfinished (both rerun).
+    # A changed config makes a finished run stale (rerun); a run without its eval.json is continued from its checkpoint.
     evals["refpo"].unlink()
     lines.clear()
     run_sweep(
@@ -199,7 +199,7 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     assert "2 stale: config changed (rerun from scratch)" in lines[1]
     lines.clear()
     run_sweep(load_sweep(str(spec), [f"out={out}", "methods=[ppo,refpo]"]), dry_run=True, echo=lines.append)
-    assert "1 done (skipped), 1 unfinished (rerun from scratch)" in lines[1]
+    assert "1 done (skipped), 1 paused (continued from its newest checkpoint)" in lines[1]
 
     # The report lists the crashed run as missing, with its log.
     result = subprocess.run(
@@ -214,3 +214,34 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     assert "| ppo | 1/1 |" in report and "| broken | 0/1 | -- | -- | -- | -- |" in report
     assert f"- gridworld / broken / seed 1: failed: exit codes [3, 3]; log {broken / 'train.log'}" in report
     assert "- gridworld / refpo / seed 1: missing" in report
+
+
+def test_a_run_in_pieces_is_paused_then_continued_and_ends_as_one_uncut_run(tmp_path):
+    """stop_after_iterations=1 ends each sweep call's piece after an iteration: the first call leaves the run paused
+    (reported, not failed), the second continues it from its checkpoint to the end, bit-identical to the same run
+    trained in one sweep call."""
+    spec = write_spec(tmp_path / "tiny.yaml", overrides=TINY, methods=[{"label": "refpo", "algo": "refpo"}])
+    whole, cut = tmp_path / "whole", tmp_path / "cut"
+    assert run_sweep(load_sweep(str(spec), [f"out={whole}"]), jobs=1, echo=lambda _: None).ok
+    lines: list[str] = []
+    first = run_sweep(load_sweep(str(spec), [f"out={cut}", "stop_after_iterations=1"]), jobs=1, echo=lines.append)
+    run_dir = cut / "gridworld" / "refpo" / "seed1"
+    assert first.paused == ["gridworld/refpo/seed1"] and not first.failed and not first.finished, lines
+    text = "\n".join(lines)
+    assert "] paused gridworld/refpo/seed1 after" in text and "paused 1 (run the sweep again" in text
+    assert not (run_dir / "eval.json").exists() and (run_dir / "model_0.pt").exists()
+    assert json.loads((cut / "status.json").read_text())["gridworld/refpo/seed1"]["state"] == "paused"
+    lines.clear()
+    second = run_sweep(load_sweep(str(spec), [f"out={cut}", "stop_after_iterations=1"]), jobs=1, echo=lines.append)
+    assert "1 paused (continued from its newest checkpoint)" in lines[1]
+    assert second.finished == ["gridworld/refpo/seed1"] and second.ok, lines
+    log = (run_dir / "train.log").read_text()
+    assert log.count("continued from its newest checkpoint") == 1 and "resume=true" in log
+    ends = [torch.load(d / "gridworld" / "refpo" / "seed1" / "model_1.pt", weights_only=True) for d in (whole, cut)]
+    for name in ("actor_state_dict", "critic_state_dict"):
+        for key, value in ends[0][name].items():
+            assert torch.equal(value, ends[1][name][key]), f"{name}.{key}"
+    results = [
+        json.loads((d / "gridworld" / "refpo" / "seed1" / "eval.json").read_text())["results"] for d in (whole, cut)
+    ]
+    assert results[0] == results[1]

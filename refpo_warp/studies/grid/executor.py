@@ -61,6 +61,7 @@ class Summary:
     finished: list[str] = field(default_factory=list)
     failed: list[tuple[str, str]] = field(default_factory=list)  # (run key, why + log)
     interrupted: list[str] = field(default_factory=list)
+    paused: list[str] = field(default_factory=list)  # stopped at a piece's end (stop_after_*): a rerun continues them
     stopped: str = ""  # why ``watch`` stopped the runs left (their state in status.json: stopped)
 
     @property
@@ -175,7 +176,8 @@ class SweepExecutor:
                     running.remove(job)
                     rc = out.exit_code
                     codes = self.status.get(job.run.key, {}).get("exit_codes", []) if job.attempt > 1 else []
-                    finished = rc == 0 and run_state(job.run, prints[job.run.key]) == "done"
+                    state = run_state(job.run, prints[job.run.key]) if rc == 0 else "failed"
+                    finished = state == "done"
                     self._record(
                         job.run, exit_codes=codes + [rc], seconds=round(out.seconds, 1), node=out.node, **out.status
                     )
@@ -193,6 +195,15 @@ class SweepExecutor:
                             + (f", ETA {duration(eta)}" if eta is not None else "")
                         )
                         continue
+                    if state == "paused":  # the run ended its piece (stop_after_iterations / _minutes) as asked
+                        done_count += 1
+                        summary.paused.append(job.run.key)
+                        self._record(job.run, state="paused")
+                        self.echo(
+                            f"[{self.tag} {done_count}/{len(todo)}] paused {job.run.key} after {duration(out.seconds)}"
+                            f"{where} at its newest checkpoint: the sweep run again continues it"
+                        )
+                        continue
                     why = out.error or (f"exit {rc}" if rc else "exit 0 without a matching eval.json")
                     self.echo(
                         f"[{self.tag}] FAILED {job.run.key} (attempt {job.attempt}, {why}, {duration(out.seconds)}"
@@ -200,7 +211,7 @@ class SweepExecutor:
                     )
                     if job.attempt <= self.retries:
                         self.echo(f"[{self.tag}] retrying {job.run.key} from scratch (attempt {job.attempt + 1})")
-                        queue.appendleft((job.run, job.attempt + 1))
+                        queue.appendleft((job.run.from_scratch(), job.attempt + 1))
                     else:
                         done_count += 1
                         earlier = " (earlier attempts: train.attempt*.log beside it)" if job.attempt > 1 else ""

@@ -47,19 +47,27 @@ def hostname() -> str:
 
 
 def start_training(
-    run_dir: Path, header: str, cmd: Sequence[str], env: Mapping[str, str], cwd: str | Path, detach: bool = False
+    run_dir: Path,
+    header: str,
+    cmd: Sequence[str],
+    env: Mapping[str, str],
+    cwd: str | Path,
+    detach: bool = False,
+    resume: bool = False,
 ) -> subprocess.Popen:
     """Clear the run dir of an earlier attempt (its log becomes ``train.attempt<k>.log``), write ``# <header>: <cmd>``
-    as the first line of ``train.log`` and start ``cmd`` with its output there.
+    as the first line of ``train.log`` and start ``cmd`` with its output there. ``resume``: a paused run is continued
+    in place (nothing cleared; its log goes on below a header of its own).
 
     ``detach``: the run gets its own process group (a terminal's Ctrl-C reaches only whoever started it, which stops
     it with ``stop_training``), a clean signal mask and, on Linux, is killed when its parent dies however it dies (a
     Ray worker lost or force-cancelled leaves no training process behind).
     """
-    clear_run_dir(run_dir)
+    if not resume:
+        clear_run_dir(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
-    with open(run_dir / LOG_FILE, "w") as f:
-        f.write(f"# {header}: {shlex.join(cmd)}\n")
+    with open(run_dir / LOG_FILE, "a" if resume else "w") as f:
+        f.write(f"# {header}{', continued from its newest checkpoint' if resume else ''}: {shlex.join(cmd)}\n")
         f.flush()
         preexec = _detached_child() if detach else None
         # preexec_fn despite a Ray worker's threads: the child only makes two system calls before it execs

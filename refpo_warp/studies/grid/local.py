@@ -34,7 +34,7 @@ class LocalLauncher(Launcher):
         cmd = train_command(run.args, self._device(slot), self.prefix)
         env = train_env(os.environ, None if self.gpus else 1)  # CPU: one torch thread per run
         header = f"{origin}, attempt {attempt} on {self.host}"
-        return start_training(run.run_dir, header, cmd, env, os.getcwd(), detach=self.detach)
+        return start_training(run.run_dir, header, cmd, env, os.getcwd(), detach=self.detach, resume=run.resume)
 
     def wait(self, jobs: list[Job], timeout: float) -> list[tuple[Job, Outcome]]:
         time.sleep(timeout)

@@ -26,7 +26,7 @@ import itertools
 import json
 import math
 import re
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -135,10 +135,19 @@ class Run:
     seed: int
     run_dir: Path
     args: tuple[str, ...]  # refpo train arguments, device excluded (chosen at launch)
+    resume: bool = False  # continue the run dir's newest checkpoint (a paused run) instead of starting it again
 
     @property
     def key(self) -> str:
         return f"{self.task}/{self.method.label}/seed{self.seed}"
+
+    def continued(self) -> Run:
+        """This run, continued from its run dir's newest checkpoint (``resume=true``)."""
+        return replace(self, resume=True, args=(*self.args, "resume=true"))
+
+    def from_scratch(self) -> Run:
+        """This run, started again from nothing."""
+        return replace(self, resume=False, args=tuple(a for a in self.args if a != "resume=true"))
 
 
 @dataclass

@@ -248,6 +248,7 @@ class RayLauncher(Launcher):
             max(1, int(self.cpus)),
             self.prefix,
             cwd,
+            run.resume,
         )
         return self.train.options(
             num_gpus=self.gpus,

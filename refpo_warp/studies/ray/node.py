@@ -31,6 +31,7 @@ class TrainTask:
     threads: int  # torch threads of a CPU run
     launcher: tuple[str, ...]
     cwd: str
+    resume: bool = False  # a paused run, continued in place
 
 
 def missing_paths(paths: list[str]) -> list[str]:
@@ -99,7 +100,7 @@ def train_run(task: TrainTask) -> dict:
     start = time.monotonic()
     proc = None
     try:
-        proc = start_training(run_dir, header, cmd, env, task.cwd, detach=True)
+        proc = start_training(run_dir, header, cmd, env, task.cwd, detach=True, resume=task.resume)
         result["exit_code"] = _wait(proc)
     except KeyboardInterrupt:  # ray.cancel(force=False) raises this here: stop the run before the task ends
         if proc is not None:
