@@ -48,8 +48,14 @@ def test_append_runs_adds_each_new_seed_once_with_its_small_files(tmp_path):
         ("21", "3", "docs/runs/task_a/ppo/seed21"),
     ]
     kept = page / "runs" / "task_a" / "ppo" / "seed21"
-    assert sorted(p.name for p in kept.iterdir()) == ["config.yaml", "eval.json", "progress_eval.jsonl"]
+    assert sorted(p.name for p in kept.iterdir()) == [
+        "config.yaml",
+        "eval.json",
+        "progress_eval.jsonl",
+        "progress_loss.jsonl",
+    ]
     assert eval_rows(run / "progress.jsonl") == json.dumps(progress[1]) + "\n"
+    assert (kept / "progress_loss.jsonl").read_text() == json.dumps(progress[0]) + "\n"
 
 
 def test_append_runs_starts_a_missing_table_and_keeps_every_eval_curve(tmp_path):

@@ -9,8 +9,8 @@ What it reads (every seed each file holds):
 - ``report/runs.csv``: one row per ``refpo sweep cpu_fpo_pp`` run (``refpo report``'s per-run rows), every label of
   ``configs/sweep/cpu_fpo_pp.yaml`` that has run. ``--add-runs`` appends the rows of a sweep dir's report
   (``<dir>/report/runs.csv``) for (task, label, seed) not yet in the file, and copies each run's ``config.yaml``,
-  ``eval.json`` and periodic-evaluation rows to ``runs/<task>/<label>/seed<k>/``: that is how the small-task recipe's
-  (``fpo_pp_small``) and the gradient-clip ablation's rows arrive. A failed run counts as return 0.
+  ``eval.json``, periodic-evaluation rows and losses to ``runs/<task>/<label>/seed<k>/``: that is how the small-task
+  recipe's (``fpo_pp_small``) and the gradient-clip ablation's rows arrive. A failed run counts as return 0.
 - ``runs/<task>/<label>/seed<k>/config.yaml`` and ``eval.json``: each setting's values and run sizes.
 - ``report_task_profile/runs.csv``: the first grid (FPO++'s loss on the task's ReFPO profile).
 - ``../tuning/fresh/runs.csv`` (label ``fpo_pp``) and ``../tuning/fresh/runs/``: FPO++ at the tuned CPU values.
@@ -35,6 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from grad_norms import grad_norm_text
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, seeds_text
@@ -863,6 +864,10 @@ def values() -> dict[str, object]:
     v.update(findings(ms, data))
     v["lr_text"] = lr_text(data, ms)
     v["clip_text"] = clip_text(data, ms)
+    max_norm = (run_config(ms[AUTHORS], TASKS[1]) or {}).get("algorithm.max_grad_norm", 1.0)
+    v["grad_norm_text"] = grad_norm_text(
+        {label: run_dirs(RUNS, TASKS[1], label) for label in CLIP_LABELS}, run_dirs(RUNS, TASKS[1], AUTHORS), max_norm
+    )
     ran, missing_labels = what_ran()
     v["what_ran"] = ran
     v["not_run"] = missing_labels
