@@ -188,6 +188,13 @@ class RunOptions:
         Check(_check_device, "auto, cpu, cuda or cuda:N"),
         "where the run trains: auto (cuda:0 when available, else cpu), cpu or cuda:N",
     )
+    torch_threads: int | None = option(
+        None,
+        Int(1, 1024, optional=True),
+        "torch's CPU threads for the run's networks; null: 1 on a machine without CUDA (the env kernels and other runs "
+        "share its cores), at most 4 with CUDA. More threads sum a matrix product in another order: the same run, "
+        "other bits",
+    )
     num_envs: int = option(64, Int(1, MAX_ENVS), "parallel envs")
     total_env_steps: int = option(
         1_000_000,

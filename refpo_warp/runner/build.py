@@ -19,6 +19,7 @@ from refpo_warp.config.resolve import Resolution
 from refpo_warp.envs.registry import make_env
 from refpo_warp.runner.distributed import process_rank, rank_device
 from refpo_warp.runner.runner import Runner
+from refpo_warp.utils.device import set_torch_threads
 from refpo_warp.utils.errors import ConfigError
 
 __all__ = [
@@ -91,6 +92,8 @@ def build_runner(run: Resolution, log_dir: Path | None, env: Any = None) -> tupl
     """
     cfg, rank = run.cfg, process_rank()
     device = rank_device(cfg["device"], rank)
+    if cfg["torch_threads"] is not None:
+        set_torch_threads(threads=cfg["torch_threads"])
     if env is None:
         env = make_env(run.task, num_envs=cfg["num_envs"], device=device, seed=cfg["seed"] + rank.rank, **cfg["env"])
     check_obs_groups(cfg, env)

@@ -38,13 +38,17 @@ def resolve_device(device: str = "auto") -> str:
     return device
 
 
-def set_torch_threads(cuda_cap: int | None = None) -> int:
-    """Limit torch's CPU threads: 1 without CUDA (the CPU cores run the env kernels), else at most ``cuda_cap``.
+def set_torch_threads(cuda_cap: int | None = None, threads: int | None = None) -> int:
+    """Set torch's CPU threads: ``threads`` when given (a run's ``torch_threads``), else 1 without CUDA (the CPU cores
+    run the env kernels) and at most ``cuda_cap`` with it.
 
     ``cuda_cap=None`` leaves the thread count unchanged when CUDA is available. Returns the count set.
     """
-    n = torch.get_num_threads()
-    n = 1 if not torch.cuda.is_available() else (min(n, cuda_cap) if cuda_cap else n)
+    if threads is None:
+        n = torch.get_num_threads()
+        n = 1 if not torch.cuda.is_available() else (min(n, cuda_cap) if cuda_cap else n)
+    else:
+        n = threads
     n = max(1, n)
     torch.set_num_threads(n)
     return n

@@ -126,7 +126,7 @@ def test_named_sweeps_resolve():
 def test_fingerprint_ignores_options_that_do_not_change_the_run():
     cfg = resolve_config(parse_overrides(["task=gridworld", "algo=refpo"]), device_type="cpu")
     same = {**cfg, "verbose": not cfg["verbose"], "run_dir": "/elsewhere", "device": "cuda:1", "resume": "x"}
-    assert fingerprint(same) == fingerprint(cfg)
+    assert fingerprint(same) == fingerprint(cfg) == fingerprint({**cfg, "torch_threads": 2})
     assert fingerprint({**cfg, "seed": cfg["seed"] + 1}) != fingerprint(cfg)
 
 

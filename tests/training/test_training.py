@@ -171,3 +171,19 @@ def test_dmc_learner_stores_the_pre_tanh_action_the_env_squashes():
     torch.testing.assert_close(alg.storage.actions[0], stored)
     assert stored.abs().max() > 1.0  # an untrained flow samples beyond the env's range; nothing clipped it
     torch.testing.assert_close(wp.to_torch(env.sim.views.ctrl), torch.tanh(stored))
+
+
+def test_torch_threads_sets_the_runs_cpu_threads_and_null_keeps_the_rule():
+    from refpo_warp.config.resolve import resolve
+    from refpo_warp.runner.build import build_runner
+
+    before = torch.get_num_threads()
+    try:
+        base = ["task=gridworld", "algo=ppo", "device=cpu", "num_envs=4", "runner.num_steps_per_env=4"]
+        torch.set_num_threads(1)
+        build_runner(resolve([*base, "torch_threads=2"]), None)
+        assert torch.get_num_threads() == 2
+        build_runner(resolve(base), None)  # null: the count the command set stays
+        assert torch.get_num_threads() == 2
+    finally:
+        torch.set_num_threads(before)

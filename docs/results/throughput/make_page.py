@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from refpo_warp.studies.reports.results_page import main_args, write_page
@@ -16,14 +18,64 @@ from refpo_warp.studies.reports.results_page import main_args, write_page
 HERE = Path(__file__).resolve().parent
 TASKS = ("dmc_point_mass", "dmc_cartpole_swingup")
 NAMES = {"ppo": "PPO", "refpo": "ReFPO"}
-# (folder, option, its default, what it changes; the before and after files: <task>_<before>.json, <task>_<after>.json)
+
+
+@dataclass(frozen=True)
+class Change:
+    """A change tried: its folder of before and after files (<task>_<before>.json, <task>_<after>.json), the option
+    and its default, what it changes, and what else its sentence says (from the after file's machine record)."""
+
+    folder: str
+    option: str
+    default: str
+    what: str
+    names: tuple[str, str]
+    note: Callable[[dict, dict], str]
+
+
+def bf16_note(before: dict, after: dict) -> str:
+    cpu = after["machine"]
+    return f"Its CPU (torch's capability: {cpu.get('cpu_capability', 'not recorded')}) has " + (
+        "native bfloat16 matrix products."
+        if cpu.get("native_bfloat16")
+        else "no native bfloat16 (AVX512-BF16 or AMX): torch emulates the bfloat16 matrix products, and training "
+        "warns when the option is set on such a CPU."
+    )
+
+
+def threads_note(before: dict, after: dict) -> str:
+    parts = []
+    for b in before["results"]:
+        a = next(r for r in after["results"] if r["algo"] == b["algo"])
+        parts.append(
+            f"{NAMES.get(b['algo'], b['algo'])}'s update {b['iteration']['update']:.2f} → "
+            f"{a['iteration']['update']:.2f} s and its collection {b['iteration']['collection']:.2f} → "
+            f"{a['iteration']['collection']:.2f} s an iteration"
+        )
+    return (
+        f"The machine has {after['machine']['cpu_count']} cores; "
+        + "; ".join(parts)
+        + ". The update's matrix products share the threads; the env kernels (Warp on the CPU) run on one thread "
+        "either way."
+    )
+
+
 CHANGES = (
-    (
+    Change(
         "bf16",
         "algorithm.use_mixed_precision=true",
         "false",
         "bfloat16 autocast of the update's forward passes and losses",
         ("float32", "bfloat16"),
+        bf16_note,
+    ),
+    Change(
+        "threads",
+        "torch_threads=2",
+        "null: one thread on a machine without CUDA",
+        "two torch threads for the networks of one run",
+        ("1thread", "2thread"),
+        threads_note,
     ),
 )
 
@@ -117,7 +169,8 @@ def commands(runs: dict[str, dict]) -> str:
 def change_rows() -> tuple[list[list[str]], list[str], list[str]]:
     """One row per (change, task, algo); the commands; a sentence per change, from its before and after files."""
     rows, lines, said = [], [], []
-    for folder, option, default, what, (before_name, after_name) in CHANGES:
+    for change in CHANGES:
+        folder, option, default, (before_name, after_name) = change.folder, change.option, change.default, change.names
         for before_file in sorted((HERE / folder).glob(f"*_{before_name}.json")):
             task = before_file.name[: -len(f"_{before_name}.json")]
             before = json.loads(before_file.read_text())
@@ -139,20 +192,12 @@ def change_rows() -> tuple[list[list[str]], list[str], list[str]]:
                         f"{b['seconds_per_iteration']:.2f} → {a['seconds_per_iteration']:.2f}",
                     ]
                 )
-            cpu = after["machine"]
-            native = bool(cpu.get("native_bfloat16"))
             said.append(
-                f"- `{option}` ({what}) {'pays' if min(ratios) > 1 else 'does not pay'} on this machine: "
-                f"{min(ratios):.2f} to {max(ratios):.2f} times the env steps per second of its default (the machine "
-                f"shared with running studies: load average {before['machine'].get('load_average', ['?'])[0]} and "
-                f"{cpu.get('load_average', ['?'])[0]} when the two commands ended). Its CPU "
-                f"(torch's capability: {cpu.get('cpu_capability', 'not recorded')}) has "
-                + (
-                    "native bfloat16 matrix products."
-                    if native
-                    else "no native bfloat16 (AVX512-BF16 or AMX): torch "
-                    "emulates the bfloat16 matrix products, and training warns when the option is set on such a CPU."
-                )
+                f"- `{option}` ({change.what}) {'pays' if min(ratios) > 1 else 'does not pay'} on `{task}`: "
+                f"{min(ratios):.2f} to {max(ratios):.2f} times the env steps per second of its default (load average "
+                f"{before['machine'].get('load_average', ['?'])[0]} and "
+                f"{after['machine'].get('load_average', ['?'])[0]} when the two commands ended). "
+                + change.note(before, after)
             )
     return rows, lines, said
 

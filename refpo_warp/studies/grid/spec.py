@@ -107,6 +107,7 @@ class SweepOptions:
 # Config keys that do not change what a run computes: a finished run whose config differs only here is kept.
 FINGERPRINT_IGNORED = (
     "device",
+    "torch_threads",  # like the device: the same run, its sums in another order
     "resume",
     "run_dir",
     "verbose",
