@@ -37,6 +37,7 @@ RENAMED: dict[str, dict[str, str]] = {
         "--json": "out=PATH (the result as JSON)",
         "--env": "env.<option>=",
     },
+    "bench train": {"run_dir=": "out= (the result as JSON; the timed runs live in a temporary folder)"},
     "bench gridworld": {**_BENCH, **_keys("gym_steps")},
     "bench latency": {
         **_BENCH,
