@@ -27,7 +27,8 @@ def test_append_runs_adds_each_new_seed_once_with_its_small_files(tmp_path):
     (run / "config.yaml").write_text("seed: 21\n")
     (run / "eval.json").write_text("{}")
     (run / "model_3.pt").write_bytes(b"not copied")
-    progress = [{"iteration": 0, "Loss/value": 1.0}, {"iteration": 1, "env_steps": 9, "eval/return_N10": 5.0}]
+    train = {"iteration": 0, "reward_mean": 2.0, "Loss/value": 1.0, "Flow/clip_fraction": 0.1, "Episode/success": 0.5}
+    progress = [{**train, "time_s": 3.0, "steps_per_s": 7}, {"iteration": 1, "env_steps": 9, "eval/return_N10": 5.0}]
     (run / "progress.jsonl").write_text("\n".join(map(json.dumps, progress)) + "\n")
     (sweep / "report").mkdir()
     new = [
@@ -52,10 +53,10 @@ def test_append_runs_adds_each_new_seed_once_with_its_small_files(tmp_path):
         "config.yaml",
         "eval.json",
         "progress_eval.jsonl",
-        "progress_loss.jsonl",
+        "progress_train.jsonl",
     ]
     assert eval_rows(run / "progress.jsonl") == json.dumps(progress[1]) + "\n"
-    assert (kept / "progress_loss.jsonl").read_text() == json.dumps(progress[0]) + "\n"
+    assert (kept / "progress_train.jsonl").read_text() == json.dumps(train) + "\n"  # no timings, no evaluations
 
 
 def test_append_runs_starts_a_missing_table_and_keeps_every_eval_curve(tmp_path):

@@ -1,5 +1,5 @@
 """The clip ablation's gradient norms: each network's norm before clipping, read from the committed runs'
-``progress_loss.jsonl`` (``Loss/grad_norm_actor``, ``Loss/grad_norm_critic``: the mean over an update's minibatches),
+``progress_train.jsonl`` (``Loss/grad_norm_actor``, ``Loss/grad_norm_critic``: the mean over an update's minibatches),
 and the factor a joint clip would scale the actor's gradient by at those norms."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ ACTOR, CRITIC = "Loss/grad_norm_actor", "Loss/grad_norm_critic"
 
 def norms(run: Path) -> list[tuple[float, float]] | None:
     """(actor, critic) per iteration, or None where the run's files hold no gradient norms."""
-    path = run / "progress_loss.jsonl"
+    path = run / "progress_train.jsonl"
     if not path.exists():
         return None
     rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
@@ -62,7 +62,7 @@ def grad_norm_text(runs: dict[str, list[Path]], joint_runs: list[Path], max_norm
     )
     return (
         "**Gradient norms.** Each network's norm before clipping (`Loss/grad_norm_actor`, `Loss/grad_norm_critic`, "
-        "the mean over an update's minibatches; each run's `progress_loss.jsonl`): "
+        "the mean over an update's minibatches; each run's `progress_train.jsonl`): "
         + "; ".join(parts)
         + f". The critic's norm sets a joint clip, and the actor's step shrinks with it; {joint}."
     )

@@ -9,8 +9,9 @@ What it reads (every seed each file holds):
 - ``report/runs.csv``: one row per ``refpo sweep cpu_fpo_pp`` run (``refpo report``'s per-run rows), every label of
   ``configs/sweep/cpu_fpo_pp.yaml`` that has run. ``--add-runs`` appends the rows of a sweep dir's report
   (``<dir>/report/runs.csv``) for (task, label, seed) not yet in the file, and copies each run's ``config.yaml``,
-  ``eval.json``, periodic-evaluation rows and losses to ``runs/<task>/<label>/seed<k>/``: that is how the small-task
-  recipe's (``fpo_pp_small``) and the gradient-clip ablation's rows arrive. A failed run counts as return 0.
+  ``eval.json``, periodic-evaluation rows and training statistics to ``runs/<task>/<label>/seed<k>/``: that is how
+  the small-task recipe's (``fpo_pp_small``) and the gradient-clip ablation's rows arrive. A failed run counts as
+  return 0.
 - ``runs/<task>/<label>/seed<k>/config.yaml`` and ``eval.json``: each setting's values and run sizes.
 - ``report_task_profile/runs.csv``: the first grid (FPO++'s loss on the task's ReFPO profile).
 - ``../tuning/fresh/runs.csv`` (label ``fpo_pp``) and ``../tuning/fresh/runs/``: FPO++ at the tuned CPU values.

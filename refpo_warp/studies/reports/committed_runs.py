@@ -1,6 +1,6 @@
 """Committing a sweep's finished runs beside a results page: each run's small files (``config.yaml``, ``eval.json``,
-its periodic-evaluation rows and its losses) copied under the page's folder, and its ``refpo report`` row appended to
-the page's ``runs.csv``; and how pages name the seeds they hold."""
+its periodic-evaluation rows and its training statistics) copied under the page's folder, and its ``refpo report``
+row appended to the page's ``runs.csv``; and how pages name the seeds they hold."""
 
 from __future__ import annotations
 
@@ -14,45 +14,49 @@ from refpo_warp.utils.atomic_files import write_text
 
 RUN_FILES = ("config.yaml", "eval.json")
 EVAL_ROW_KEYS = ("iteration", "env_steps", "time_s", "reward_mean")
-LOSS_ROW_KEYS = ("iteration", "env_steps")
+TRAIN_ROW_KEYS = ("iteration", "env_steps", "reward_mean", "episode_length_mean")
+# The training statistics a committed run keeps each iteration: losses and gradient norms, the flow's update
+# statistics (ratios, clipping, KL), the training episodes' task metrics; not timings, not evaluations.
+TRAIN_PREFIXES = ("Loss/", "Flow/", "Episode/")
 
 
-def progress_rows(progress: Path, marker: str, prefix: str, keys: tuple[str, ...]) -> str:
-    """The rows of a run's ``progress.jsonl`` that hold a key starting with ``marker``, each with only ``keys`` and the
-    keys starting with ``prefix``, as JSON lines."""
-    keep = []
+def progress_rows(progress: Path, marker: tuple[str, ...], kept: tuple[str, ...], keys: tuple[str, ...]) -> str:
+    """The rows of a run's ``progress.jsonl`` that hold a key starting with one of ``marker``, each with only ``keys``
+    and the keys starting with one of ``kept``, as JSON lines."""
+    rows = []
     for line in progress.read_text().splitlines():
         try:
             row = json.loads(line)
         except ValueError:
             continue
         if any(k.startswith(marker) for k in row):
-            keep.append(json.dumps({k: v for k, v in row.items() if k in keys or k.startswith(prefix)}))
-    return "\n".join(keep) + ("\n" if keep else "")
+            rows.append(json.dumps({k: v for k, v in row.items() if k in keys or k.startswith(kept)}))
+    return "\n".join(rows) + ("\n" if rows else "")
 
 
 def eval_rows(progress: Path) -> str:
     """The rows of a run's ``progress.jsonl`` that hold a periodic evaluation (the curves a page draws), each with
     only its position, its training reward and its ``eval/`` values."""
-    return progress_rows(progress, "eval/return", "eval/", EVAL_ROW_KEYS)
+    return progress_rows(progress, ("eval/return",), ("eval/",), EVAL_ROW_KEYS)
 
 
-def loss_rows(progress: Path) -> str:
-    """Every iteration's ``Loss/`` scalars of a run's ``progress.jsonl``: the losses, and each network's gradient norm
-    before clipping (``Loss/grad_norm_actor``, ``Loss/grad_norm_critic``)."""
-    return progress_rows(progress, "Loss/", "Loss/", LOSS_ROW_KEYS)
+def train_rows(progress: Path) -> str:
+    """Every iteration's training statistics of a run's ``progress.jsonl`` (``TRAIN_PREFIXES``): the losses, each
+    network's gradient norm before clipping, the flow's ratio, clipping and KL statistics, the training episodes'
+    metrics."""
+    return progress_rows(progress, TRAIN_PREFIXES, TRAIN_PREFIXES, TRAIN_ROW_KEYS)
 
 
 def copy_run(run: Path, dst: Path) -> None:
     """A run's small files into ``dst``: config.yaml, eval.json, and from its progress.jsonl the periodic evaluations
-    (progress_eval.jsonl) and every iteration's losses and gradient norms (progress_loss.jsonl)."""
+    (progress_eval.jsonl) and every iteration's training statistics (progress_train.jsonl)."""
     dst.mkdir(parents=True, exist_ok=True)
     for name in RUN_FILES:
         if (run / name).exists():
             shutil.copy2(run / name, dst / name)
     if (run / "progress.jsonl").exists():
         write_text(dst / "progress_eval.jsonl", eval_rows(run / "progress.jsonl"))
-        write_text(dst / "progress_loss.jsonl", loss_rows(run / "progress.jsonl"))
+        write_text(dst / "progress_train.jsonl", train_rows(run / "progress.jsonl"))
 
 
 def read_rows(path: Path) -> list[dict]:
