@@ -22,6 +22,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from finetune_updates import update_text
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, read_rows, seeds_text
@@ -238,11 +239,28 @@ def curves(label: str) -> dict[int, list[dict]]:
     return out
 
 
+def warmup_iterations() -> int:
+    """The critic's warm-up (``critic_warmup_iterations``, the actor held fixed), from a run's config."""
+    row = next(r for r in rows() if r["status"] == "ok")
+    return int(load_yaml(ROOT / row["run_dir"] / "config.yaml")["critic_warmup_iterations"])
+
+
 def warmup_env_steps() -> int:
-    """Env steps of the critic's warm-up (``critic_warmup_iterations``, the actor held fixed), from a run's config."""
+    """Env steps of the critic's warm-up, from a run's config."""
     row = next(r for r in rows() if r["status"] == "ok")
     cfg = load_yaml(ROOT / row["run_dir"] / "config.yaml")
-    return int(cfg["critic_warmup_iterations"]) * int(cfg["num_envs"]) * int(cfg["runner"]["num_steps_per_env"])
+    return warmup_iterations() * int(cfg["num_envs"]) * int(cfg["runner"]["num_steps_per_env"])
+
+
+def run_folders() -> dict[str, tuple[str, list[Path]]]:
+    """label -> (the method's name, its finished runs' folders)."""
+    return {
+        m["label"]: (
+            m["name"],
+            [ROOT / r["run_dir"] for r in rows() if r["label"] == m["label"] and r["status"] == "ok"],
+        )
+        for m in methods()
+    }
 
 
 def figure() -> None:
@@ -294,6 +312,7 @@ def values() -> dict[str, object]:
         "data_episodes": data["total_episodes"],
         "left_share": data["refpo"]["policy"]["left_share"],
         "summary": summary(),
+        "updates": update_text(run_folders(), warmup_iterations()),
         "warmup": f"{warmup_env_steps():,}",
         "machine": MACHINE,
         "success_floor": f"{100 * SUCCESS_FLOOR:.0f} %",
