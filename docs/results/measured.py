@@ -35,8 +35,12 @@ import math
 import re
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
+
+if TYPE_CHECKING:  # imported where used: numpy's import is the cost of a page that needs no interval
+    from refpo_warp.studies.reports.intervals import Estimate
 
 RESULTS = Path(__file__).resolve().parent
 ROOT = RESULTS.parents[1]
@@ -84,7 +88,7 @@ def number(text: str | None) -> float | None:
 
 
 @functools.cache
-def _interval(values: tuple[float, ...]):
+def _interval(values: tuple[float, ...]) -> Estimate:
     import numpy as np
 
     from refpo_warp.studies.reports.intervals import aggregate
@@ -92,7 +96,7 @@ def _interval(values: tuple[float, ...]):
     return aggregate({"x": np.array([[v] for v in values])})["x"]["mean"]
 
 
-def interval(values) -> object:
+def interval(values) -> Estimate:
     """The mean over ``values`` (one per seed) with its 95 % stratified-bootstrap interval (``intervals.Estimate``)."""
     return _interval(tuple(float(v) for v in values))
 
@@ -237,8 +241,9 @@ def finetuning_gridworld_row() -> str | None:
     """Success and the bands' shares of the clones and the fine-tuned flows on GridWorld's two-mode demonstrations."""
     folder = RESULTS / "finetuning" / "gridworld"
     names = ("clone_flow", "clone_gauss", "refpo_from_flow", "fpo_from_flow", "ppo_from_gauss")
-    runs = {name: _eval(folder / name / "eval.json") for name in names}
-    if any(r is None for r in runs.values()):
+    found = {name: _eval(folder / name / "eval.json") for name in names}
+    runs = {name: r for name, r in found.items() if r is not None}
+    if len(runs) < len(names):
         return None
     seed = json.loads((folder / "clone_flow" / "eval.json").read_text())["seed"]
 
@@ -365,7 +370,8 @@ def fresh_standing() -> dict | None:
     ppo = task_runs(rows, "ppo")
     if not all(ppo.get(t) for t in tasks):
         return None
-    out = {"path": path, "tasks": tasks, "seeds": set(), "flows": {}}
+    seeds: set[int] = set()
+    flows: dict[str, dict] = {}
     for label in FLOW_NAMES:
         runs = task_runs(rows, label)
         if not all(runs.get(t) for t in tasks):
@@ -377,10 +383,10 @@ def fresh_standing() -> dict | None:
             for t in tasks
         )
         poi = improvement(_matrix(runs, tasks), _matrix(ppo, tasks))
-        out["flows"][label] = {"reach": reach, "poi": poi}
-        out["seeds"] |= {s for t in tasks for s in runs[t]}
-    out["seeds"] |= {s for t in tasks for s in ppo[t]}
-    return out
+        flows[label] = {"reach": reach, "poi": poi}
+        seeds |= {s for t in tasks for s in runs[t]}
+    seeds |= {s for t in tasks for s in ppo[t]}
+    return {"path": path, "tasks": tasks, "seeds": seeds, "flows": flows}
 
 
 def budget_runs() -> dict[str, list[dict]]:
@@ -497,7 +503,10 @@ def demonstrations() -> str:
         + f" and the Gaussian clone reaches neither in {100 * (1 - g['success_rate']):.0f} % of its "
         f"{g['episodes']} episodes"
     )
-    above, overlap, holds, highest = {}, {}, {}, {}
+    above: dict[str, list[str]] = {}
+    overlap: dict[str, list[str]] = {}
+    holds: dict[str, list[str]] = {}
+    highest: dict[str, tuple[str, Estimate, list[str]]] = {}
     tasks = []
     for task_dir in sorted(FINETUNED.glob("dmc_*")):
         tasks.append(short(task_dir.name))

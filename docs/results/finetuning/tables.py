@@ -33,6 +33,7 @@ import math
 import shutil
 import sys
 from collections import Counter
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -178,7 +179,8 @@ def timeout_rows(run: Path, episodes: int = 200) -> Counter:
     _, runner = build_runner(resolved, None, env=env)
     load_latest(runner, run, cfg["task"], cfg["algo"])
     actor = runner.get_inference_policy(device="cpu")
-    obs, ended, rows = env.reset(), torch.zeros(episodes, dtype=torch.bool), Counter()
+    rows: Counter[int] = Counter()
+    obs, ended = env.reset(), torch.zeros(episodes, dtype=torch.bool)
     with torch.inference_mode():
         for _ in range(int(env.max_episode_length)):
             before = env.positions.clone()
@@ -395,9 +397,11 @@ def record_note(records: list[dict]) -> str:
 def learning_check_values() -> dict:
     """The learning check's records: each run's statistics as tests/learning/checks.py computes them."""
     records = [json.loads(line) for line in CHECK_RECORDS.read_text().splitlines() if line.strip()]
-    constants = {}
+    constants: dict[str, str] = {}
     for node in ast.parse(CHECKS_SOURCE.read_text()).body:
-        target = node.targets[0] if isinstance(node, ast.Assign) else None
+        if not isinstance(node, ast.Assign):
+            continue
+        target = node.targets[0]
         if isinstance(target, ast.Name) and target.id in ("FINETUNE_COLLECT", "FINETUNE_PRETRAIN"):
             constants.update(o.split("=", 1) for o in ast.literal_eval(node.value))
 
@@ -530,7 +534,7 @@ def keep_dmc(runs: Path, sweeps: Path) -> None:
             shutil.copyfile(runs / task / "data" / "metadata.json", DMC_KEPT / task / "data" / "metadata.json")
 
 
-def _groups(task: str):
+def _groups(task: str) -> Iterator[tuple[str, str, str, str, list[Path]]]:
     """(start, label, base, what, seed runs) of the task's fine-tuned and from-scratch groups, in the table's order:
     per method, its runs from the clone, with the normalisers updated, its variants, from scratch."""
     for label, base, what in DMC_METHODS:
@@ -655,11 +659,11 @@ def dmc_table() -> str:
             if "normalisers updated" in start:
                 continue  # the collapse table's
             runs = [load_run(r) for r in dirs]
-            one = [r.n1 for r in runs if r.n1 is not None]
+            ones = [r.n1 for r in runs if r.n1 is not None]
             reach = [ksteps_list([first_reaching(r.curve, target) for r in runs]) for target in (data, ppo_final)]
             lines.append(
                 f"| {task} | {what}, from {start} | {interval_cell(n10(runs))} | "
-                f"{interval_cell(one) if one else '-'} | {reach[0]} | {reach[1]} |"
+                f"{interval_cell(ones) if ones else '-'} | {reach[0]} | {reach[1]} |"
             )
     return "\n".join(lines)
 
@@ -735,7 +739,7 @@ def reach_sentence() -> str:
             + (f", at {span([s / 1000 for s in at_scratch], 0, 'k-')}k" if at_scratch else "")
         )
         parts.append(text)
-        counts = {}
+        counts: dict[str, list[str]] = {}
         for label in FLOWS_HELD + ("ppo",):
             runs = group(DMC_KEPT, task, label)
             if runs:
@@ -778,7 +782,9 @@ def ppo_values() -> dict:
     task = "dmc_point_mass"
     chosen, fresh = chosen_and_fresh(task)
     ppo_fresh = n10(group(DMC_KEPT, task, "ppo"), fresh)
-    beaten, split, above = [], [], []
+    beaten: list[str] = []
+    split: list[str] = []
+    above: list[str] = []
     for label in FLOWS_HELD:
         values = n10(group(DMC_KEPT, task, label), fresh)
         p = improvement_estimate(tuple(values), tuple(ppo_fresh))
@@ -795,16 +801,16 @@ def ppo_values() -> dict:
         text += f"; {words(above)} ends above PPO"
     sentences.append(text + ".")
     task = "dmc_reacher_easy"
-    ppo = n10(group(DMC_KEPT, task, "ppo"))
+    reacher_ppo = n10(group(DMC_KEPT, task, "ppo"))
     rest = []
     for label in FLOWS_HELD:
-        runs = group(DMC_KEPT, task, label)
-        if runs:
-            p = improvement_estimate(tuple(n10(runs)), tuple(ppo))
+        reacher_runs = group(DMC_KEPT, task, label)
+        if reacher_runs:
+            p = improvement_estimate(tuple(n10(reacher_runs)), tuple(reacher_ppo))
             rest.append((prose(label), p))
     none = all(not p.separates for _, p in rest)
     sentences.append(
-        f"On reacher_easy ({len(ppo)} seeds each) "
+        f"On reacher_easy ({len(reacher_ppo)} seeds each) "
         + (
             f"no interval separates a flow method from PPO (P = {span([p.point for _, p in rest], 2)})."
             if none
@@ -846,7 +852,7 @@ def collapse_values() -> dict:
     rows = [(UPDATED_KEPT, "updated", label) for label, _, _ in DMC_METHODS] + [
         (DMC_KEPT, "held", label) for label in FLOWS_HELD
     ]
-    warmup = {}
+    warmup: dict[int, list[Run]] = {}
     for kept, how, label in rows:
         runs = group(kept, task, label)
         if not runs:
@@ -1168,9 +1174,9 @@ def dmc_curves(path: Path, remedies: bool = False) -> Path | None:
 
     names = {label: what for label, _, what in DMC_METHODS}
     if remedies:
-        panels = [(task, [g for g in _groups(task) if g[0] != "scratch" and g[2] == "refpo"]) for task in DMC_TASKS]
+        tried = [(task, [g for g in _groups(task) if g[0] != "scratch" and g[2] == "refpo"]) for task in DMC_TASKS]
         panels = [
-            (task, groups, "ReFPO from the flow clone, remedies tried") for task, groups in panels if len(groups) > 1
+            (task, groups, "ReFPO from the flow clone, remedies tried") for task, groups in tried if len(groups) > 1
         ]
     else:
         panels = [

@@ -552,7 +552,7 @@ def values() -> dict:
             name = "its mean action" if setting == "mean_action" else setting.replace("N=", "N = ")
             own.append(f"{lab}, {name}: {r['return_mean']:.0f} ({r['episodes']} episodes)")
 
-    def share(key: str, k: str, of: str | None = None) -> str:
+    def share(key: str, k: str, of: tuple[str, str] | None = None) -> str:
         s = st[key]
         n = s["episodes"] if of is None else s[of[0]] + s[of[1]]
         return f"{100 * s[k] / n:.0f} %"

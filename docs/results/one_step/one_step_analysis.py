@@ -42,6 +42,7 @@ import json
 import statistics
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
@@ -50,7 +51,7 @@ from refpo_warp.cli.guard import EXIT_USAGE, run_guarded
 from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.utils.errors import ConfigError, DataFileError, unknown
 
-OPTIONS = {
+OPTIONS: dict[str, Any] = {  # key=value options of the command line, their types checked in main
     "out": None,
     "task": "dmc_point_mass",
     "seed": 1,
@@ -91,7 +92,7 @@ def training_figures(runs, out: Path) -> dict:
     from refpo_warp.runner.progress import read_rows
     from refpo_warp.utils.atomic_files import save_figure
 
-    numbers = {}
+    numbers: dict[str, dict] = {}
     for task, methods in runs.items():
         fig, axes = plt.subplots(1, len(PANELS), figsize=(3.3 * len(PANELS), 2.8))
         numbers[task] = {}
@@ -164,7 +165,7 @@ def probe_run(run: Path, options: dict) -> dict:
     if not loaded.checkpoints:
         raise DataFileError(f"{run}: no checkpoints (model_<iteration>.pt) to probe")
     keys = [*PROBE_KEYS, "saturated_n", "saturated_1"]
-    out = {"iterations": [], "states_N": {k: [] for k in keys}, "states_1": {k: [] for k in keys}}
+    out: dict[str, Any] = {"iterations": [], "states_N": {k: [] for k in keys}, "states_1": {k: [] for k in keys}}
     picked = loaded.checkpoints[:: options["every"]]
     picked += [] if picked[-1] == loaded.checkpoints[-1] else loaded.checkpoints[-1:]
     for path in picked:
@@ -209,7 +210,7 @@ def point_mass_paths(loaded: CheckpointPolicy, actor) -> dict:
 
 # One update rule changed at a time, from the same checkpoint and the same first rollout (the base run: ReFPO with
 # independent pairs, the sweep's "refpo"). "advantages" keeps only one sign of the (normalised) advantages.
-VARIANTS = {
+VARIANTS: dict[str, dict[str, float | str]] = {
     "as trained (λ = 0.04)": {},
     "λ = 0": {"algorithm.reflow_coef": 0.0},
     "λ = 0, A > 0 only": {"algorithm.reflow_coef": 0.0, "advantages": "positive"},
@@ -241,7 +242,7 @@ def screen(seeds: dict[str, dict[int, Path]], task: str, options: dict, out: Pat
     if not runs:
         raise ConfigError(f"screen= needs the sweep's 'refpo' runs of {task} (checkpoints every few iterations)")
     sweep = load_sweep(str(options["screen"]))
-    candidates = {"ReFPO (the paper's rule)": {}}
+    candidates: dict[str, dict] = {"ReFPO (the paper's rule)": {}}
     candidates.update({m.name: dict(m.overrides) for m in sweep.methods})
     iteration, iterations = int(options["intervene"]), int(options["intervene_iterations"])
     results = {
@@ -323,7 +324,7 @@ def intervene(
         fixed["states_1"] = base.states(actor, options["states"], 1)
 
     def measure(actor) -> dict:
-        out = {}
+        out: dict[str, Any] = {}
         for where, obs in fixed.items():
             gen = torch.Generator().manual_seed(options["seed"])
             out[where] = sampler_probe(actor, obs, actor.num_flow_steps, base.transform, options["noises"], gen)
@@ -335,7 +336,7 @@ def intervene(
         out["returns"] = evaluate_returns(actor, base.cfg, device)
         return out
 
-    results = {"checkpoint": measure(actor), "iterations": iterations, "variants": {}}
+    results: dict[str, Any] = {"checkpoint": measure(actor), "iterations": iterations, "variants": {}}
     for name, change in variants.items():
         print(f"[one_step] {run.name} from iteration {iteration}: {iterations} iterations, {name}", flush=True)
         overrides = {"device": device, **{k: v for k, v in change.items() if k != "advantages"}}
@@ -611,14 +612,14 @@ def page_values() -> dict:
     e_pm = {lb: statistics.fmean(runs(lb, pm_task, "one_step").values()) for lb in REFPO_VARIANTS}
     o_pm = {lb: statistics.fmean(runs(lb, pm_task, ONE).values()) for lb in REFPO_VARIANTS}
     others = [lb for lb in REFPO_VARIANTS if lb != "refpo"]
-    if min(s_pm, key=s_pm.get) == "refpo" and max(e_pm, key=e_pm.get) == "refpo":
+    if min(s_pm, key=s_pm.__getitem__) == "refpo" and max(e_pm, key=e_pm.__getitem__) == "refpo":
         verdict = (
             "The paper's Straightness Error (the CFM residual on independent pairs) does not see this: on point_mass "
             f"it ranks independent pairs the straightest of the ReFPO variants ({s_pm['refpo']:.2f} against "
             f"{' and '.join(f'{s_pm[lb]:.2f}' for lb in others)}) while the one-step error (eval) ranks them the "
             f"farthest from one-step ({e_pm['refpo']:.2f} against {' and '.join(f'{e_pm[lb]:.2f}' for lb in others)})"
         )
-        verdict += ", and they have the lowest 1-step return." if min(o_pm, key=o_pm.get) == "refpo" else "."
+        verdict += ", and they have the lowest 1-step return." if min(o_pm, key=o_pm.__getitem__) == "refpo" else "."
     else:
         verdict = (
             "On point_mass, Straightness (eval) "
@@ -832,7 +833,7 @@ def page_values() -> dict:
     )
     cp, re_ = "dmc_cartpole_balance", "dmc_reacher_easy"
     cp_multi = runs("refpo", cp, MULTI)
-    weakest = min(cp_multi, key=cp_multi.get)
+    weakest = min(cp_multi, key=cp_multi.__getitem__)
     cp_up = all(est[f"{lb}:{cp}"].point > est[f"refpo:{cp}"].point for lb in others)
     cp_one_kept = all(
         statistics.fmean(runs(lb, cp, ONE).values()) >= 0.9 * statistics.fmean(runs("refpo", cp, ONE).values())
@@ -1161,7 +1162,8 @@ def page_values() -> dict:
     s_all = [v for lb in REFPO_VARIANTS for t in tasks for v in runs(lb, t, "straightness").values()]
     out["straightness_range"] = st.span(s_all)
     ratio_eval = {lb: runs(lb, pm_task, "one_step_ratio") for lb in ("fpo", *REFPO_VARIANTS)}
-    lost_r, kept_r = [], []
+    lost_r: list[float] = []
+    kept_r: list[float] = []
     for lb, values in ratio_eval.items():
         m, o = runs(lb, pm_task, MULTI), runs(lb, pm_task, ONE)
         for s, v in values.items():
@@ -1171,7 +1173,7 @@ def page_values() -> dict:
     out["diag_text"] = (
         f"collapsed in {st.of(ref_lost, len(ref_r))} seeds, they end at final ratios (eval) of "
         f"{st.span(ref_r.values())} while their Straightness is the lowest of the variants"
-        if min(s_pm, key=s_pm.get) == "refpo"
+        if min(s_pm, key=s_pm.__getitem__) == "refpo"
         else f"collapsed in {st.of(ref_lost, len(ref_r))} seeds, they end at final ratios (eval) of "
         f"{st.span(ref_r.values())}"
     )
@@ -1217,7 +1219,7 @@ def main(argv: list[str]) -> int:
         sweep = Path(argv[0])
         if not sweep.is_dir():
             raise ConfigError(f"{sweep}: no such sweep directory (a refpo sweep output dir)")
-        options = dict(OPTIONS)
+        options: dict[str, Any] = dict(OPTIONS)
         for key, value in parse_overrides(argv[1:]).items():
             if key not in OPTIONS:
                 raise unknown("option", key, list(OPTIONS))

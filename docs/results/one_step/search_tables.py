@@ -33,6 +33,7 @@ sys.path.insert(0, str(ROOT))  # refpo_warp, when run from anywhere
 
 from refpo_warp.studies.reports.committed_runs import seeds_text  # noqa: E402
 from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
+from refpo_warp.utils.errors import DataFileError  # noqa: E402
 
 SEARCH_RUNS = HERE / "search" / "report" / "runs.csv"
 CPU_DMC_RUNS = RESULTS / "cpu_dmc" / "runs.csv"
@@ -201,7 +202,7 @@ def screen_values(screen: dict, spec: dict) -> dict:
         for m in candidates
         if set(m.get("overrides", {})) == {"algorithm.one_step_coef"}
     }
-    ordered = sorted(coef, key=coef.get)
+    ordered = sorted(coef, key=coef.__getitem__)
     factors = {n: [err(s, rule) / err(s, n) for s in seeds] for n in ordered}
     monotone = all(err(s, a) > err(s, b) for s in seeds for a, b in itertools.pairwise(ordered))
     largest = ordered[-1]
@@ -330,7 +331,8 @@ def full_run_values(spec: dict, rules: dict) -> dict:
     ]
     refpo_seed_sets = sorted({seeds_text(refpo[t][0]) for t in tasks})
     lines[0] = lines[0].replace("{}", ", ".join(refpo_seed_sets))
-    held_all, pairs_all, changes, overlap, narrowest = 0, 0, {}, [], None
+    held_all, pairs_all, changes, overlap = 0, 0, {}, []
+    narrowest: tuple[float, str, int, float, float] | None = None  # (1-step / 10-step, task, seed, 1-step, 10-step)
     for t in tasks:
         multi, one = mine[t]
         cells = [f"{multi[s]:.0f} / {one[s]:.0f}" if s in multi and s in one else "--" for s in seeds]
@@ -339,9 +341,9 @@ def full_run_values(spec: dict, rules: dict) -> dict:
         pairs_all += len(multi)
         for s in multi:
             if s in one and multi[s] > 0:
-                r = one[s] / multi[s]
-                if narrowest is None or r < narrowest[0]:
-                    narrowest = (r, t, s, one[s], multi[s])
+                ratio = one[s] / multi[s]
+                if narrowest is None or ratio < narrowest[0]:
+                    narrowest = (ratio, t, s, one[s], multi[s])
         a, b = est[f"mine:{t}"], est[f"refpo:{t}"]
         change = a.point / b.point - 1.0
         changes[t] = change
@@ -397,14 +399,18 @@ def full_run_values(spec: dict, rules: dict) -> dict:
     mean_ppo = {t: statistics.fmean(ppo[t].values()) for t in tasks if ppo[t]}
     at_ppo = [t for t in tasks if t in mean_ppo and mean_one[t] >= mean_ppo[t]]
     need = goal["ppo_tasks"]
-    r, nt, ns, n1, n10 = narrowest
+    if narrowest is None:
+        raise DataFileError(
+            f"{SEARCH_RUNS}: no finished run with a positive 10-step return to compare its 1-step one with"
+        )
+    ratio, nt, ns, n1, n10 = narrowest
     goal_rows = [
         "| criterion | shown? |",
         "|---|---|",
         (
             f"| 1-step ≥ {share:g} × 10-step in every (task, seed) | **{'yes' if held_all == pairs_all else 'no'}, "
             f"{of(held_all, pairs_all)}** (ReFPO: {of(r_held, r_pairs)}); the narrowest: {short(nt)} seed {ns}, "
-            f"{n1:.0f} against {n10:.0f} ({r:.2f}) |"
+            f"{n1:.0f} against {n10:.0f} ({ratio:.2f}) |"
         ),
         f"| 10-step mean within {100 * drop:g} % of ReFPO's, per task | "
         + ("**yes, on the means**: " if len(within) == len(tasks) else "**no**: ")

@@ -35,6 +35,7 @@ import numpy as np
 import yaml
 
 from refpo_warp.studies.reports.committed_runs import copy_run, seeds_text
+from refpo_warp.utils.errors import DataFileError
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
@@ -114,10 +115,15 @@ def stopped_run(run: Path, dst: Path) -> bool:
             last = line
         if match:
             pairs = match.group(3).split()
-            row = {"iteration": int(match.group(1)), "env_steps": int(match.group(2).replace(",", ""))}
+            row: dict[str, float] = {
+                "iteration": int(match.group(1)),
+                "env_steps": int(match.group(2).replace(",", "")),
+            }
             row.update({f"eval/{k}": float(v) for k, v in zip(pairs[::2], pairs[1::2], strict=True)})
             rows.append(row)
     stopped_at = re.match(r"^\[it +(\d+)/\d+\] +steps +([\d,]+)", last or "")
+    if stopped_at is None:
+        raise DataFileError(f"{logs[0]}: no '[it N/M] steps S' line before its '{STOP_LINE}' line")
     dst.mkdir(parents=True, exist_ok=True)
     if (run / "config.yaml").exists():
         shutil.copy2(run / "config.yaml", dst / "config.yaml")
@@ -196,6 +202,14 @@ def own_trial(label: str) -> dict | None:
     return next((r for r in mine if r["enqueued"] == "True"), None) or next(
         (r for r in mine if r["trial"] == "0"), None
     )
+
+
+def own_values(label: str) -> dict:
+    """``own_trial`` where the page needs it: an error naming the file when trials.csv has none."""
+    own = own_trial(label)
+    if own is None:
+        raise DataFileError(f"{STUDY / 'trials.csv'}: no trial of '{label}' at its own values (enqueued or trial 0)")
+    return own
 
 
 def chosen() -> dict:
@@ -479,6 +493,8 @@ def one_step_counts(row: Row, share: float, within: float) -> tuple[int, int, in
                 misses.append(
                     f"{short(task)} seed {seed} failed"
                     if failed
+                    else f"{short(task)} seed {seed}: no N = 1 return"
+                    if one is None
                     else f"{short(task)} seed {seed}: {one:.0f} against {multi:.0f}, {one / multi:.2f}"
                 )
     return held, near, total, misses
@@ -509,11 +525,11 @@ def fresh_table(fresh: Fresh | None, crit: dict) -> str:
     if left:
         lines.append(f"- Left out until every task has their seed: {', '.join(left)}")
     goal = crit["goal"]["one_step"]
-    row = fresh.rows.get(f"{goal['method']}/tuned")
-    if row is not None:
-        held, near, total, _ = one_step_counts(row, goal["share"], crit["report"]["within"])
+    goal_row = fresh.rows.get(f"{goal['method']}/tuned")
+    if goal_row is not None:
+        held, near, total, _ = one_step_counts(goal_row, goal["share"], crit["report"]["within"])
         lines.append(
-            f"- {NAMES[row.label]} (tuned): N = 1 ≥ {goal['share']:g} × N = 10 in {held} of {total} (task, seed) "
+            f"- {NAMES[goal_row.label]} (tuned): N = 1 ≥ {goal['share']:g} × N = 10 in {held} of {total} (task, seed) "
             f"pairs; |N = 1 − N = 10| ≤ {crit['report']['within']:g} × N = 10 in {near} of {total}"
         )
     return "\n".join(lines)
@@ -928,7 +944,9 @@ def budget_prose(runs: list[BudgetRun], fresh: Fresh | None, profile: int, multi
         flows = [label for label in FLOWS if f"{label}/tuned" in fresh.rows]
         best = max(flows, key=lambda label: fresh.iqm[f"{label}/tuned"].point)
     still = (
-        "still the tuned flow method with the highest IQM on the fresh seeds"
+        "--"
+        if best is None
+        else "still the tuned flow method with the highest IQM on the fresh seeds"
         if best == flow
         else f"the tuned flow method with the highest IQM on the fresh seeds is now {CODE_NAMES[best]}"
     )
@@ -969,7 +987,7 @@ def page_values(check: bool) -> dict[str, object]:
     v["paper_steps"] = steps_text(paper_steps)
     v["paper_multiple"] = _fmt(paper_steps / trial_cfg["total_env_steps"])
     v["paper_passes"] = dmc["_actor_critic"]["num_learning_epochs"]
-    v["own_passes"] = _fmt(_num(own_trial("refpo")["algorithm.num_learning_epochs"]))
+    v["own_passes"] = _fmt(_num(own_values("refpo")["algorithm.num_learning_epochs"]))
 
     # the intro: the committed rows at the paper's values
     ppo_c, refpo_c = read_runs(*COMMITTED["ppo"][:2]), read_runs(*COMMITTED["refpo"][:2])
@@ -1003,7 +1021,7 @@ def page_values(check: bool) -> dict[str, object]:
     v["tune_evaluations"] = sum(1 for line in complete.read_text().splitlines() if line.strip())
     v["eval_episodes"] = trial_cfg["eval"]["interval_num_envs"]
     lr = next(d for k, d in spec["methods"][0]["space"].items() if k == "algorithm.learning_rate")
-    paper_lr = float(own_trial("ppo")["algorithm.learning_rate"])
+    paper_lr = float(own_values("ppo")["algorithm.learning_rate"])
     v["lr_paper"] = _fmt(paper_lr)
     v["lr_below"] = times_text(paper_lr / lr["low"])
     v["lr_above"] = times_text(lr["high"] / paper_lr)
@@ -1016,7 +1034,7 @@ def page_values(check: bool) -> dict[str, object]:
     v["chosen_one_step"] = chosen_one_step(crit)
 
     # tuned ReFPO's values against the paper's
-    picked, own_refpo = chosen(), own_trial("refpo")
+    picked, own_refpo = chosen(), own_values("refpo")
     v["refpo_lr_ratio"] = times_text(
         picked["refpo"]["overrides"]["algorithm.learning_rate"] / float(own_refpo["algorithm.learning_rate"])
     )
