@@ -12,8 +12,8 @@
   diagnostics' means, the Appendix C means, and which of the paper's directions hold, counted over the (task, seed)
   pairs, in words chosen here from the numbers.
 
-The helpers for seeds, intervals and runs.csv rows are ``docs/results/measured.py``'s (imported from beside this
-file).
+The helpers for intervals, runs.csv rows and profiles are ``docs/results/results_reading.py``'s (imported from beside
+this file).
 """
 
 from __future__ import annotations
@@ -25,18 +25,18 @@ from typing import TYPE_CHECKING
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from measured import (  # noqa: E402  (docs/results/measured.py)
+from results_reading import (  # noqa: E402  (docs/results/results_reading.py)
     ROOT,
     count_text,
     estimate,
     method_names,
     number,
     read_csv,
-    seeds_text,
     short,
     steps_text,
 )
 
+from refpo_warp.studies.reports.committed_runs import seeds_text  # noqa: E402
 from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
 from refpo_warp.utils.errors import DataFileError  # noqa: E402
 
@@ -104,7 +104,7 @@ def sweeps() -> tuple[str, dict]:
 
 
 def cuda_iteration_steps() -> str:
-    from measured import profile
+    from results_reading import profile
 
     cfg = profile("dmc_cartpole_balance", "ppo", "cuda")
     return f"{cfg['num_envs'] * cfg['runner']['num_steps_per_env']:,}"
@@ -358,7 +358,7 @@ def values() -> dict[str, object]:
     cpu, note = cpu_table(data)
     appendix, counted, bullets = directions(data)
     tasks = sorted({t for by_task in data.values() for t in by_task})
-    from measured import profile_steps
+    from results_reading import profile_steps
 
     by_steps: dict[int, list[str]] = {}
     for t in tasks:

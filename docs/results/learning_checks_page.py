@@ -28,9 +28,10 @@ sys.path.insert(0, str(ROOT / "tests" / "learning"))
 sys.path.insert(0, str(HERE))
 from checks import CHECKS, FINETUNE_COLLECT, FINETUNE_PRETRAIN, MJLAB_NULL_CONTROL, NULL_CONTROL  # noqa: E402
 from measure import RECORDS, RESULTS, current, read_records  # noqa: E402
-from measured import profile, seeds_text, steps_text  # noqa: E402  (docs/results/measured.py)
+from results_reading import profile, steps_text  # noqa: E402  (docs/results/results_reading.py)
 from table import LEARNING_RUNS, NULL_RUNS, fmt, table_markdown  # noqa: E402
 
+from refpo_warp.studies.reports.committed_runs import seeds_text  # noqa: E402
 from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
 
 TEMPLATE = HERE / "learning_checks.template.md"
