@@ -35,7 +35,7 @@ numbers in an existing one_step.json, keeping its probes and intervention.
 writes this folder's README.md whole from README.template.md and the committed files (one_step.json, report/runs.csv,
 ../cpu_dmc/runs.csv, configs/sweep/cpu_reflow_pairs.yaml, configs/task/_dmc.yaml and criteria.yaml), or with --check
 compares it with the page on disk; it trains and loads nothing (the helpers it shares with search.md's script are in
-search_tables.py).
+run_rows.py).
 """
 
 import json
@@ -527,7 +527,9 @@ def _roles(variants: dict) -> dict[str, str]:
 
 
 def page_values() -> dict:
-    import search_tables as st
+    import run_rows as st
+
+    from refpo_warp.studies.reports.committed_runs import seeds_text
 
     rules = st.criteria()
     below = rules["collapse_below"]
@@ -564,7 +566,7 @@ def page_values() -> dict:
         parts.append(text)
     dmc_seeds = sorted({s for t in tasks for s in runs("refpo", t, MULTI, dmc)})
     out["cpu_dmc_standing"] = (
-        f"in its ReFPO runs (seeds {st.seeds_text(dmc_seeds)}) the 1-step return collapses in " + st.words(parts)
+        f"in its ReFPO runs (seeds {seeds_text(dmc_seeds)}) the 1-step return collapses in " + st.words(parts)
     )
 
     # ------------------------------------------------------------------------------------- in short
@@ -686,7 +688,7 @@ def page_values() -> dict:
     apart = [lb for lb in others if st.separated(est[f"{lb}:{pm_task}"], est[f"refpo:{pm_task}"])]
     run_seeds = sorted({s for lb in REFPO_VARIANTS for s in pm_multi[lb]})
     out["short_runs"] = (
-        f"Over whole runs (seeds {st.seeds_text(run_seeds)}), **coupled pairs at λ = {lam('refpo_coupled')['mean']:g} "
+        f"Over whole runs (seeds {seeds_text(run_seeds)}), **coupled pairs at λ = {lam('refpo_coupled')['mean']:g} "
         f"remove the collapse in {held_text('refpo_coupled')}, and the adaptive λ in {held_text('refpo_adaptive')}**, "
         + (
             "with 10-step returns these seeds do not separate from ReFPO's"
@@ -764,7 +766,7 @@ def page_values() -> dict:
                 + f" | {mean_of('one_step_ratio', lambda x: f'{x:.2f}')} |"
             )
     out["main_table"] = "\n".join(lines)
-    out["table_seeds"] = st.seeds_text({int(r["seed"]) for r in rows})
+    out["table_seeds"] = seeds_text({int(r["seed"]) for r in rows})
 
     # ------------------------------------------------------------------------------------- directions
     bullets = []
