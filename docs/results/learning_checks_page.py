@@ -32,6 +32,7 @@ from results_reading import profile, steps_text  # noqa: E402  (docs/results/res
 from table import LEARNING_RUNS, NULL_RUNS, fmt, table_markdown  # noqa: E402
 
 from refpo_warp.studies.reports.committed_runs import seeds_text  # noqa: E402
+from refpo_warp.studies.reports.phrases import and_list  # noqa: E402
 from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
 
 TEMPLATE = HERE / "learning_checks.template.md"
@@ -40,11 +41,6 @@ LOG_LINE = re.compile(r"^\[learning check\] (\S+): (.*?); bounds")
 
 def code(items) -> str:
     return ", ".join(f"`{i}`" for i in items)
-
-
-def and_list(items: list[str]) -> str:
-    items = list(items)
-    return ", ".join(items[:-1]) + " and " + items[-1] if len(items) > 1 else "".join(items)
 
 
 def override(check: str, key: str) -> str | None:

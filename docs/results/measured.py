@@ -56,6 +56,7 @@ from results_reading import (
 )
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.phrases import and_list
 
 if TYPE_CHECKING:  # imported where used: numpy's import is the cost of a page that needs no interval
     from refpo_warp.studies.reports.intervals import Estimate
@@ -371,9 +372,6 @@ def budget() -> str:
 
 
 # ------------------------------------------------------------------------------------------------ demonstrations
-def and_list(items: list[str]) -> str:
-    items = list(items)
-    return ", ".join(items[:-1]) + " and " + items[-1] if len(items) > 1 else "".join(items)
 
 
 def grouped(by_method: dict[str, list[str]]) -> str:

@@ -16,12 +16,12 @@ from number_text import (
     slashed,
     span,
     thousands,
-    words,
 )
 from study_layout import DMC_KEPT, DMC_TASKS, FLOWS_HELD, HERE, NAMES, SCRATCH_KEPT, prose, read_json, read_yaml
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
 from refpo_warp.studies.reports.intervals import Estimate
+from refpo_warp.studies.reports.phrases import and_list
 
 
 # ------------------------------------------------------------------------------------------------ DMC: the page
@@ -181,9 +181,9 @@ def scratch_values() -> dict:
                     f"{name} (P = {p.point:.2f}; from scratch its seeds end at {slashed(n10(scratch))})"
                 )
     sentence = (
-        f"The interval puts fine-tuning above starting from scratch for {words(separated) if separated else 'none'}"
+        f"The interval puts fine-tuning above starting from scratch for {and_list(separated) if separated else 'none'}"
     )
-    sentence += f"; it holds one half, separating nothing, for {words(not_separated)}." if not_separated else "."
+    sentence += f"; it holds one half, separating nothing, for {and_list(not_separated)}." if not_separated else "."
     return {"scratch_table": "\n".join(lines), "scratch_sentence": sentence}
 
 
@@ -214,7 +214,7 @@ def reach_sentence() -> str:
         if len(counts) == 1:
             full.append(f"on {task[4:]} ({ppo_final:.0f}) {next(iter(counts))} seeds of each method")
         else:
-            listed = "; ".join(f"{c} seeds of {words(m)}" for c, m in counts.items())
+            listed = "; ".join(f"{c} seeds of {and_list(m)}" for c, m in counts.items())
             full.append(f"on {task[4:]} ({ppo_final:.0f}) {listed}")
     return (
         "Reaching the data's return: " + "; ".join(parts) + ". Reaching PPO's full-profile final within these env "
@@ -259,12 +259,12 @@ def ppo_values() -> dict:
     text = (
         f"On point_mass's fresh seeds {seeds_text(fresh)} (run after adaptive λ and ASPO were chosen on seeds "
         f"{seeds_text(chosen)}, which the all-seed rows pool with them) every PPO seed ({span(ppo_fresh)}) ends above "
-        f"every seed of {words(beaten) if beaten else 'no method'}"
+        f"every seed of {and_list(beaten) if beaten else 'no method'}"
     )
     if split:
-        text += f"; the seeds of {words(split)} mix with PPO's"
+        text += f"; the seeds of {and_list(split)} mix with PPO's"
     if above:
-        text += f"; {words(above)} ends above PPO"
+        text += f"; {and_list(above)} ends above PPO"
     sentences.append(text + ".")
     task = "dmc_reacher_easy"
     reacher_ppo = n10(group(DMC_KEPT, task, "ppo"))
@@ -281,7 +281,7 @@ def ppo_values() -> dict:
             f"no interval separates a flow method from PPO (P = {span([p.point for _, p in rest], 2)})."
             if none
             else "the intervals separate "
-            + words([f"{n} ({p.text(2)})" for n, p in rest if p.separates])
+            + and_list([f"{n} ({p.text(2)})" for n, p in rest if p.separates])
             + " from PPO."
         )
     )

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dmc_comparisons import chosen_and_fresh, verdict
 from dmc_runs import Run, final_returns, group, n10
-from number_text import improvement_estimate, interval_cell, slashed, span, words
+from number_text import improvement_estimate, interval_cell, slashed, span
 from study_layout import (
     DMC_KEPT,
     DMC_METHODS,
@@ -22,6 +22,7 @@ from study_layout import (
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
 from refpo_warp.studies.reports.intervals import Estimate
+from refpo_warp.studies.reports.phrases import and_list
 
 
 def collapse_values() -> dict:
@@ -92,7 +93,7 @@ def collapse_values() -> dict:
         "remedies_fell": "; ".join(remedies),
         "held_fall_sentence": (
             f"With the normalisers held, plain ReFPO on point_mass still fell in {fell_text(held)} seeds ("
-            + words(
+            + and_list(
                 [
                     f"seed {r.seed}: {r.peak[0]:.0f} at iteration {r.peak[1]}, {r.last_periodic:.0f} at the last "
                     "periodic evaluation"
@@ -129,10 +130,10 @@ def held_values() -> dict:
     re_sep = [prose(m) for (t, m), p in verdicts.items() if t == "dmc_reacher_easy" and p.separates]
     sentence = (
         "On point_mass the interval puts the held normalisers above the updated ones for "
-        f"{words(pm) if pm else 'no method'}"
-        + (f", not for {words(pm_not)}" if pm_not else "")
+        f"{and_list(pm) if pm else 'no method'}"
+        + (f", not for {and_list(pm_not)}" if pm_not else "")
         + "; on reacher_easy "
-        + (f"it separates {words(re_sep)}." if re_sep else "it separates no method.")
+        + (f"it separates {and_list(re_sep)}." if re_sep else "it separates no method.")
     )
     return {"held_table": "\n".join(lines), "held_sentence": sentence}
 
@@ -190,7 +191,7 @@ def adaptive_values() -> dict:
     if min(start_ratio) > schedule.target * BAND:
         text += f", above {schedule.target * BAND:g}, so λ rose from the first update on"
     text += (
-        f"; it reached its upper bound {high} in {len(reached)} of {len(runs)} adaptive runs ({words(sources)})"
+        f"; it reached its upper bound {high} in {len(reached)} of {len(runs)} adaptive runs ({and_list(sources)})"
         + (f", at iteration {span(reached)}" if reached else "")
         + f", and stayed there to the last update in {stayed} of {len(runs)}; the ratio ended at "
         f"{span(end_ratio, 1)}."
@@ -200,7 +201,7 @@ def adaptive_values() -> dict:
     if schedule.high not in fixed:
         text += (
             f" None of the fixed-λ runs on this page uses λ = {high} (they use "
-            f"{words(sorted(f'{v:g}' for v in fixed))}), so these runs do not tell the schedule from the larger λ."
+            f"{and_list(sorted(f'{v:g}' for v in fixed))}), so these runs do not tell the schedule from the larger λ."
         )
 
     task = "dmc_point_mass"
@@ -241,7 +242,7 @@ def adaptive_values() -> dict:
         "lambda_high": high,
         "lambda_low": f"{schedule.low:g}",
         "lambda_start": (
-            f"starting from {words(sorted(f'{v:g}' for v in starts))}"
+            f"starting from {and_list(sorted(f'{v:g}' for v in starts))}"
             + (", the fixed λ of every other ReFPO run here" if starts == fixed else "")
         ),
         "lambda_sentence": text,

@@ -7,7 +7,7 @@ import ast
 import json
 from collections import Counter
 
-from number_text import seconds, span, thousands, words
+from number_text import seconds, span, thousands
 from study_layout import (
     BOTH_BANDS,
     CHECK_RECORDS,
@@ -22,6 +22,7 @@ from study_layout import (
 )
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.phrases import and_list
 
 
 def eval_settings(results: dict) -> list[tuple[str, str]]:
@@ -151,8 +152,12 @@ def gridworld_values() -> dict:
         "gw_seed": seeds_text({configs[n]["seed"] for n in configs}),
         "gw_eval_episodes": seeds_text(episodes),
         "gw_unshown": (
-            f"{words([s.replace('=', ' = ') for s in unshown])} also in the eval.json of "
-            + ("every flow run" if set(with_unshown) == {n for n in res if "N=10" in res[n]} else words(with_unshown))
+            f"{and_list([s.replace('=', ' = ') for s in unshown])} also in the eval.json of "
+            + (
+                "every flow run"
+                if set(with_unshown) == {n for n in res if "N=10" in res[n]}
+                else and_list(with_unshown)
+            )
             if unshown
             else "nothing else in the eval.json files"
         ),
@@ -211,7 +216,7 @@ def record_note(records: list[dict]) -> str:
         return tuple(r["final"][s][k] for s in ("N=1", "N=10") for k in ("length_mean", "top_share", "bottom_share"))
 
     alike = all(len({statistics(r) for r in records if r["seed"] == seed}) == 1 for seed in twice)
-    return f"seeds {seeds_text(twice)} recorded more than once, with {words(threads)} torch threads" + (
+    return f"seeds {seeds_text(twice)} recorded more than once, with {and_list(threads)} torch threads" + (
         ", alike in these statistics" if alike else ", differing in these statistics"
     )
 

@@ -9,12 +9,7 @@ import numpy as np
 
 from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
 
-
 # ------------------------------------------------------------------------------------------------ formatting
-def words(items: list[str]) -> str:
-    """'a', 'a and b', 'a, b and c'."""
-    items = list(items)
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 
 
 def span(values, digits: int = 0, sep: str = "-") -> str:

@@ -47,7 +47,7 @@ from dmc_remedies import adaptive_values, collapse_values, held_values
 from dmc_runs import Run, cpu_dmc_rows, group, keep_dmc
 from gridworld_runs import keep
 from gridworld_values import gridworld_values, learning_check_values
-from number_text import span, thousands, words
+from number_text import span, thousands
 from study_layout import (
     DMC_FIGURE,
     DMC_KEPT,
@@ -62,6 +62,7 @@ from study_layout import (
 )
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.phrases import and_list
 
 PAIRS = [(task, label) for task in DMC_TASKS for label, _, _ in DMC_METHODS]
 
@@ -85,10 +86,10 @@ def dmc_values() -> dict:
         below += [task[4:]] if r < 0.5 else []
     weaker = all(f["data"] < f["ppo_final"] for f in facts.values())
     data_ratios = (
-        f"The data's return over PPO's full-profile final is {words(ratio_words)}: "
+        f"The data's return over PPO's full-profile final is {and_list(ratio_words)}: "
         + ("below PPO's final on every task" if weaker else "not below PPO's final on every task")
         + (
-            f", below the half the study aimed for on {words(below)} only."
+            f", below the half the study aimed for on {and_list(below)} only."
             if below and len(below) < len(facts)
             else f", below the half the study aimed for on {'every task' if below else 'no task'}."
         )
@@ -118,7 +119,7 @@ def dmc_values() -> dict:
     return {
         "demonstrator_table": demonstrator_table(facts),
         "dmc_episodes": seeds_text({f["episodes"] for f in facts.values()}),
-        "dmc_noise": words(sorted({f"{f['noise']:g}" for f in facts.values()})),
+        "dmc_noise": and_list(sorted({f"{f['noise']:g}" for f in facts.values()})),
         "data_ratios": data_ratios,
         "data_gap": "; ".join(gap),
         "rule_sentence": rule,
@@ -133,7 +134,7 @@ def dmc_values() -> dict:
         "periodic_steps": thousands(interval_steps),
         "periodic_episodes": seeds_text({read_yaml(r.path / "config.yaml")["eval"]["interval_num_envs"] for r in fine}),
         "ppo_full": " / ".join(f"{f['ppo_final']:.0f}" for f in facts.values()),
-        "ppo_full_runs": words(sorted({cpu_dmc_rows()[(t, "ppo")]["return_multi_n"] for t in DMC_TASKS})),
+        "ppo_full_runs": and_list(sorted({cpu_dmc_rows()[(t, "ppo")]["return_multi_n"] for t in DMC_TASKS})),
         "dmc_table": dmc_table(),
         "reach_sentence": reach_sentence(),
         "one_step_sentence": one_step_sentence(),

@@ -13,6 +13,8 @@ from intervention import VARIANTS
 from readme_data import PAGE_METHODS, REFPO_VARIANTS, SHORT, diag
 from run_rows import MULTI, ONE
 
+from refpo_warp.studies.reports.phrases import and_list
+
 
 def over_training(c: SimpleNamespace) -> dict:
     """Over training: the last update's table and the one-step error and λ of FPO, ReFPO and the adaptive λ."""
@@ -59,7 +61,7 @@ def over_training(c: SimpleNamespace) -> dict:
     )
     text += (
         "The adaptive λ ends at "
-        + st.words([f"{value:g} in every seed on {st.words(ts)}" for value, ts in fixed.items()])
+        + and_list([f"{value:g} in every seed on {and_list(ts)}" for value, ts in fixed.items()])
         if fixed
         else "The adaptive λ ends"
     )
@@ -119,7 +121,7 @@ def paths_text(c: SimpleNamespace) -> dict:
         + "; ".join(lines)
         + ". A bias of a few hundredths in where the 1-step dynamics come to rest is worth "
         "nearly the whole return on this task, which is why the return is far more sensitive than a mean-squared "
-        f"action error suggests; on {st.words([st.short(t) for t in rest])}, ReFPO's one-step error (eval) of "
+        f"action error suggests; on {and_list([st.short(t) for t in rest])}, ReFPO's one-step error (eval) of "
         f"{' and '.join(diag(cost[t][0]) for t in rest)}, against point_mass's {diag(cost[pm_task][0])}, goes with "
         "1-step "
         f"returns of {' and '.join(f'{cost[t][1]:.0f}' for t in rest)} against 10-step ones of "

@@ -12,6 +12,7 @@ from readme_data import REFPO_VARIANTS, SHORT, diag, variant_roles
 from run_rows import MULTI, ONE
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.phrases import and_list
 
 
 def cpu_dmc_standing(c: SimpleNamespace) -> dict:
@@ -29,7 +30,7 @@ def cpu_dmc_standing(c: SimpleNamespace) -> dict:
         parts.append(text)
     dmc_seeds = sorted({s for t in tasks for s in runs("refpo", t, MULTI, dmc)})
     out["cpu_dmc_standing"] = (
-        f"in its ReFPO runs (seeds {seeds_text(dmc_seeds)}) the 1-step return collapses in " + st.words(parts)
+        f"in its ReFPO runs (seeds {seeds_text(dmc_seeds)}) the 1-step return collapses in " + and_list(parts)
     )
     return out
 
@@ -173,7 +174,7 @@ def in_short(c: SimpleNamespace) -> dict:
         + (
             "with 10-step returns these seeds do not separate from ReFPO's"
             if not apart
-            else f"with 10-step returns apart from ReFPO's for {st.words([names[lb] for lb in apart])}"
+            else f"with 10-step returns apart from ReFPO's for {and_list([names[lb] for lb in apart])}"
         )
         + f" ({iv('refpo_coupled')} and {iv('refpo_adaptive')} against {iv('refpo')}). "
         + (
@@ -410,10 +411,10 @@ def directions(c: SimpleNamespace) -> dict:
         + "), "
         + "; ".join(
             f"{SHORT[lb]} below independent pairs in seed{'s' if len(re_below[lb]) != 1 else ''} "
-            f"{st.words([str(s) for s in re_below[lb]]) if re_below[lb] else 'none'}"
+            f"{and_list([str(s) for s in re_below[lb]]) if re_below[lb] else 'none'}"
             + (
                 f" and above it in seed{'s' if len(re_above[lb]) != 1 else ''} "
-                f"{st.words([str(s) for s in re_above[lb]])}"
+                f"{and_list([str(s) for s in re_above[lb]])}"
                 if re_above[lb]
                 else ""
             )

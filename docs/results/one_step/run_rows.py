@@ -73,11 +73,6 @@ def listing(values, digits: int = 0, sep: str = " / ") -> str:
     return sep.join(num(v, digits) for v in values)
 
 
-def words(items: list[str]) -> str:
-    """'a', 'a and b', 'a, b and c'."""
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
-
-
 def of(k: int, n: int) -> str:
     return f"{k} of {n}"
 

@@ -48,12 +48,12 @@ from run_rows import (
     span,
     sweep_spec,
     tasks_of,
-    words,
 )
 
 sys.path.insert(0, str(ROOT))  # refpo_warp, when run from anywhere
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.phrases import and_list
 from refpo_warp.studies.reports.results_page import main_args, write_page
 from refpo_warp.utils.errors import DataFileError
 
@@ -283,14 +283,14 @@ def full_run_values(spec: dict, rules: dict) -> dict:
             + (
                 f"so the goal's {100 * drop:g} % bound is met on the means only."
                 if not failing
-                else f"and on the means the goal's {100 * drop:g} % bound fails on {words(failing)}."
+                else f"and on the means the goal's {100 * drop:g} % bound fails on {and_list(failing)}."
             )
         )
     else:
         apart = [short(t) for t in tasks if short(t) not in overlap]
         verdict = (
-            f"The intervals are apart on {words(apart)}"
-            + (f" and overlap on {words(overlap)}" if overlap else "")
+            f"The intervals are apart on {and_list(apart)}"
+            + (f" and overlap on {and_list(overlap)}" if overlap else "")
             + "."
         )
 

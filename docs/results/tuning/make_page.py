@@ -42,7 +42,6 @@ from study_files import (
     TASKS,
     TEMPLATE,
     TUNING_FILE,
-    and_list,
     fmt,
     number,
     read_yaml,
@@ -80,6 +79,7 @@ from verdict_prose import (
 )
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.phrases import and_list
 
 
 def page_values(check: bool) -> dict[str, object]:

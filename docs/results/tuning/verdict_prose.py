@@ -15,7 +15,6 @@ from study_files import (
     FLOWS,
     LABELS,
     TASKS,
-    and_list,
     fmt,
     read_yaml,
     short,
@@ -24,6 +23,7 @@ from study_files import (
 from study_tables import _same, chosen, own_trial
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.phrases import and_list
 
 # ------------------------------------------------------------------------------------------------ the prose
 EXIT_NOTE = re.compile(r"exit codes \[([^\]]*)\]")
