@@ -45,8 +45,8 @@ def stat(row: dict, metric: str, std: bool = True) -> str:
 def one_step_holds(mine: list[dict]) -> str:
     """(task, seed) pairs of a method whose 1-step return is at least 0.9 x its 10-step one, of its finished runs
     ``mine``."""
-    pairs = [(value(r, "return_1"), value(r, "return_multi")) for r in mine]
-    pairs = [(one, multi) for one, multi in pairs if one is not None and multi is not None]
+    found = [(value(r, "return_1"), value(r, "return_multi")) for r in mine]
+    pairs = [(one, multi) for one, multi in found if one is not None and multi is not None]
     return f"{sum(one >= 0.9 * multi for one, multi in pairs)}/{len(pairs)}" if pairs else "--"
 
 
@@ -72,10 +72,10 @@ def cliff_cell(runs: list[dict]) -> str:
 
 def rows_of(spec: str) -> list[tuple[dict, list[dict], Path]]:
     spec, _, note = spec.partition("#")
-    folder, _, labels = spec.partition(":")
-    folder = Path(folder)
-    per_task = list(csv.DictReader((folder / "per_task.csv").open()))
-    runs = list(csv.DictReader((folder / "runs.csv").open())) if (folder / "runs.csv").exists() else []
+    where, _, labels = spec.partition(":")
+    folder = Path(where)
+    per_task: list[dict] = list(csv.DictReader((folder / "per_task.csv").open()))
+    runs: list[dict] = list(csv.DictReader((folder / "runs.csv").open())) if (folder / "runs.csv").exists() else []
     wanted = labels.split(",") if labels else list(dict.fromkeys(r["label"] for r in per_task))
     rows = [(dict(row), runs, folder) for label in wanted for row in per_task if row["label"] == label]
     for row, _, _ in rows:

@@ -12,8 +12,8 @@
   diagnostics' means, the Appendix C means, and which of the paper's directions hold, counted over the (task, seed)
   pairs, in words chosen here from the numbers.
 
-The helpers for seeds, intervals and runs.csv rows are ``docs/results/measured.py``'s (imported from beside this
-file).
+The helpers for intervals, runs.csv rows and profiles are ``docs/results/results_reading.py``'s (imported from beside
+this file).
 """
 
 from __future__ import annotations
@@ -21,22 +21,27 @@ from __future__ import annotations
 import statistics
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from measured import (  # noqa: E402  (docs/results/measured.py)
+from results_reading import (  # noqa: E402  (docs/results/results_reading.py)
     ROOT,
     count_text,
     estimate,
     method_names,
     number,
     read_csv,
-    seeds_text,
     short,
     steps_text,
 )
 
+from refpo_warp.studies.reports.committed_runs import seeds_text  # noqa: E402
 from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
+from refpo_warp.utils.errors import DataFileError  # noqa: E402
+
+if TYPE_CHECKING:  # imported where used: numpy's import is the cost of a page that needs no interval
+    from refpo_warp.studies.reports.intervals import Estimate
 
 TEMPLATE = HERE / "README.template.md"
 CPU_DMC = HERE / "cpu_dmc" / "runs.csv"
@@ -81,7 +86,7 @@ def sweeps() -> tuple[str, dict]:
         "| sweep | its description | methods (labels) | tasks | seeds | device | env steps a run | runs | results |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    paper = None
+    paper: dict | None = None
     for path in sorted((ROOT / "configs" / "sweep").glob("*.yaml")):
         sweep = load_sweep(path.stem)
         steps = _steps(sweep)
@@ -93,11 +98,13 @@ def sweeps() -> tuple[str, dict]:
         )
         if sweep.name == "paper_dmc":
             paper = {"runs": len(sweep.runs), "steps": " or ".join(steps_text(s) for s in steps)}
+    if paper is None:
+        raise DataFileError("configs/sweep/ has no paper_dmc.yaml (the paper's sweep, whose runs the page counts)")
     return "\n".join(lines), paper
 
 
 def cuda_iteration_steps() -> str:
-    from measured import profile
+    from results_reading import profile
 
     cfg = profile("dmc_cartpole_balance", "ppo", "cuda")
     return f"{cfg['num_envs'] * cfg['runner']['num_steps_per_env']:,}"
@@ -126,7 +133,7 @@ def _diag(value: float | None) -> str:
     return "0" if value == 0 else (f"{value:.2f}" if value >= 0.01 else f"{value:.1e}")
 
 
-def _pooled(runs: dict[str, dict[int, dict]], key: str):
+def _pooled(runs: dict[str, dict[int, dict]], key: str) -> Estimate:
     """The method's (seeds x tasks) scores pooled: the mean with its stratified-bootstrap interval (rliable)."""
     import numpy as np
 
@@ -152,12 +159,12 @@ def cpu_table(data) -> tuple[str, str]:
             if not runs:
                 continue
             rows = list(runs.values())
-            one = estimate([r["return_1"] for r in rows]) if all(r["return_1"] is not None for r in rows) else "--"
+            one_cell = estimate([r["return_1"] for r in rows]) if all(r["return_1"] is not None for r in rows) else "--"
             straight = [r["straightness"] for r in rows if r["straightness"] is not None]
             explosion = [r["explosion"] for r in rows if r["explosion"] is not None]
             lines.append(
                 f"| {short(task)} | {names.get(label, label)} | {estimate([r['return_multi'] for r in rows])} | "
-                f"{one} | "
+                f"{one_cell} | "
                 f"{_diag(_mean(straight)) if straight else '--'} | {_diag(_mean(explosion)) if explosion else '--'} |"
             )
     pooled_runs = {}
@@ -290,7 +297,7 @@ def directions(data) -> tuple[str, str, str]:
         t = point[0]
         f1 = {s: fpo[t][s]["return_1"] for s in fpo[t]}
         r1 = _mean(refpo[t][s]["return_1"] for s in refpo[t])
-        best = max(f1, key=f1.get)
+        best = max(f1, key=f1.__getitem__)
         text += (
             f" FPO's 1-step return on {short(t)} is {compare(_mean(f1.values()), r1).replace('level', 'level with')}"
             f"{' than ReFPO' if _mean(f1.values()) != r1 else ' ReFPO'}'s ({_mean(f1.values()):.0f} on average "
@@ -351,7 +358,7 @@ def values() -> dict[str, object]:
     cpu, note = cpu_table(data)
     appendix, counted, bullets = directions(data)
     tasks = sorted({t for by_task in data.values() for t in by_task})
-    from measured import profile_steps
+    from results_reading import profile_steps
 
     by_steps: dict[int, list[str]] = {}
     for t in tasks:

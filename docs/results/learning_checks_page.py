@@ -28,9 +28,11 @@ sys.path.insert(0, str(ROOT / "tests" / "learning"))
 sys.path.insert(0, str(HERE))
 from checks import CHECKS, FINETUNE_COLLECT, FINETUNE_PRETRAIN, MJLAB_NULL_CONTROL, NULL_CONTROL  # noqa: E402
 from measure import RECORDS, RESULTS, current, read_records  # noqa: E402
-from measured import profile, seeds_text, steps_text  # noqa: E402  (docs/results/measured.py)
+from results_reading import profile, steps_text  # noqa: E402  (docs/results/results_reading.py)
 from table import LEARNING_RUNS, NULL_RUNS, fmt, table_markdown  # noqa: E402
 
+from refpo_warp.studies.reports.committed_runs import seeds_text  # noqa: E402
+from refpo_warp.studies.reports.phrases import and_list  # noqa: E402
 from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
 
 TEMPLATE = HERE / "learning_checks.template.md"
@@ -39,11 +41,6 @@ LOG_LINE = re.compile(r"^\[learning check\] (\S+): (.*?); bounds")
 
 def code(items) -> str:
     return ", ".join(f"`{i}`" for i in items)
-
-
-def and_list(items: list[str]) -> str:
-    items = list(items)
-    return ", ".join(items[:-1]) + " and " + items[-1] if len(items) > 1 else "".join(items)
 
 
 def override(check: str, key: str) -> str | None:
@@ -177,7 +174,7 @@ def finetune(records) -> str:
     study = json.loads((HERE / "finetuning" / "gridworld" / "clone_flow" / "eval.json").read_text())["dataset"]
     change = [check.statistics(r)["bottom_share_change_N=10"] for r in learning]
     one_way = all(c > 0 for c in change) or all(c < 0 for c in change)
-    by_seed = {}
+    by_seed: dict[int, dict[int, dict]] = {}
     for r in learning:
         by_seed.setdefault(r["seed"], {})[r["threads"]] = check.statistics(r)
     both = [s for s, by in by_seed.items() if len(by) > 1]
@@ -237,8 +234,8 @@ def fpo_pp_narrow(records) -> str:
 def one_step(records) -> str:
     name = "point_mass_refpo_onestep"
     check = CHECKS[name]
-    first, claim = (b for b in check.bounds if not b.claim), (b for b in check.bounds if b.claim)
-    first, claim = next(first), next(claim)
+    first = next(b for b in check.bounds if not b.claim)
+    claim = next(b for b in check.bounds if b.claim)
     learning, null, mine = runs(records, name, False), runs(records, name, True), runs(records, name)
     stats = {id(r): check.statistics(r) for r in mine}
     meets = [r for r in null if claim.holds(stats[id(r)])]
@@ -292,8 +289,8 @@ def same_as_earlier(name: str) -> str:
     every = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
     now = [r for r in every if current(r)]
     earlier = {(r["seed"], r["threads"], r["null"]): r for r in every if not current(r)}
-    pairs = [(r, earlier.get((r["seed"], r["threads"], r["null"]))) for r in now]
-    pairs = [(r, e) for r, e in pairs if e is not None]
+    found = [(r, earlier.get((r["seed"], r["threads"], r["null"]))) for r in now]
+    pairs = [(r, e) for r, e in found if e is not None]
     if not pairs:
         return ""
 

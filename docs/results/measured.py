@@ -21,25 +21,47 @@ Nothing in a block is typed in by hand: every number is read from the file the b
 depends on the data the words are chosen here from the numbers. ``--check`` writes nothing and exits 1 with the
 difference when README.md is not what the data says (``tests/docs/test_readme_measured.py``).
 
-``docs/results/index_page.py`` imports the helpers of the first section (seeds, intervals, runs.csv rows).
+The helpers it shares with ``index_page.py`` and ``learning_checks_page.py`` (runs.csv rows, intervals, profiles, task
+names and env steps) are in ``results_reading.py``.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import difflib
-import functools
 import json
-import math
 import re
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from results_reading import (
+    RESULTS,
+    ROOT,
+    count_text,
+    estimate,
+    eval_results,
+    fall_share,
+    final_returns,
+    interval,
+    method_names,
+    one_step_share,
+    profile_iterations,
+    profile_steps,
+    read_csv,
+    relative,
+    short,
+    steps_text,
+    task_runs,
+)
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.phrases import and_list
 
-RESULTS = Path(__file__).resolve().parent
-ROOT = RESULTS.parents[1]
+if TYPE_CHECKING:  # imported where used: numpy's import is the cost of a page that needs no interval
+    from refpo_warp.studies.reports.intervals import Estimate
+
+
 README = ROOT / "README.md"
 BLOCK = re.compile(r"(<!--\s+measured:\s+(\w+)[^>]*-->)(.*?)(<!--\s+measured:\s+end\s+-->)", re.DOTALL)
 # (runs.csv of a DMC sweep, the labels shown in this order: None for all, a note on the values)
@@ -53,127 +75,6 @@ SWEEPS = [
         "each method at its values chosen by the equal-budget tuning study (`docs/results/tuning/`)",
     ),
 ]
-
-
-@functools.cache
-def criteria() -> dict:
-    """The tuning study's thresholds (``tuning/criteria.yaml``): definitions its page and these sentences judge by,
-    not measurements."""
-    import yaml
-
-    return yaml.safe_load((RESULTS / "tuning" / "criteria.yaml").read_text(encoding="utf-8"))
-
-
-def one_step_share() -> float:
-    """ "N = 1 keeps the N = 10 return": at least this share of it (the tuning goal's one-step part)."""
-    return float(criteria()["goal"]["one_step"]["share"])
-
-
-def fall_share() -> float:
-    """A budget run falls when its last periodic return is below this share of its peak."""
-    return float(criteria()["report"]["fall"])
-
-
-# ------------------------------------------------------------------------------------------------ shared helpers
-def relative(path: Path) -> str:
-    return str(path.relative_to(ROOT))
-
-
-def number(text: str | None) -> float | None:
-    return float(text) if text not in ("", None) else None
-
-
-@functools.cache
-def _interval(values: tuple[float, ...]):
-    import numpy as np
-
-    from refpo_warp.studies.reports.intervals import aggregate
-
-    return aggregate({"x": np.array([[v] for v in values])})["x"]["mean"]
-
-
-def interval(values) -> object:
-    """The mean over ``values`` (one per seed) with its 95 % stratified-bootstrap interval (``intervals.Estimate``)."""
-    return _interval(tuple(float(v) for v in values))
-
-
-def estimate(values, digits: int = 0) -> str:
-    """``mean [low, high]`` over ``values``: the form every results page compares."""
-
-    e = interval(values)
-    return e.text(digits)
-
-
-def read_csv(path: Path) -> list[dict]:
-    return list(csv.DictReader(path.open(encoding="utf-8"))) if path.exists() else []
-
-
-def method_names(runs_csv: Path) -> dict[str, str]:
-    """label -> the method's name in the report beside ``runs_csv`` (its per_task.csv), or the label."""
-    return {r["label"]: r["method"] for r in read_csv(runs_csv.with_name("per_task.csv"))}
-
-
-def task_runs(rows: list[dict], label: str) -> dict[str, dict[int, dict]]:
-    """task -> seed -> {multi, one, failed} of one method's runs in a runs.csv. A run that failed (its training
-    stopped, e.g. on a non-finite loss) counts as return 0 at every N, as the tuning page counts it: leaving it out
-    would flatter its method. Runs of any other status (not run yet, stale) are left out."""
-    flow = any(r["label"] == label and r["return_1"] for r in rows)
-    out: dict[str, dict[int, dict]] = {}
-    for r in rows:
-        if r["label"] != label:
-            continue
-        if r["status"] == "ok" and r["return_multi"]:
-            run = {"multi": float(r["return_multi"]), "one": number(r["return_1"]), "failed": False}
-        elif r["status"] == "failed":
-            run = {"multi": 0.0, "one": 0.0 if flow else None, "failed": True}
-        else:
-            continue
-        out.setdefault(r["task"], {})[int(r["seed"])] = run
-    return out
-
-
-def short(task: str) -> str:
-    return task.removeprefix("dmc_")
-
-
-def steps_text(steps: float) -> str:
-    """``450k``, ``1M``, ``4.06M``: env steps to three significant digits."""
-    return f"{steps / 1e6:.3g}M" if steps >= 1e6 else f"{steps / 1e3:.3g}k"
-
-
-@functools.cache
-def profile(task: str, algo: str = "ppo", device: str = "cpu") -> dict:
-    """The resolved config of ``task``'s profile for ``device`` (``configs/``, as ``refpo train`` resolves it)."""
-    from refpo_warp.config.resolve import resolve_config
-
-    return resolve_config({"task": task, "algo": algo}, device_type=device)
-
-
-def profile_steps(task: str, algo: str = "ppo", device: str = "cpu") -> int:
-    return int(profile(task, algo, device)["total_env_steps"])
-
-
-def profile_iterations(task: str, algo: str = "ppo", device: str = "cpu") -> int:
-    cfg = profile(task, algo, device)
-    if cfg["max_iterations"]:
-        return int(cfg["max_iterations"])
-    return math.ceil(cfg["total_env_steps"] / (cfg["num_envs"] * cfg["runner"]["num_steps_per_env"]))
-
-
-def _eval(path: Path) -> dict | None:
-    return json.loads(path.read_text())["results"] if path.exists() else None
-
-
-def final_returns(path: Path) -> tuple[float, float | None]:
-    """(N = 10 return, or a Gaussian's mean-action return; N = 1 return or None) of an eval.json."""
-    results = json.loads(path.read_text())["results"]
-    if "mean_action" in results:
-        return results["mean_action"]["return_mean"], None
-    return results["N=10"]["return_mean"], results["N=1"]["return_mean"]
-
-
-def count_text(k: int, n: int) -> str:
-    return f"all {n}" if k == n and n > 2 else f"{k} of {n}"
 
 
 # ------------------------------------------------------------------------------------------------ the table
@@ -237,8 +138,9 @@ def finetuning_gridworld_row() -> str | None:
     """Success and the bands' shares of the clones and the fine-tuned flows on GridWorld's two-mode demonstrations."""
     folder = RESULTS / "finetuning" / "gridworld"
     names = ("clone_flow", "clone_gauss", "refpo_from_flow", "fpo_from_flow", "ppo_from_gauss")
-    runs = {name: _eval(folder / name / "eval.json") for name in names}
-    if any(r is None for r in runs.values()):
+    found = {name: eval_results(folder / name / "eval.json") for name in names}
+    runs = {name: r for name, r in found.items() if r is not None}
+    if len(runs) < len(names):
         return None
     seed = json.loads((folder / "clone_flow" / "eval.json").read_text())["seed"]
 
@@ -365,7 +267,8 @@ def fresh_standing() -> dict | None:
     ppo = task_runs(rows, "ppo")
     if not all(ppo.get(t) for t in tasks):
         return None
-    out = {"path": path, "tasks": tasks, "seeds": set(), "flows": {}}
+    seeds: set[int] = set()
+    flows: dict[str, dict] = {}
     for label in FLOW_NAMES:
         runs = task_runs(rows, label)
         if not all(runs.get(t) for t in tasks):
@@ -377,10 +280,10 @@ def fresh_standing() -> dict | None:
             for t in tasks
         )
         poi = improvement(_matrix(runs, tasks), _matrix(ppo, tasks))
-        out["flows"][label] = {"reach": reach, "poi": poi}
-        out["seeds"] |= {s for t in tasks for s in runs[t]}
-    out["seeds"] |= {s for t in tasks for s in ppo[t]}
-    return out
+        flows[label] = {"reach": reach, "poi": poi}
+        seeds |= {s for t in tasks for s in runs[t]}
+    seeds |= {s for t in tasks for s in ppo[t]}
+    return {"path": path, "tasks": tasks, "seeds": seeds, "flows": flows}
 
 
 def budget_runs() -> dict[str, list[dict]]:
@@ -469,9 +372,6 @@ def budget() -> str:
 
 
 # ------------------------------------------------------------------------------------------------ demonstrations
-def and_list(items: list[str]) -> str:
-    items = list(items)
-    return ", ".join(items[:-1]) + " and " + items[-1] if len(items) > 1 else "".join(items)
 
 
 def grouped(by_method: dict[str, list[str]]) -> str:
@@ -481,7 +381,7 @@ def grouped(by_method: dict[str, list[str]]) -> str:
 
 def demonstrations() -> str:
     folder = RESULTS / "finetuning" / "gridworld"
-    flow, gauss = _eval(folder / "clone_flow" / "eval.json"), _eval(folder / "clone_gauss" / "eval.json")
+    flow, gauss = eval_results(folder / "clone_flow" / "eval.json"), eval_results(folder / "clone_gauss" / "eval.json")
     if flow is None or gauss is None:
         return "the fine-tuning study's GridWorld runs are not committed yet"
     g = gauss["mean_action"]
@@ -497,7 +397,10 @@ def demonstrations() -> str:
         + f" and the Gaussian clone reaches neither in {100 * (1 - g['success_rate']):.0f} % of its "
         f"{g['episodes']} episodes"
     )
-    above, overlap, holds, highest = {}, {}, {}, {}
+    above: dict[str, list[str]] = {}
+    overlap: dict[str, list[str]] = {}
+    holds: dict[str, list[str]] = {}
+    highest: dict[str, tuple[str, Estimate, list[str]]] = {}
     tasks = []
     for task_dir in sorted(FINETUNED.glob("dmc_*")):
         tasks.append(short(task_dir.name))

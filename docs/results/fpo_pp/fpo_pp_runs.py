@@ -299,7 +299,7 @@ def values_table(ms: dict[str, Method]) -> tuple[str, list[str]]:
     configs = {k: {t: run_config(ms[k], t) for t in TASKS} for k in keys3}
     differ = set()
     for task in TASKS:
-        present = [configs[k][task] for k in keys3 if configs[k][task] is not None]
+        present = [c for c in (configs[k][task] for k in keys3) if c is not None]
         for key in set().union(*present):
             if len({json.dumps(c.get(key, "(absent)"), sort_keys=True) for c in present}) > 1:
                 differ.add(key)
@@ -307,7 +307,7 @@ def values_table(ms: dict[str, Method]) -> tuple[str, list[str]]:
     def cells(key: str) -> list[str]:
         out = []
         for k in keys3:
-            vals = [configs[k][t] for t in TASKS if configs[k][t] is not None]
+            vals = [c for c in (configs[k][t] for t in TASKS) if c is not None]
             if not vals:
                 out.append("--")
                 continue

@@ -36,6 +36,7 @@ from fpo_pp_runs import (
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.utils.errors import DataFileError
 
 
 # ------------------------------------------------------------------------------------------------ tables
@@ -86,8 +87,8 @@ def poi_rows(pairs, ms, data, settings=("multi", "headline")) -> tuple[list[str]
             where = short(task) if task else "the three tasks"
             if task is not None and min(len(data[x][settings[0]][task]), len(data[y][settings[0]][task])) < 2:
                 # one seed's bootstrap is that seed: its interval is a point, whatever the runs are
-                cells = " | ".join("--" for _ in settings)
-                rows.append(f"| {where} | {label[0]} over {label[1]} | {cells} | one seed on a side: not compared |")
+                dashes = " | ".join("--" for _ in settings)
+                rows.append(f"| {where} | {label[0]} over {label[1]} | {dashes} | one seed on a side: not compared |")
                 continue
             cells = []
             for s in settings:
@@ -95,7 +96,9 @@ def poi_rows(pairs, ms, data, settings=("multi", "headline")) -> tuple[list[str]
                 cells.append("--" if p is None else f"{p.text(2)}")
                 if p is not None:
                     kept.append((x, y, task, s, p))
-            says = "; ".join(f"{SETTINGS[s][1]}: {short_verdict(ps[s], *label)}" for s in settings if ps[s] is not None)
+            says = "; ".join(
+                f"{SETTINGS[s][1]}: {short_verdict(p, *label)}" for s in settings if (p := ps[s]) is not None
+            )
             rows.append(f"| {where} | {label[0]} over {label[1]} | " + " | ".join(cells) + f" | {says} |")
     return rows, kept
 
@@ -115,7 +118,7 @@ def small_verdicts(kept: list[tuple], ms: dict[str, Method]) -> str:
             got = {task: p for x_, y_, task, s_, p in kept if x_ == SMALL and y_ == y and s_ == s}
             if not got:
                 continue
-            groups = {1: [], -1: [], 0: []}
+            groups: dict[int, list[str]] = {1: [], -1: [], 0: []}
             for task, p in got.items():
                 groups[separates(p)].append("over the three tasks" if task is None else f"on {short(task)}")
             bits = []
@@ -216,7 +219,10 @@ def gpu_values() -> dict[str, str]:
     script = (GPU / "run.sh").read_text()
     limits = dict(re.findall(r'"(\w+) (\d+)"', script))
     summary = dict(re.findall(r"^(\w+) rc=(\d+)", (GPU / "summary.txt").read_text(), re.MULTILINE))
-    requested = re.search(r"max_iterations=(\d+)", script).group(1)
+    found = re.search(r"max_iterations=(\d+)", script)
+    if found is None:
+        raise DataFileError(f"{GPU / 'run.sh'}: no max_iterations=<n> (the iterations the GPU job requested)")
+    requested = found.group(1)
     head = "| algo | iterations | env steps | training time | env steps / s (median iteration) | last training return |"
     table = [head, "|---|---|---|---|---|---|"]
     rate, cfg = {}, {}
@@ -337,7 +343,7 @@ def findings(ms: dict[str, Method], data: dict) -> dict[str, str]:
     # Run health by FPO++'s rule.
     from refpo_warp.evaluation.run_health import MIN_PLATEAU, WINDOW
 
-    health = {}
+    health: dict[str, int] = {}
     for r in rows:
         health[r["health"]] = health.get(r["health"], 0) + 1
     out["health"] = ", ".join(f"{n} `{h}`" for h, n in sorted(health.items()))
@@ -357,6 +363,8 @@ def lr_text(data: dict, ms: dict[str, Method]) -> str:
         if not lr["multi"][t]:
             continue
         p = poi(lr["multi"], au["multi"], t)
+        if p is None:  # no run at its own rate on t
+            continue
         seeds = sorted(set(lr["multi"][t]) & set(au["multi"][t]))
         higher = sum(lr["multi"][t][s] > au["multi"][t][s] for s in seeds)
         text = (
@@ -367,8 +375,8 @@ def lr_text(data: dict, ms: dict[str, Method]) -> str:
         )
         if lr["headline"][t] and au["headline"][t]:
             text += f", and its N = 64 zero-noise return {cell(lr['headline'][t])} against {cell(au['headline'][t])}"
-        if prof is not None and prof["multi"][t]:
-            q = poi(prof["multi"], lr["multi"], t)
+        q = poi(prof["multi"], lr["multi"], t) if prof is not None else None
+        if q is not None and prof is not None:
             text += (
                 f"; the first grid's FPO++ reached {cell(prof['multi'][t])} at N = 10 (P(a first-grid run beats one at "
                 f"the higher rate) {q.text(2)}: "

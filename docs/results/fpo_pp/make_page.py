@@ -157,7 +157,7 @@ def values() -> dict[str, object]:
         "rows, and its probabilities of improvement over the locomotion defaults and over the tuned values, appear "
         "here when they do."
     )
-    tuned_groups = {1: [], -1: [], 0: []}
+    tuned_groups: dict[int, list[str]] = {1: [], -1: [], 0: []}
     for x, y, task, s, p in kept:
         if x == TUNED_KEY and y == AUTHORS and s == "multi":
             tuned_groups[separates(p)].append("over the three tasks" if task is None else f"on {short(task)}")
@@ -245,8 +245,10 @@ def values() -> dict[str, object]:
         prof.append(f"{name}: {cell(data[label]['multi'][pm])}, higher in {higher} of {len(seeds)} seeds")
     v["profile_ablation"] = "; ".join(prof)
     v["profile_fpo_pm"] = cell(base["multi"][pm]) if base else "--"
-    v["profile_vs_authors"] = "; ".join(
-        f"{short(t)} {cell(base['multi'][t])} against {cell(data[AUTHORS]['multi'][t])}" for t in TASKS
+    v["profile_vs_authors"] = (
+        "; ".join(f"{short(t)} {cell(base['multi'][t])} against {cell(data[AUTHORS]['multi'][t])}" for t in TASKS)
+        if base
+        else "--"
     )
     v.update(gpu_values())
     return v

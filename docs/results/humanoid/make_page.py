@@ -26,7 +26,7 @@ FIRST = re.compile(
 )
 
 
-def rows() -> list[str]:
+def rows() -> str:
     headings = [
         line.lstrip("#").strip() for line in DOC.read_text(encoding="utf-8").splitlines() if line.startswith("#")
     ]

@@ -137,8 +137,8 @@ def clone_numbers(clone: str, setting: str) -> dict[str, float]:
     return numbers(json.loads((HERE / clone / "eval.json").read_text())["results"][setting])
 
 
-def clone_row(label: str, n: int) -> str:
-    c = clone_numbers(CLONE_OF[label], setting_of(label, n))
+def clone_row(label: str, setting: str) -> str:
+    c = clone_numbers(CLONE_OF[label], setting)
     return (
         f"| its clone (`{CLONE_OF[label]}`) | {c['episodes']} episodes | {100 * c['success']:.0f} % | "
         f"{100 * c['left']:.0f} % | {100 * c['right']:.0f} % | {100 * c['rarer']:.0f} % | {c['return']:.0f} | "
@@ -154,18 +154,19 @@ def method_table(n: int) -> str:
     lines = [head, "|---|---|---|---|---|---|---|---|"]
     for method in methods():
         label = method["label"]
-        if setting_of(label, n) is None:
+        setting = setting_of(label, n)
+        if setting is None:
             continue
         runs = run_results(label)
         if not runs:
             continue
-        per = [numbers(r.get(setting_of(label, n), {}) if r else {}) for r in runs.values()]
+        per = [numbers(r.get(setting, {}) if r else {}) for r in runs.values()]
         kinds = [outcome(p) for p in per]
         cells = [percent(interval([p[k] for p in per])) for k in ("success", "left", "right", "rarer")]
         ret = interval([p["return"] for p in per]).text()
         counts = " / ".join(str(kinds.count(k)) for k in ("both ways", "one way", "lost"))
         lines.append(f"| {method['name']} | {seeds_text(runs)} | {' | '.join(cells)} | {ret} | {counts} |")
-        lines.append(clone_row(label, n))
+        lines.append(clone_row(label, setting))
     return "\n".join(lines)
 
 

@@ -11,13 +11,12 @@ candidates, tasks and seeds), ``configs/algo/refpo_onestep.yaml``, the learning 
 (``docs/results/learning_checks/records/point_mass_refpo_onestep.jsonl``) and its bounds (``tests/learning/checks.py``),
 and the thresholds of ``criteria.yaml``. Every table and every count follows the seeds the files hold.
 
-The helpers above ``# ---- the page`` (rows of a runs.csv, means, ranges, intervals, seed lists) are shared with
-``one_step_analysis.py --page``, which writes ``README.md``.
+The helpers it shares with ``one_step_analysis.py --page``, which writes ``README.md`` (rows of a runs.csv, means,
+ranges, intervals), are in ``run_rows.py``.
 """
 
 from __future__ import annotations
 
-import csv
 import itertools
 import json
 import statistics
@@ -25,124 +24,44 @@ import sys
 from pathlib import Path
 
 import yaml
+from run_rows import (
+    CPU_DMC_RUNS,
+    HERE,
+    MULTI,
+    ONE,
+    RESULTS,
+    ROOT,
+    collapsed,
+    criteria,
+    interval_text,
+    intervals,
+    labels_of,
+    listing,
+    method_names,
+    of,
+    per_seed,
+    pm,
+    read_rows,
+    separated,
+    short,
+    signed_pct,
+    span,
+    sweep_spec,
+    tasks_of,
+)
 
-HERE = Path(__file__).resolve().parent
-RESULTS = HERE.parent
-ROOT = RESULTS.parents[1]
 sys.path.insert(0, str(ROOT))  # refpo_warp, when run from anywhere
 
-from refpo_warp.studies.reports.committed_runs import seeds_text  # noqa: E402
-from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
+from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.phrases import and_list
+from refpo_warp.studies.reports.results_page import main_args, write_page
+from refpo_warp.utils.errors import DataFileError
 
 SEARCH_RUNS = HERE / "search" / "report" / "runs.csv"
-CPU_DMC_RUNS = RESULTS / "cpu_dmc" / "runs.csv"
-CRITERIA = HERE / "criteria.yaml"
 SWEEP = ROOT / "configs" / "sweep" / "cpu_onestep.yaml"
 ONESTEP_ALGO = ROOT / "configs" / "algo" / "refpo_onestep.yaml"
 RECORDS = RESULTS / "learning_checks" / "records" / "point_mass_refpo_onestep.jsonl"
 CHECK = "point_mass_refpo_onestep"
-MULTI, ONE = "return_multi", "return_1"
-
-
-# ------------------------------------------------------------------------------------------------ shared helpers
-def criteria() -> dict:
-    return yaml.safe_load(CRITERIA.read_text(encoding="utf-8"))
-
-
-def read_rows(path: Path) -> list[dict]:
-    with path.open(newline="", encoding="utf-8") as f:
-        return list(csv.DictReader(f))
-
-
-def per_seed(rows: list[dict], label: str, task: str, key: str) -> dict[int, float]:
-    """seed -> the run's ``key`` (a failed run's return counts as 0; a run without the number is left out)."""
-    out = {}
-    for row in rows:
-        if row["label"] != label or row["task"] != task:
-            continue
-        if row["status"] == "failed" and key in (MULTI, ONE):
-            out[int(row["seed"])] = 0.0
-        elif row["status"] == "ok" and row.get(key) not in (None, ""):
-            out[int(row["seed"])] = float(row[key])
-    return dict(sorted(out.items()))
-
-
-def labels_of(rows: list[dict]) -> list[str]:
-    return list(dict.fromkeys(r["label"] for r in rows))
-
-
-def tasks_of(rows: list[dict], label: str | None = None) -> list[str]:
-    return sorted({r["task"] for r in rows if label is None or r["label"] == label})
-
-
-def short(task: str) -> str:
-    return task.removeprefix("dmc_")
-
-
-def num(x: float, digits: int = 0) -> str:
-    text = f"{x:.{digits}f}"
-    return "0" if text.strip("-0.") == "" else text
-
-
-def pm(values, digits: int = 0) -> str:
-    """``mean ± population std`` (ddof 0, as ``refpo report`` writes them)."""
-    values = list(values)
-    return f"{num(statistics.fmean(values), digits)} ± {num(statistics.pstdev(values), digits)}"
-
-
-def span(values, digits: int = 2) -> str:
-    """``low-high`` of ``values`` (one number when they round alike)."""
-    values = list(values)
-    low, high = num(min(values), digits), num(max(values), digits)
-    return low if low == high else f"{low}-{high}"
-
-
-def listing(values, digits: int = 0, sep: str = " / ") -> str:
-    return sep.join(num(v, digits) for v in values)
-
-
-def words(items: list[str]) -> str:
-    """'a', 'a and b', 'a, b and c'."""
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
-
-
-def of(k: int, n: int) -> str:
-    return f"{k} of {n}"
-
-
-def intervals(named: dict[str, list[float]]):
-    """name -> the mean over the values with its 95 % stratified-bootstrap interval (rliable, one call for all)."""
-    import numpy as np
-
-    from refpo_warp.studies.reports.intervals import aggregate
-
-    estimates = aggregate({k: np.asarray(v, dtype=float).reshape(-1, 1) for k, v in named.items()})
-    return {k: e["mean"] for k, e in estimates.items()}
-
-
-def interval_text(estimate, digits: int = 0) -> str:
-    return estimate.text(digits)
-
-
-def separated(a, b) -> bool:
-    """Two intervals that do not overlap."""
-    return a.high < b.low or b.high < a.low
-
-
-def signed_pct(change: float) -> str:
-    return f"{100 * change:+.1f} %".replace("-", "\u2212")
-
-
-def collapsed(multi: float, one: float, below: float) -> bool:
-    return one < below * multi
-
-
-def sweep_spec(path: Path) -> dict:
-    return yaml.safe_load(path.read_text(encoding="utf-8"))
-
-
-def method_names(spec: dict) -> dict[str, str]:
-    return {m["label"]: m.get("name", m["label"]) for m in spec["methods"]}
 
 
 # ------------------------------------------------------------------------------------------------ the page
@@ -201,7 +120,7 @@ def screen_values(screen: dict, spec: dict) -> dict:
         for m in candidates
         if set(m.get("overrides", {})) == {"algorithm.one_step_coef"}
     }
-    ordered = sorted(coef, key=coef.get)
+    ordered = sorted(coef, key=coef.__getitem__)
     factors = {n: [err(s, rule) / err(s, n) for s in seeds] for n in ordered}
     monotone = all(err(s, a) > err(s, b) for s in seeds for a, b in itertools.pairwise(ordered))
     largest = ordered[-1]
@@ -330,7 +249,8 @@ def full_run_values(spec: dict, rules: dict) -> dict:
     ]
     refpo_seed_sets = sorted({seeds_text(refpo[t][0]) for t in tasks})
     lines[0] = lines[0].replace("{}", ", ".join(refpo_seed_sets))
-    held_all, pairs_all, changes, overlap, narrowest = 0, 0, {}, [], None
+    held_all, pairs_all, changes, overlap = 0, 0, {}, []
+    narrowest: tuple[float, str, int, float, float] | None = None  # (1-step / 10-step, task, seed, 1-step, 10-step)
     for t in tasks:
         multi, one = mine[t]
         cells = [f"{multi[s]:.0f} / {one[s]:.0f}" if s in multi and s in one else "--" for s in seeds]
@@ -339,9 +259,9 @@ def full_run_values(spec: dict, rules: dict) -> dict:
         pairs_all += len(multi)
         for s in multi:
             if s in one and multi[s] > 0:
-                r = one[s] / multi[s]
-                if narrowest is None or r < narrowest[0]:
-                    narrowest = (r, t, s, one[s], multi[s])
+                ratio = one[s] / multi[s]
+                if narrowest is None or ratio < narrowest[0]:
+                    narrowest = (ratio, t, s, one[s], multi[s])
         a, b = est[f"mine:{t}"], est[f"refpo:{t}"]
         change = a.point / b.point - 1.0
         changes[t] = change
@@ -363,14 +283,14 @@ def full_run_values(spec: dict, rules: dict) -> dict:
             + (
                 f"so the goal's {100 * drop:g} % bound is met on the means only."
                 if not failing
-                else f"and on the means the goal's {100 * drop:g} % bound fails on {words(failing)}."
+                else f"and on the means the goal's {100 * drop:g} % bound fails on {and_list(failing)}."
             )
         )
     else:
         apart = [short(t) for t in tasks if short(t) not in overlap]
         verdict = (
-            f"The intervals are apart on {words(apart)}"
-            + (f" and overlap on {words(overlap)}" if overlap else "")
+            f"The intervals are apart on {and_list(apart)}"
+            + (f" and overlap on {and_list(overlap)}" if overlap else "")
             + "."
         )
 
@@ -397,14 +317,18 @@ def full_run_values(spec: dict, rules: dict) -> dict:
     mean_ppo = {t: statistics.fmean(ppo[t].values()) for t in tasks if ppo[t]}
     at_ppo = [t for t in tasks if t in mean_ppo and mean_one[t] >= mean_ppo[t]]
     need = goal["ppo_tasks"]
-    r, nt, ns, n1, n10 = narrowest
+    if narrowest is None:
+        raise DataFileError(
+            f"{SEARCH_RUNS}: no finished run with a positive 10-step return to compare its 1-step one with"
+        )
+    ratio, nt, ns, n1, n10 = narrowest
     goal_rows = [
         "| criterion | shown? |",
         "|---|---|",
         (
             f"| 1-step ≥ {share:g} × 10-step in every (task, seed) | **{'yes' if held_all == pairs_all else 'no'}, "
             f"{of(held_all, pairs_all)}** (ReFPO: {of(r_held, r_pairs)}); the narrowest: {short(nt)} seed {ns}, "
-            f"{n1:.0f} against {n10:.0f} ({r:.2f}) |"
+            f"{n1:.0f} against {n10:.0f} ({ratio:.2f}) |"
         ),
         f"| 10-step mean within {100 * drop:g} % of ReFPO's, per task | "
         + ("**yes, on the means**: " if len(within) == len(tasks) else "**no**: ")
