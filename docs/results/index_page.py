@@ -56,6 +56,7 @@ PAGES = {
     "finetune_point_mass_wall": "[multimodal/finetuning.md](multimodal/finetuning.md)",
     "finetune_reacher_easy": "[finetuning/](finetuning/README.md)",
     "finetune_scratch": "[finetuning/](finetuning/README.md)",
+    "scratch_point_mass_wall": "[multimodal/scratch.md](multimodal/scratch.md)",
     "paper_dmc": "not run (CUDA)",
 }
 LABELS = ("ppo", "fpo", "refpo")

@@ -444,9 +444,13 @@ def demonstrations() -> str:
 
 
 def multimodal_page():
-    """The two-way task's fine-tuning page script (multimodal/finetuning.py), its functions read, not run."""
+    """The two-way task's fine-tuning page script (multimodal/finetuning.py), its functions read, not run; its folder
+    goes on the path for the scripts it imports (two_way_runs.py and the rest)."""
     import importlib.util
 
+    folder = str(RESULTS / "multimodal")
+    if folder not in sys.path:
+        sys.path.append(folder)
     spec = importlib.util.spec_from_file_location("multimodal_finetuning", RESULTS / "multimodal" / "finetuning.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -463,9 +467,11 @@ def multimodal() -> str:
         f"{100 * gauss['success']:.0f} %"
     )
     outcomes, ppo = {"both ways": 0, "one way": 0, "lost": 0}, []
-    for method in page.methods():
-        for results in page.run_results(method["label"]).values():
-            n = page.numbers(results.get(page.setting_of(method["label"], 10), {}) if results else {})
+    runs_of = page.RUNS
+    for method in runs_of.methods():
+        for results in runs_of.run_results(method["label"]).values():
+            setting = "mean_action" if method["label"] == "ppo" else "N=10"
+            n = page.numbers(results.get(setting, {}) if results else {})
             if method["label"] == "ppo":
                 ppo.append(n["success"])
             else:
@@ -473,11 +479,12 @@ def multimodal() -> str:
     runs = sum(outcomes.values())
     if not runs:
         return text
-    steps = page.load_yaml(page.SWEEP)["overrides"]["total_env_steps"]
-    seeds = sorted({s for m in page.methods() for s in page.run_results(m["label"])})
+    sweep = page.load_yaml(runs_of.sweep)
+    steps = sweep["overrides"]["total_env_steps"]
+    seeds = runs_of.seeds()
     text += (
         f"; fine-tuned from their clones for {steps_text(steps)} env steps (seed{'s' if len(seeds) > 1 else ''} "
-        f"{page.seeds_text(seeds)}{'' if seeds == page.load_yaml(page.SWEEP)['seeds'] else ' so far'}), "
+        f"{page.seeds_text(seeds)}{'' if seeds == sweep['seeds'] else ' so far'}), "
         f"of {runs} flow-policy runs (ReFPO, ReFPO with adaptive λ, FPO, FPO++) {outcomes['both ways']} kept both "
         f"ways, {outcomes['one way']} one way and {outcomes['lost']} lost the task (success below "
         f"{100 * page.SUCCESS_FLOOR:.0f} % at N = 10)"
