@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
+from refpo_warp.studies.grid.spec import computed_part
 from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
 
 HERE = Path(__file__).resolve().parent
@@ -281,10 +282,11 @@ RUN_KEYS = {"task", "algo", "seed", "device", "run_dir", "resume", "verbose", "n
 
 
 def run_config(method: Method, task: str) -> dict | None:
-    """The method's config on the task (flattened, without what names the run); the same for every seed."""
+    """The method's config on the task (flattened, without what names the run and the options that do not change
+    what it computes, so runs saved before such an option existed compare equal); the same for every seed."""
     configs = []
     for run in run_dirs(method.runs, task, method.label):
-        cfg = flat(load_yaml(run / "config.yaml"))
+        cfg = flat(computed_part(load_yaml(run / "config.yaml")))
         configs.append({k: v for k, v in cfg.items() if k not in RUN_KEYS and not k.startswith(KEPT_OUT)})
     if not configs:
         return None

@@ -8,9 +8,9 @@ import re
 import shutil
 from pathlib import Path
 
-from study_files import BUDGET, FRESH, STUDY
+from study_files import BUDGET, FRESH, REPO, STUDY
 
-from refpo_warp.studies.reports.committed_runs import copy_run
+from refpo_warp.studies.reports.committed_runs import append_runs, copy_run
 from refpo_warp.utils.errors import DataFileError
 
 
@@ -33,10 +33,14 @@ def sync_study(src: Path) -> None:
 
 
 def sync_fresh(src: Path) -> None:
+    """Append the fresh-seed sweep's runs that ``fresh/runs.csv`` lacks (its report's rows, each run's small files):
+    seeds run in later calls join the committed ones. The report's per_task.csv is copied once, for the methods'
+    names."""
     FRESH.mkdir(exist_ok=True)
-    for name in ("runs.csv", "per_task.csv"):
-        shutil.copy2(src / "report" / name, FRESH / name)
-    print(f"copied {src / 'report'}'s runs.csv and per_task.csv and {copy_runs(src, FRESH / 'runs')} run(s)")
+    if not (FRESH / "per_task.csv").exists():
+        shutil.copy2(src / "report" / "per_task.csv", FRESH / "per_task.csv")
+    added = append_runs(src, FRESH / "runs.csv", FRESH / "runs", REPO)
+    print(f"appended {added} run(s) of {src / 'report'}'s runs.csv to {FRESH / 'runs.csv'}")
 
 
 # A console line of a periodic evaluation: "[it  43/263]  steps     675,840 ... return_N10 562.4  return_N1 568.2 ..."
