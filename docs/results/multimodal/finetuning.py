@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import json
 import sys
-from pathlib import Path
 
 import numpy as np
 from finetune_updates import update_text
@@ -31,13 +30,14 @@ from two_way_runs import (
     method_table,
     numbers,
     outcome,
+    page_arguments,
     per_run_table,
     summary,
 )
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.studies.reports.committed_runs import append_runs, seeds_text
-from refpo_warp.studies.reports.results_page import main_args, write_page
+from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.results_page import write_page
 
 RUNS = TwoWayRuns(ROOT / "configs" / "sweep" / "finetune_point_mass_wall.yaml", HERE / "finetune" / "runs.csv")
 FIGURE = HERE / "finetune_curves.png"
@@ -130,12 +130,7 @@ def values() -> dict[str, object]:
 
 
 def main() -> None:
-    parser = main_args(__doc__.splitlines()[0])
-    parser.add_argument("--add-runs", nargs="*", default=[], type=Path, help="sweep dirs whose finished runs to add")
-    args = parser.parse_args()
-    for sweep_dir in args.add_runs:
-        added = append_runs(sweep_dir, RUNS.runs_csv, RUNS.runs_dir, ROOT)
-        print(f"{RUNS.runs_csv.relative_to(ROOT)}: {added} run(s) added from {sweep_dir}")
+    args = page_arguments(__doc__ or "", RUNS)
     if not args.check:
         figure()
     same = write_page(HERE / "finetuning.template.md", values(), check=args.check)

@@ -13,7 +13,6 @@ committed so far and names the grid's runs still to come.
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 from two_way_runs import (
     HERE,
@@ -27,6 +26,7 @@ from two_way_runs import (
     interval,
     method_table,
     numbers,
+    page_arguments,
     per_run_table,
     percent,
     setting_of,
@@ -34,9 +34,9 @@ from two_way_runs import (
 )
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.studies.reports.committed_runs import append_runs, seeds_text
+from refpo_warp.studies.reports.committed_runs import seeds_text
 from refpo_warp.studies.reports.phrases import and_list
-from refpo_warp.studies.reports.results_page import main_args, write_page
+from refpo_warp.studies.reports.results_page import write_page
 
 RUNS = TwoWayRuns(ROOT / "configs" / "sweep" / "scratch_point_mass_wall.yaml", HERE / "scratch" / "runs.csv")
 FINETUNED = TwoWayRuns(ROOT / "configs" / "sweep" / "finetune_point_mass_wall.yaml", HERE / "finetune" / "runs.csv")
@@ -110,12 +110,7 @@ def values() -> dict[str, object]:
 
 
 def main() -> None:
-    parser = main_args(__doc__.splitlines()[0])
-    parser.add_argument("--add-runs", nargs="*", default=[], type=Path, help="sweep dirs whose finished runs to add")
-    args = parser.parse_args()
-    for sweep_dir in args.add_runs:
-        added = append_runs(sweep_dir, RUNS.runs_csv, RUNS.runs_dir, ROOT)
-        print(f"{RUNS.runs_csv.relative_to(ROOT)}: {added} run(s) added from {sweep_dir}")
+    args = page_arguments(__doc__ or "", RUNS)
     if not args.check and RUNS.rows:
         curves_figure(
             RUNS,

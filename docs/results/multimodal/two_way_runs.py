@@ -4,6 +4,7 @@ return), and the tables and the figure both pages draw from them."""
 
 from __future__ import annotations
 
+import argparse
 import functools
 import json
 from collections.abc import Callable
@@ -17,8 +18,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.studies.reports.committed_runs import read_rows, seeds_text
+from refpo_warp.studies.reports.committed_runs import append_runs, read_rows, seeds_text
 from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
+from refpo_warp.studies.reports.results_page import main_args
 from refpo_warp.utils.atomic_files import save_figure
 
 HERE = Path(__file__).resolve().parent
@@ -117,6 +119,17 @@ class TwoWayRuns:
 
     def seeds(self) -> list[int]:
         return sorted({s for m in self.methods() for s in self.run_results(m["label"])})
+
+
+def page_arguments(doc: str, runs: TwoWayRuns) -> argparse.Namespace:
+    """A page script's command line (``--check``, ``--add-runs DIR ...``), the sweeps' new runs appended first."""
+    parser = main_args(doc.splitlines()[0])
+    parser.add_argument("--add-runs", nargs="*", default=[], type=Path, help="sweep dirs whose finished runs to add")
+    args = parser.parse_args()
+    for sweep_dir in args.add_runs:
+        added = append_runs(sweep_dir, runs.runs_csv, runs.runs_dir, ROOT)
+        print(f"{runs.runs_csv.relative_to(ROOT)}: {added} run(s) added from {sweep_dir}")
+    return args
 
 
 # ------------------------------------------------------------------------------------------------ tables
