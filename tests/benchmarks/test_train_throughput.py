@@ -83,12 +83,15 @@ def test_the_parts_add_up_to_the_whole(results):
 def test_a_bad_option_names_the_key_and_writes_nothing(tmp_path, capsys):
     out = tmp_path / "x.json"
     # the benchmark's own options and the run options it passes on, through the one parser: an unknown key is refused
-    # naming the valid ones, a run option the benchmark sets itself (its temporary run dir) included
-    for key in ("iteration=3", "run_dir=x", "train.iterations=3"):
+    # naming the valid ones; the run option the benchmark sets itself (its temporary run dir) is refused naming out=
+    for key in ("iteration=3", "train.iterations=3"):
         assert main(["bench", "train", "task=gridworld", key, f"out={out}"]) == 2
         err = capsys.readouterr().err
         assert "Unknown option of refpo bench train" in err and "iterations, max_iterations" in err, err
         assert "algorithm.<option>" in err and "Traceback" not in err and not out.exists()
+    assert main(["bench", "train", "task=gridworld", "run_dir=x", f"out={out}"]) == 2
+    err = capsys.readouterr().err
+    assert "'run_dir=' is spelled 'out=" in err and "Traceback" not in err and not out.exists()
     assert main(["bench", "train", "task=gridworld", "iterations=0", f"out={out}"]) == 2
     assert "iterations" in capsys.readouterr().err and not out.exists()
     assert main(["bench", "train", "task=gridworld", "algo=[ppo,refpoo]", f"out={out}"]) == 2

@@ -82,7 +82,8 @@ def test_a_saved_config_lists_the_run_options_in_their_fields_order():
     compare saved files byte for byte)."""
     cfg = resolve_config(["task=dmc_cheetah_run", "algo=ppo"], device_type="cpu")
     assert list(cfg) == [
-        "task", "algo", "seed", "device", "num_envs", "total_env_steps", "max_iterations", "run_dir", "resume",
+        "task", "algo", "seed", "device", "torch_threads", "num_envs", "total_env_steps", "max_iterations", "run_dir",
+        "resume",
         "stop_after_iterations", "stop_after_minutes", "verbose", "notice", "env", "init_from",
         "critic_warmup_iterations", "clone_normalizer", "config_dir", "runner", "actor", "critic", "algorithm",
         "video", "pretrain", "eval",
