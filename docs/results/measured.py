@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import importlib
 import json
 import re
 import sys
@@ -468,10 +469,10 @@ def multimodal() -> str:
     )
     outcomes, ppo = {"both ways": 0, "one way": 0, "lost": 0}, []
     runs_of = page.RUNS
+    runs_module = importlib.import_module(type(runs_of).__module__)  # two_way_runs.py, beside the page script
     for method in runs_of.methods():
         for results in runs_of.run_results(method["label"]).values():
-            setting = "mean_action" if method["label"] == "ppo" else "N=10"
-            n = page.numbers(results.get(setting, {}) if results else {})
+            n = page.numbers(results.get(runs_module.setting_of(method["label"], 10), {}) if results else {})
             if method["label"] == "ppo":
                 ppo.append(n["success"])
             else:
