@@ -11,7 +11,7 @@ from pathlib import Path
 AFTER = 3  # the updates right after the warm-up that the clipping figures cover
 
 
-def train_rows(run: Path) -> list[dict] | None:
+def read_train_rows(run: Path) -> list[dict] | None:
     path = run / "progress_train.jsonl"
     if not path.exists():
         return None
@@ -29,7 +29,7 @@ def update_text(runs: dict[str, tuple[str, list[Path]]], warmup: int) -> str:
     approximate KL of the ``AFTER`` updates that follow the warm-up, with the clone's sampled spread there."""
     lines = []
     for name, folders in runs.values():
-        logged = [r for r in (train_rows(f) for f in folders) if r and len(r) > warmup]
+        logged = [r for r in (read_train_rows(f) for f in folders) if r and len(r) > warmup]
         if not logged:
             continue
         start = [r[warmup - 1]["reward_mean"] for r in logged]
