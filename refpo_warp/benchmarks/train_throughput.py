@@ -21,6 +21,13 @@ by its step hooks) and other (minibatch indexing, gradient clipping, the statist
 Host syncs: on CUDA every clock read waits for the device, so a part holds the device work it queued; the waits the
 run makes itself (the update's one read of its statistics, the logger's) fall in update/other and logging.
 
+The update against the device's arithmetic rate (``detail=true``, with a warm-up): the last warm-up iteration's update
+is run under torch's ``FlopCounterMode``, which counts the floating-point operations of its matrix products (forward
+and backward, as executed); divided by the timed update's seconds, that is the rate the update reaches. Beside it,
+the same command times a plain float32 matrix product at the update's widest shape (a minibatch of rows through the
+critic's widest hidden layer, square), on the run's device and threads: the rate the hardware gives such a product.
+Their ratio bounds what a change that keeps the arithmetic can gain on this machine.
+
 The anchor is PPO at the same task, profile and device (added when not asked for): each algo's env steps/s is printed
 as a ratio to PPO's, measured in the same command.
 """
@@ -30,6 +37,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import math
 import platform
 import tempfile
 import time
@@ -182,8 +190,13 @@ def measure(overrides: dict[str, Any], algo: str, iterations: int, warmup: int, 
         with contextlib.redirect_stdout(io.StringIO()):  # the progress lines of the iterations
             env, runner = build_runner(run, Path(tmp))
             random_start = bool(cfg["runner"]["init_at_random_ep_len"])
+            counted_flops = None
             if warmup:
-                runner.learn_chunk(warmup, total, init_at_random_ep_len=random_start)
+                if warmup > 1:
+                    runner.learn_chunk(warmup - 1, total, init_at_random_ep_len=random_start)
+                    runner.end_chunk({})
+                with count_update_flops(runner.alg, detail) as counted_flops:
+                    runner.learn_chunk(1, total, init_at_random_ep_len=random_start and warmup == 1)
                 runner.end_chunk({})
             clock = Clock(runner.device)
             steps_before = int(runner.logger.tot_timesteps)
@@ -202,7 +215,71 @@ def measure(overrides: dict[str, Any], algo: str, iterations: int, warmup: int, 
                 evaluation = clock.now() - start
         per_iteration = env_steps_per_iteration(cfg)
     row = result_row(cfg, algo, clock, whole, iterations, counted, per_iteration, evaluation, interval, str(env.device))
+    if counted_flops and "update" in row:
+        rows, width = minibatch_rows(cfg), max(cfg["critic"]["hidden_dims"])
+        rate = matmul_rate(rows, width, str(env.device))
+        achieved = counted_flops["flops"] / row["iteration"]["update"]
+        row["arithmetic"] = {
+            "update_matmul_flops": counted_flops["flops"],
+            "update_gflops_per_s": achieved / 1e9,
+            "matmul_shape": [rows, width, width],
+            "matmul_gflops_per_s": rate / 1e9,
+            "share_of_matmul_rate": achieved / rate,
+        }
     return {**row, "warmup": warmup}
+
+
+@contextlib.contextmanager
+def count_update_flops(alg, detail: bool):
+    """Count the matrix products' floating-point operations of every ``alg.update`` inside (forward and backward, as
+    executed: torch's ``FlopCounterMode``); yields a dict whose ``flops`` holds the count, empty unless ``detail``."""
+    from torch.utils.flop_counter import FlopCounterMode
+
+    found: dict[str, int] = {}
+    if not detail:
+        yield found
+        return
+    plain = alg.update
+
+    def counted(*args, **kwargs):
+        with FlopCounterMode(display=False) as counter:
+            out = plain(*args, **kwargs)
+        found["flops"] = found.get("flops", 0) + counter.get_total_flops()
+        return out
+
+    alg.update = counted
+    try:
+        yield found
+    finally:
+        del alg.update  # the class's method again
+
+
+def minibatch_rows(cfg: dict[str, Any]) -> int:
+    """The transitions of one minibatch: an iteration's (envs x policy steps) over the algorithm's minibatches."""
+    return cfg["num_envs"] * cfg["runner"]["num_steps_per_env"] // int(cfg["algorithm"].get("num_mini_batches", 1))
+
+
+def matmul_rate(rows: int, width: int, device: str, seconds: float = 0.5) -> float:
+    """Floating-point operations per second of a float32 (rows x width) @ (width x width) product on ``device`` at
+    torch's current threads: the best of five timings of as many products as fill ``seconds``."""
+    gen = torch.Generator(device=device).manual_seed(0)
+    a = torch.randn(rows, width, device=device, generator=gen)
+    b = torch.randn(width, width, device=device, generator=gen)
+    clock = Clock(device)
+    start = clock.now()
+    repeats = 0
+    while clock.now() - start < 0.05 or repeats < 3:  # warm-up, and a first estimate of one product's time
+        a @ b
+        repeats += 1
+    per_product = (clock.now() - start) / repeats
+    count = max(1, int(seconds / 5 / per_product))
+    best = math.inf
+    for _ in range(5):
+        start = clock.now()
+        for _ in range(count):
+            a @ b
+        best = min(best, (clock.now() - start) / count)
+    return 2 * rows * width * width / best
 
 
 def result_row(cfg, algo, clock: Clock, whole, iterations, counted, per_iteration, evaluation, interval, device):
@@ -308,6 +385,21 @@ def print_results(rows: list[dict[str, Any]]) -> None:
             for r in detail
         ]
         print_table(parts, list(parts[0]), title="The update's and the rollout's parts (seconds per iteration, share)")
+    counted = [r for r in rows if "arithmetic" in r]
+    if counted:
+        rates = [
+            {
+                "algo": r["algo"],
+                "update: matrix-product GFLOP / iteration": f"{r['arithmetic']['update_matmul_flops'] / 1e9:,.1f}",
+                "update GFLOP/s": f"{r['arithmetic']['update_gflops_per_s']:.1f}",
+                "float32 product GFLOP/s": f"{r['arithmetic']['matmul_gflops_per_s']:.1f}",
+                "product shape": " x ".join(str(n) for n in r["arithmetic"]["matmul_shape"][:2])
+                + f" @ {r['arithmetic']['matmul_shape'][1]} x {r['arithmetic']['matmul_shape'][2]}",
+                "share": f"{100 * r['arithmetic']['share_of_matmul_rate']:.0f}%",
+            }
+            for r in counted
+        ]
+        print_table(rates, list(rates[0]), title="The update against this device's float32 matrix-product rate")
 
 
 def _share(seconds: float, whole: float) -> str:

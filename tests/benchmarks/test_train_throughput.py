@@ -1,5 +1,6 @@
 """``refpo bench train``: its parts add up to the iteration it times, and it counts the env steps the run takes."""
 
+import itertools
 import json
 
 import pytest
@@ -96,3 +97,25 @@ def test_a_bad_option_names_the_key_and_writes_nothing(tmp_path, capsys):
     assert "iterations" in capsys.readouterr().err and not out.exists()
     assert main(["bench", "train", "task=gridworld", "algo=[ppo,refpoo]", f"out={out}"]) == 2
     assert "refpoo" in capsys.readouterr().err and not out.exists()
+
+
+def test_the_update_flops_are_the_hand_count_of_ppos_matrix_products(results):
+    # PPO on gridworld: observations (x, y) and a 2-D action; actor obs -> 64 -> 64 -> 2, critic obs -> 64 -> 64 -> 1.
+    # A layer d_in -> d_out over r rows: 2 r d_in d_out forward, as much for its weight's gradient, and as much for its
+    # input's gradient except at the first layer (the observations need none). One update: every transition, every pass.
+    def mlp(dims):
+        layers = list(itertools.pairwise(dims))
+        return sum(4 * i * o for i, o in layers) + sum(2 * i * o for i, o in layers[1:])
+
+    rows = ENVS * STEPS * EPOCHS
+    ppo = results["results"][0]["arithmetic"]
+    assert ppo["update_matmul_flops"] == rows * (mlp([2, 64, 64, 2]) + mlp([2, 64, 64, 1]))
+    for row in results["results"]:
+        found = row["arithmetic"]
+        assert found["matmul_shape"] == [ENVS * STEPS // MINIBATCHES, 64, 64]
+        assert found["update_gflops_per_s"] * 1e9 == pytest.approx(
+            found["update_matmul_flops"] / row["iteration"]["update"]
+        )
+        assert found["share_of_matmul_rate"] == pytest.approx(
+            found["update_gflops_per_s"] / found["matmul_gflops_per_s"]
+        )
