@@ -208,6 +208,56 @@ def changes() -> str:
     return table(header, rows) + "\n\n" + "\n".join(said) + "\n\nMeasured by:\n\n```\n" + "\n".join(lines) + "\n```"
 
 
+def ceiling() -> str:
+    """The update's matrix-product rate against a plain float32 product's, from ceiling/<task>.json, and what that
+    bounds: the iteration with the update's matrix products at the plain product's rate and every other part as it is."""
+    rows, said, lines, speedups = [], [], [], []
+    for task in TASKS:
+        data = json.loads((HERE / "ceiling" / f"{task}.json").read_text())
+        lines.append(data["command"])
+        for r in data["results"]:
+            found, whole, update = r["arithmetic"], r["seconds_per_iteration"], r["iteration"]["update"]
+            floor = whole - update + found["update_matmul_flops"] / (found["matmul_gflops_per_s"] * 1e9)
+            speedups.append(whole / floor)
+            rows.append(
+                [
+                    f"`{task}`",
+                    NAMES.get(r["algo"], r["algo"]),
+                    f"{found['update_matmul_flops'] / 1e9:,.0f}",
+                    f"{update:.2f}",
+                    f"{found['update_gflops_per_s']:.1f}",
+                    f"{found['matmul_gflops_per_s']:.1f}",
+                    f"{100 * found['share_of_matmul_rate']:.0f} %",
+                    f"{whole:.2f} → {floor:.2f} ({whole / floor:.2f}x)",
+                ]
+            )
+        shape = data["results"][0]["arithmetic"]["matmul_shape"]
+        cpu = data["machine"]
+        said.append(
+            f"`{task}`: the plain product is {shape[0]:,} x {shape[1]} @ {shape[1]} x {shape[2]} (a minibatch through "
+            f"the critic's hidden layer) on {cpu['torch_threads']} thread (torch's capability "
+            f"{cpu.get('cpu_capability', 'not recorded')}; load average {cpu.get('load_average', ['?'])[0]} when the "
+            "command ended)."
+        )
+    header = ["task", "algo", "update: matrix-product GFLOP / iteration", "update (s)", "update GFLOP/s"]
+    header += ["float32 product GFLOP/s", "share", "s / iteration → bound (speed-up)"]
+    verdict = (
+        f"A run at this profile {'cannot' if max(speedups) < 2 else 'could'} be made twice as fast on the same "
+        f"threads by a change that keeps the float32 arithmetic: the bound is {min(speedups):.2f}x to "
+        f"{max(speedups):.2f}x."
+    )
+    return (
+        table(header, rows)
+        + "\n\n"
+        + " ".join(said)
+        + " "
+        + verdict
+        + "\n\nMeasured by:\n\n```\n"
+        + "\n".join(lines)
+        + "\n```"
+    )
+
+
 def main() -> None:
     args = main_args(__doc__.splitlines()[1]).parse_args()
     runs = {task: load(task) for task in TASKS}
@@ -223,6 +273,7 @@ def main() -> None:
         "reading": reading(runs),
         "commands": commands(runs),
         "changes": changes(),
+        "ceiling": ceiling(),
     }
     same = write_page(HERE / "README.template.md", values, check=args.check)
     sys.exit(0 if same or not args.check else 1)
