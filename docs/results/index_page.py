@@ -57,6 +57,7 @@ PAGES = {
     "finetune_reacher_easy": "[finetuning/](finetuning/README.md)",
     "finetune_scratch": "[finetuning/](finetuning/README.md)",
     "scratch_point_mass_wall": "[multimodal/scratch.md](multimodal/scratch.md)",
+    "trend_8x": "[trend/](trend/README.md)",
     "paper_dmc": "not run (CUDA)",
 }
 LABELS = ("ppo", "fpo", "refpo")

@@ -1,0 +1,353 @@
+#!/usr/bin/env python
+"""Toward the paper's budget on the CPU: ``README.md`` in this folder, written whole from ``README.template.md`` and the
+committed runs of ``refpo sweep trend_8x`` (nothing typed in by hand):
+
+    python docs/results/trend/make_page.py [--add-runs runs/sweeps/trend_8x] [--check]
+
+Rows: ``runs.csv`` here (``refpo report`` of the sweep); each run's periodic evaluations (``progress_eval.jsonl``,
+one at every multiple of the profile's budget) and training statistics (``progress_train.jsonl``) under ``runs/``.
+``--add-runs`` appends the finished runs of a sweep dir not yet in the table and copies their small files; the page
+shows every run committed so far and names the grid's runs still to come.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from refpo_warp.config.yaml_files import load_yaml
+from refpo_warp.studies.reports.committed_runs import append_runs, read_rows, seeds_text
+from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
+from refpo_warp.studies.reports.phrases import and_list
+from refpo_warp.studies.reports.results_page import main_args, write_page
+from refpo_warp.utils.atomic_files import save_figure
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[2]
+SWEEP = load_yaml(ROOT / "configs" / "sweep" / "trend_8x.yaml")
+TASKS: tuple[str, ...] = tuple(SWEEP["tasks"])
+METHODS = {m["label"]: m["name"] for m in SWEEP["methods"]}
+FLOWS = tuple(label for label in METHODS if label != "ppo")
+COLOURS = {"ppo": "#2ca02c", "fpo": "#ff7f0e", "refpo": "#1f77b4", "refpo_onestep": "#9467bd"}
+RUNS_CSV, RUNS_DIR = HERE / "runs.csv", HERE / "runs"
+MACHINE = "a 2-core AMD EPYC (AVX2) shared with other work, one torch thread a run"  # the runs record no machine
+
+
+# ------------------------------------------------------------------------------------------------ data
+def profile_iterations() -> int:
+    """Iterations of the CPU profile's budget: the sweep's evaluation interval (one evaluation per multiple)."""
+    return int(SWEEP["overrides"]["eval"]["interval"])
+
+
+def multiples() -> list[int]:
+    """The budgets the tables show, as multiples of the profile's: 1, 2, 4, ... up to the sweep's (the periodic
+    evaluations fall at every multiple; the curves show them all)."""
+    largest = int(SWEEP["overrides"]["total_env_steps"]) // env_steps_per_profile()
+    return [2**k for k in range(largest.bit_length()) if 2**k <= largest]
+
+
+def env_steps_per_profile() -> int:
+    from refpo_warp.config.resolve import resolve_config
+    from refpo_warp.runner.build import env_steps_per_iteration
+
+    cfg = resolve_config([f"task={TASKS[0]}", "algo=ppo", "device=cpu"], device_type="cpu")
+    return env_steps_per_iteration(cfg) * profile_iterations()
+
+
+def read_jsonl(path: Path) -> list[dict]:
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def committed() -> list[dict]:
+    """The committed runs' rows (finished or failed), each with its evaluations and training rows."""
+    if not RUNS_CSV.exists():
+        return []
+    rows = []
+    for row in read_rows(RUNS_CSV):
+        run = ROOT / row["run_dir"]
+        row["evals"] = read_jsonl(run / "progress_eval.jsonl") if (run / "progress_eval.jsonl").exists() else []
+        row["train"] = read_jsonl(run / "progress_train.jsonl") if (run / "progress_train.jsonl").exists() else []
+        rows.append(row)
+    return rows
+
+
+def at_budget(row: dict, multiple: int, key: str) -> float | None:
+    """The run's periodic evaluation of ``key`` at ``multiple`` x the profile's budget; a failed run scores 0."""
+    if row["status"] == "failed":
+        return 0.0
+    iteration = multiple * profile_iterations() - 1
+    found = [e for e in row["evals"] if e["iteration"] == iteration and key in e]
+    return float(found[0][key]) if found else None
+
+
+def return_key(label: str, setting: str) -> str:
+    """The evaluation's key: PPO's mean action; a flow's N = 10 or N = 1 from random initial noise."""
+    return "eval/return" if label == "ppo" else f"eval/return_N{setting}"
+
+
+def scores(rows: list[dict], label: str, task: str, multiple: int, setting: str) -> dict[int, float]:
+    """seed -> the return at that budget, for the runs that reached it."""
+    out = {}
+    for row in rows:
+        if row["label"] == label and row["task"] == task:
+            value = at_budget(row, multiple, return_key(label, setting))
+            if value is not None:
+                out[int(row["seed"])] = value
+    return out
+
+
+def window(row: dict, multiple: int) -> list[dict]:
+    """The run's training rows from the previous budget to this one."""
+    top, bottom = multiple * profile_iterations(), (multiple - 1) * profile_iterations()
+    return [r for r in row["train"] if bottom <= r["iteration"] < top]
+
+
+# ------------------------------------------------------------------------------------------------ tables
+def mean_cell(values: dict[int, float]) -> str:
+    if not values:
+        return "--"
+    estimate = aggregate({"m": np.array(list(values.values()), dtype=float)[:, None]})["m"]["mean"]
+    return f"{estimate.text()} ({len(values)})"
+
+
+def returns_table(rows: list[dict], setting: str) -> str:
+    labels = [label for label in METHODS if setting == "10" or label != "ppo"]
+    header = ["task", "method", *(f"{m}x" for m in multiples())]
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    for task in TASKS:
+        for label in labels:
+            cells = [mean_cell(scores(rows, label, task, m, setting)) for m in multiples()]
+            if all(c == "--" for c in cells):
+                continue
+            lines.append(f"| `{task}` | {METHODS[label]} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def paired(rows: list[dict], label: str, multiple: int) -> tuple[np.ndarray, np.ndarray, list[int]] | None:
+    """(seeds x tasks) of the flow at N = 10 and of PPO, over the seeds both have on every task; None if none."""
+    flow = {t: scores(rows, label, t, multiple, "10") for t in TASKS}
+    ppo = {t: scores(rows, "ppo", t, multiple, "10") for t in TASKS}
+    seeds = sorted(set.intersection(*(set(flow[t]) & set(ppo[t]) for t in TASKS)))
+    if not seeds:
+        return None
+    return (
+        np.array([[flow[t][s] for t in TASKS] for s in seeds]),
+        np.array([[ppo[t][s] for t in TASKS] for s in seeds]),
+        seeds,
+    )
+
+
+def verdict(p: Estimate, name: str) -> str:
+    if p.low > 0.5:
+        return f"{name} ahead"
+    if p.high < 0.5:
+        return "PPO ahead"
+    return "not separated"
+
+
+def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Estimate]]]:
+    """P(a run of the flow at N = 10 beats a run of PPO) at each budget over both tasks, and the estimates."""
+    header = ["method", "seeds", *(f"{m}x" for m in multiples())]
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    found: dict[str, dict[int, Estimate]] = {}
+    for label in FLOWS:
+        cells, seeds = [], set()
+        for m in multiples():
+            pair = paired(rows, label, m)
+            if pair is None:
+                cells.append("--")
+                continue
+            p = improvement(pair[0], pair[1])
+            found.setdefault(label, {})[m] = p
+            seeds |= set(pair[2])
+            cells.append(f"{p.text(2)}: {verdict(p, 'flow')}")
+        if label in found:
+            lines.append(f"| {METHODS[label]} | {seeds_text(sorted(seeds))} | " + " | ".join(cells) + " |")
+    return "\n".join(lines), found
+
+
+def health_table(rows: list[dict]) -> str:
+    """Per flow run's budget window: the largest ratio, the mean explosion rate and the straightness error at the
+    window's end, means over seeds; and the run-health rule's verdict at the run's end."""
+    header = ["task", "method", "statistic", *(f"{m}x" for m in multiples())]
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    stats = (
+        ("largest ratio", lambda w: max(r.get("Flow/ratio_max", np.nan) for r in w)),
+        ("explosion rate", lambda w: float(np.mean([r.get("Flow/explosion_rate", np.nan) for r in w]))),
+        ("straightness error", lambda w: w[-1].get("Flow/straightness_error", np.nan)),
+    )
+    for task in TASKS:
+        for label in FLOWS:
+            runs = [r for r in rows if r["label"] == label and r["task"] == task and r["status"] == "ok"]
+            if not runs:
+                continue
+            for name, fn in stats:
+                cells = []
+                for m in multiples():
+                    values = [fn(w) for w in (window(r, m) for r in runs) if w]
+                    cells.append(f"{np.mean(values):.3g}" if values else "--")
+                lines.append(f"| `{task}` | {METHODS[label]} | {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def health_verdicts(rows: list[dict]) -> str:
+    """How many runs each verdict of the rule has, naming the runs of every verdict but ok."""
+    by_verdict: dict[str, list[str]] = {}
+    for r in rows:
+        if r.get("health"):
+            by_verdict.setdefault(r["health"], []).append(
+                f"{r['task'].removeprefix('dmc_')}/{r['label']}/seed{r['seed']}"
+            )
+    if not by_verdict:
+        return "no run has a verdict yet"
+    return and_list(
+        f"{verdict} in {len(runs)} run{'s' if len(runs) != 1 else ''}"
+        + ("" if verdict == "ok" else f" ({and_list(runs)})")
+        for verdict, runs in sorted(by_verdict.items())
+    )
+
+
+# ------------------------------------------------------------------------------------------------ the answer
+def movement(p0: Estimate, p1: Estimate) -> str:
+    """How the probability of improvement moved between two budgets, in words of who leads."""
+    leader = "PPO's lead" if p0.point < 0.5 else "the flow's lead"
+    if p1.point == p0.point:
+        moved = f"{leader} holds"
+    elif (p0.point < 0.5) != (p1.point < 0.5) and p1.point != 0.5:
+        moved = f"{leader} turns into the other's"
+    else:
+        toward_flow = p1.point > p0.point
+        moved = f"{leader} {'narrows' if toward_flow == (p0.point < 0.5) else 'widens'}"
+    both = p0.separates and p1.separates
+    return (
+        f"by the point estimates {moved}; {'both intervals leave out' if both else 'not both intervals leave out'} 0.5"
+    )
+
+
+def answer(found: dict[str, dict[int, Estimate]]) -> str:
+    """Per flow method: the probability of beating PPO at the smallest and the largest budget both reached."""
+    if not found:
+        return "No flow method and PPO share a committed seed yet: the page answers when they do."
+    lines = []
+    for label, by_budget in found.items():
+        first, last = min(by_budget), max(by_budget)
+        p0, p1 = by_budget[first], by_budget[last]
+        if first == last:
+            lines.append(f"- **{METHODS[label]}**: only {first}x reached so far: {p0.text(2)} ({verdict(p0, 'it')}).")
+            continue
+        lines.append(
+            f"- **{METHODS[label]}** against PPO: P(improvement) {p0.text(2)} at {first}x "
+            f"({verdict(p0, METHODS[label])}), {p1.text(2)} at {last}x ({verdict(p1, METHODS[label])}): "
+            f"{movement(p0, p1)}."
+        )
+    return "\n".join(lines)
+
+
+def degradation(rows: list[dict]) -> str:
+    """The paper's Figure 3 question on point_mass: does FPO fall from its best budget where ReFPO holds?"""
+    task = "dmc_point_mass"
+    lines = []
+    for label in ("fpo", "refpo"):
+        means = {m: scores(rows, label, task, m, "10") for m in multiples()}
+        means = {m: v for m, v in means.items() if v}
+        if len(means) < 2:
+            continue
+        best = max(means, key=lambda m: np.mean(list(means[m].values())))
+        last = max(means)
+        lines.append(
+            f"- {METHODS[label]} on `{task}` (N = 10): best at {best}x, {mean_cell(means[best])}; at {last}x, "
+            f"{mean_cell(means[last])}."
+        )
+    return "\n".join(lines) if lines else "- Not enough committed runs on `dmc_point_mass` yet."
+
+
+# ------------------------------------------------------------------------------------------------ figure
+def curves(rows: list[dict], path: Path) -> None:
+    """N = 10 (PPO: its mean action) at every evaluation, the mean over seeds and a band from lowest to highest."""
+    fig, axes = plt.subplots(1, len(TASKS), figsize=(5.5 * len(TASKS), 4))
+    for ax, task in zip(axes, TASKS, strict=True):
+        for label, name in METHODS.items():
+            runs = [r for r in rows if r["label"] == label and r["task"] == task and r["status"] == "ok"]
+            if not runs:
+                continue
+            key = return_key(label, "10")
+            series = [[(e["env_steps"], e[key]) for e in r["evals"] if key in e] for r in runs]
+            length = min(len(s) for s in series)
+            steps = np.array([x for x, _ in series[0][:length]])
+            values = np.array([[y for _, y in s[:length]] for s in series])
+            ax.plot(steps, values.mean(axis=0), color=COLOURS[label], label=f"{name} ({len(runs)})")
+            ax.fill_between(steps, values.min(axis=0), values.max(axis=0), color=COLOURS[label], alpha=0.15)
+        ax.set_title(task)
+        ax.set_xlabel("env steps")
+        ax.set_ylabel("return (N = 10; PPO: mean action)")
+        ax.legend(fontsize=7, loc="lower right")
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+
+
+# ------------------------------------------------------------------------------------------------ the page
+def still_to_run(rows: list[dict]) -> str:
+    have = {(r["task"], r["label"], int(r["seed"])) for r in rows}
+    missing = []
+    for task in TASKS:
+        for label in METHODS:
+            seeds = [s for s in SWEEP["seeds"] if (task, label, s) not in have]
+            if seeds:
+                missing.append(f"{task.removeprefix('dmc_')}/{label} (seeds {seeds_text(seeds)})")
+    return and_list(missing) if missing else "none"
+
+
+def run_minutes(rows: list[dict]) -> str:
+    minutes = [float(r["minutes"]) for r in rows if r.get("minutes")]
+    if not minutes:
+        return "No committed run has its wall time yet"
+    return f"The committed runs took {min(minutes):.0f}-{max(minutes):.0f} min each"
+
+
+def values() -> dict[str, object]:
+    rows = committed()
+    gap, found = gap_table(rows)
+    if rows:
+        curves(rows, HERE / "trend_curves.png")
+    return {
+        "committed": len(rows),
+        "grid": len(TASKS) * len(METHODS) * len(SWEEP["seeds"]),
+        "still_to_run": still_to_run(rows),
+        "run_minutes": run_minutes(rows),
+        "machine": MACHINE,
+        "budget": f"{env_steps_per_profile():,} env steps ({profile_iterations()} iterations)",
+        "largest": f"{multiples()[-1]}x",
+        "seeds": seeds_text(SWEEP["seeds"]),
+        "returns_n10": returns_table(rows, "10"),
+        "returns_n1": returns_table(rows, "1"),
+        "gap_table": gap,
+        "answer": answer(found),
+        "degradation": degradation(rows),
+        "health_table": health_table(rows),
+        "health_verdicts": health_verdicts(rows),
+        "figure": "![Returns through training to 8x the budget](trend_curves.png)"
+        if rows
+        else "(no run committed yet)",
+    }
+
+
+def main() -> None:
+    parser = main_args(__doc__.splitlines()[0])
+    parser.add_argument("--add-runs", nargs="*", default=[], type=Path, help="sweep dirs whose finished runs to add")
+    args = parser.parse_args()
+    for sweep_dir in args.add_runs:
+        added = append_runs(sweep_dir, RUNS_CSV, RUNS_DIR, ROOT)
+        print(f"{RUNS_CSV.relative_to(ROOT)}: {added} run(s) added from {sweep_dir}")
+    same = write_page(HERE / "README.template.md", values(), check=args.check)
+    sys.exit(0 if same or not args.check else 1)
+
+
+if __name__ == "__main__":
+    main()
