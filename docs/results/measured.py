@@ -444,18 +444,41 @@ def demonstrations() -> str:
     return grid + dmc
 
 
-def multimodal_page():
-    """The two-way task's fine-tuning page script (multimodal/finetuning.py), its functions read, not run; its folder
-    goes on the path for the scripts it imports (two_way_runs.py and the rest)."""
+def multimodal_page(script: str = "finetuning"):
+    """A two-way task page's script (multimodal/<script>.py: finetuning or scratch), its functions read, not run; its
+    folder goes on the path for the scripts it imports (two_way_runs.py and the rest)."""
     import importlib.util
 
     folder = str(RESULTS / "multimodal")
     if folder not in sys.path:
         sys.path.append(folder)
-    spec = importlib.util.spec_from_file_location("multimodal_finetuning", RESULTS / "multimodal" / "finetuning.py")
+    spec = importlib.util.spec_from_file_location(f"multimodal_{script}", RESULTS / "multimodal" / f"{script}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def multimodal_scratch() -> str:
+    """The two-way task from scratch: how many runs of each kind reach the target (success at N = 10, PPO's mean
+    action, at least the page's floor)."""
+    page = multimodal_page("scratch")
+    runs_of = page.RUNS
+    reached, total = 0, 0
+    for method in runs_of.methods():
+        for results in runs_of.run_results(method["label"]).values():
+            n = page.numbers(results.get(page.setting_of(method["label"], 10), {}) if results else {})
+            total += 1
+            reached += n["success"] >= page.SUCCESS_FLOOR
+    if not total:
+        return ""
+    sweep = page.load_yaml(runs_of.sweep)
+    seeds = runs_of.seeds()
+    return (
+        f"; from scratch at the task's full CPU budget ({steps_text(runs_of.first_config()['total_env_steps'])} env "
+        f"steps, seeds {page.seeds_text(seeds)}{'' if seeds == sweep['seeds'] else ' so far'}), {reached} of "
+        f"{total} runs of the {len(runs_of.methods())} methods reach the target in {100 * page.SUCCESS_FLOOR:.0f} % "
+        "of their episodes"
+    )
 
 
 def multimodal() -> str:
@@ -492,6 +515,7 @@ def multimodal() -> str:
     )
     if ppo:
         text += f", and PPO from the Gaussian clone ends at a success of {estimate([100 * v for v in ppo])} %"
+    text += multimodal_scratch()
     if outcomes["lost"] > runs / 2:
         return text + (
             ": pick a flow policy to clone demonstrations that hold several ways; at these values, fine-tuning "
