@@ -452,7 +452,10 @@ def multimodal_page(script: str = "finetuning"):
     folder = str(RESULTS / "multimodal")
     if folder not in sys.path:
         sys.path.append(folder)
-    spec = importlib.util.spec_from_file_location(f"multimodal_{script}", RESULTS / "multimodal" / f"{script}.py")
+    path = RESULTS / "multimodal" / f"{script}.py"
+    spec = importlib.util.spec_from_file_location(f"multimodal_{script}", path)
+    if spec is None or spec.loader is None:
+        raise SystemExit(f"{path}: not a Python script")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module

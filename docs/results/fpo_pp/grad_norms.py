@@ -8,6 +8,8 @@ import json
 import statistics
 from pathlib import Path
 
+from refpo_warp.studies.reports.phrases import value_range as span
+
 ACTOR, CRITIC = "Loss/grad_norm_actor", "Loss/grad_norm_critic"
 
 
@@ -27,11 +29,6 @@ def joint_factor(actor: float, critic: float, max_norm: float) -> float:
     return min(1.0, max_norm / (actor * actor + critic * critic) ** 0.5)
 
 
-def span(values: list[float], digits: int) -> str:
-    lo, hi = min(values), max(values)
-    return f"{lo:.{digits}f}" if round(lo, digits) == round(hi, digits) else f"{lo:.{digits}f}-{hi:.{digits}f}"
-
-
 def grad_norm_text(runs: dict[str, list[Path]], joint_runs: list[Path], max_norm: float) -> str:
     """A paragraph on the ablated runs' norms (``runs``: label -> run folders) and the joint clip's factor at them;
     ``joint_runs`` are the joint-clip runs, named as having norms or not."""
@@ -47,9 +44,10 @@ def grad_norm_text(runs: dict[str, list[Path]], joint_runs: list[Path], max_norm
         lowest = [min(joint_factor(a, c, max_norm) for a, c in n) for n in logged]
         parts.append(
             f"in the {len(logged)} `{label}` runs the actor's median norm over iterations is "
-            f"{span(actor, 2)} and the critic's {span(critic, 0)}, reaching {span(last, 0)} at the last iteration; "
+            f"{span(actor, '.2f')} and the critic's {span(critic, '.0f')}, reaching {span(last, '.0f')} at the last "
+            "iteration; "
             f"a joint clip of {max_norm:g} at these norms would multiply the actor's gradient by a median "
-            f"{span(factor, 2)} a run (lowest {span(lowest, 3)})"
+            f"{span(factor, '.2f')} a run (lowest {span(lowest, '.3f')})"
         )
     if not parts:
         return ""

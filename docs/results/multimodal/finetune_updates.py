@@ -4,9 +4,14 @@ success), read at the end of the critic's warm-up and after it."""
 
 from __future__ import annotations
 
+import functools
 import json
 import statistics
 from pathlib import Path
+
+from refpo_warp.studies.reports.phrases import value_range
+
+span = functools.partial(value_range, sep=" to ")  # this page writes a range as "a to b"
 
 AFTER = 3  # the updates right after the warm-up that the clipping figures cover
 
@@ -16,11 +21,6 @@ def read_train_rows(run: Path) -> list[dict] | None:
     if not path.exists():
         return None
     return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
-
-
-def span(values: list[float], fmt: str) -> str:
-    lo, hi = format(min(values), fmt), format(max(values), fmt)
-    return lo if lo == hi else f"{lo} to {hi}"
 
 
 def update_text(runs: dict[str, tuple[str, list[Path]]], warmup: int) -> str:

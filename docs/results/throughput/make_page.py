@@ -210,7 +210,7 @@ def changes() -> str:
 
 def ceiling() -> str:
     """The update's matrix-product rate against a plain float32 product's, from ceiling/<task>.json, and what that
-    bounds: the iteration with the update's matrix products at the plain product's rate and every other part as it is."""
+    bounds: the iteration with the update's matrix products at the plain product's rate, every other part as it is."""
     rows, said, lines, speedups = [], [], [], []
     for task in TASKS:
         data = json.loads((HERE / "ceiling" / f"{task}.json").read_text())

@@ -9,3 +9,11 @@ def and_list(items: Iterable[str]) -> str:
     if len(listed) <= 1:
         return "".join(listed)
     return ", ".join(listed[:-1]) + " and " + listed[-1]
+
+
+def value_range(values: Iterable[float], fmt: str, sep: str = "-") -> str:
+    """The smallest and the largest of ``values`` formatted with ``fmt`` ('.2f'), joined by ``sep``; one value where
+    the two read the same."""
+    listed = list(values)
+    lo, hi = format(min(listed), fmt), format(max(listed), fmt)
+    return lo if lo == hi else f"{lo}{sep}{hi}"
