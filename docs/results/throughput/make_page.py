@@ -60,6 +60,18 @@ def threads_note(before: dict, after: dict) -> str:
     )
 
 
+def compile_note(before: dict, after: dict) -> str:
+    parts = []
+    for b in before["results"]:
+        a = next(r for r in after["results"] if r["algo"] == b["algo"])
+        parts.append(
+            f"{NAMES.get(b['algo'], b['algo'])}'s update {b['iteration']['update']:.2f} → "
+            f"{a['iteration']['update']:.2f} s an iteration"
+        )
+    warmup = after["results"][0]["warmup"]
+    return f"The update: {'; '.join(parts)}. Compilation falls in the {warmup} warm-up iterations, not timed."
+
+
 CHANGES = (
     Change(
         "bf16",
@@ -76,6 +88,14 @@ CHANGES = (
         "two torch threads for the networks of one run",
         ("1thread", "2thread"),
         threads_note,
+    ),
+    Change(
+        "compile",
+        "runner.torch_compile_mode=default",
+        "null: not compiled",
+        "torch.compile of the actor and the critic, as rsl_rl applies it",
+        ("eager", "compiled"),
+        compile_note,
     ),
 )
 
