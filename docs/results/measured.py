@@ -461,9 +461,9 @@ def multimodal_page(script: str = "finetuning"):
     return module
 
 
-def multimodal_scratch() -> str:
+def multimodal_scratch() -> tuple[str, int, int]:
     """The two-way task from scratch: how many runs of each kind reach the target (success at N = 10, PPO's mean
-    action, at least the page's floor)."""
+    action, at least the page's floor): the clause, the runs that reach it and the runs."""
     page = multimodal_page("scratch")
     runs_of = page.RUNS
     reached, total = 0, 0
@@ -473,15 +473,16 @@ def multimodal_scratch() -> str:
             total += 1
             reached += n["success"] >= page.SUCCESS_FLOOR
     if not total:
-        return ""
+        return "", 0, 0
     sweep = page.load_yaml(runs_of.sweep)
     seeds = runs_of.seeds()
-    return (
+    text = (
         f"; from scratch at the task's full CPU budget ({steps_text(runs_of.first_config()['total_env_steps'])} env "
         f"steps, seeds {page.seeds_text(seeds)}{'' if seeds == sweep['seeds'] else ' so far'}), {reached} of "
         f"{total} runs of the {len(runs_of.methods())} methods reach the target in {100 * page.SUCCESS_FLOOR:.0f} % "
         "of their episodes"
     )
+    return text, reached, total
 
 
 def multimodal() -> str:
@@ -518,15 +519,18 @@ def multimodal() -> str:
     )
     if ppo:
         text += f", and PPO from the Gaussian clone ends at a success of {estimate([100 * v for v in ppo])} %"
-    text += multimodal_scratch()
+    scratch, reached, tried = multimodal_scratch()
+    text += scratch + ": "
+    if tried and not reached:
+        text += "without demonstrations no method finds this task's target at this budget; with them, "
     if outcomes["lost"] > runs / 2:
         return text + (
-            ": pick a flow policy to clone demonstrations that hold several ways; at these values, fine-tuning "
-            "it lost the task in most runs"
+            "pick a flow policy to clone demonstrations that hold several ways; at these values, fine-tuning it lost "
+            "the task in most runs"
         )
     if outcomes["both ways"] > runs / 2:
-        return text + ": pick a flow policy for demonstrations that hold several ways, cloned and fine-tuned"
-    return text + ": pick a flow policy to clone demonstrations that hold several ways; fine-tuned, most runs keep one"
+        return text + "pick a flow policy for demonstrations that hold several ways, cloned and fine-tuned"
+    return text + "pick a flow policy to clone demonstrations that hold several ways; fine-tuned, most runs keep one"
 
 
 # ------------------------------------------------------------------------------------------------ the page
