@@ -21,12 +21,12 @@ by its step hooks) and other (minibatch indexing, gradient clipping, the statist
 Host syncs: on CUDA every clock read waits for the device, so a part holds the device work it queued; the waits the
 run makes itself (the update's one read of its statistics, the logger's) fall in update/other and logging.
 
-The update against the device's arithmetic rate (``detail=true``, with a warm-up): the last warm-up iteration's update
-is run under torch's ``FlopCounterMode``, which counts the floating-point operations of its matrix products (forward
-and backward, as executed); divided by the timed update's seconds, that is the rate the update reaches. Beside it,
-the same command times a plain float32 matrix product at the update's widest shape (a minibatch of rows through the
-critic's widest hidden layer, square), on the run's device and threads: the rate the hardware gives such a product.
-Their ratio bounds what a change that keeps the arithmetic can gain on this machine.
+The update against the device's arithmetic rate (``detail=true`` with a warm-up; networks not compiled): the last
+warm-up iteration's update is run under torch's ``FlopCounterMode``, which counts the floating-point operations of its
+matrix products (forward and backward, as executed); divided by the timed update's seconds, that is the rate the
+update reaches. Beside it, the same command times a plain float32 matrix product at the update's widest shape (a
+minibatch of rows through the critic's widest hidden layer, square), on the run's device and threads: the rate the
+hardware gives such a product. Their ratio bounds what a change that keeps the arithmetic can gain on this machine.
 
 The anchor is PPO at the same task, profile and device (added when not asked for): each algo's env steps/s is printed
 as a ratio to PPO's, measured in the same command.
@@ -195,7 +195,9 @@ def measure(overrides: dict[str, Any], algo: str, iterations: int, warmup: int, 
                 if warmup > 1:
                     runner.learn_chunk(warmup - 1, total, init_at_random_ep_len=random_start)
                     runner.end_chunk({})
-                with count_update_flops(runner.alg, detail) as counted_flops:
+                # torch.compile'd networks are not counted: the counter's module hooks would change what they trace
+                counting = detail and not cfg["runner"].get("torch_compile_mode")
+                with count_update_flops(runner.alg, counting) as counted_flops:
                     runner.learn_chunk(1, total, init_at_random_ep_len=random_start and warmup == 1)
                 runner.end_chunk({})
             clock = Clock(runner.device)
@@ -230,13 +232,13 @@ def measure(overrides: dict[str, Any], algo: str, iterations: int, warmup: int, 
 
 
 @contextlib.contextmanager
-def count_update_flops(alg, detail: bool):
+def count_update_flops(alg, counting: bool):
     """Count the matrix products' floating-point operations of every ``alg.update`` inside (forward and backward, as
-    executed: torch's ``FlopCounterMode``); yields a dict whose ``flops`` holds the count, empty unless ``detail``."""
+    executed: torch's ``FlopCounterMode``); yields a dict whose ``flops`` holds the count, empty unless ``counting``."""
     from torch.utils.flop_counter import FlopCounterMode
 
     found: dict[str, int] = {}
-    if not detail:
+    if not counting:
         yield found
         return
     plain = alg.update
