@@ -217,8 +217,50 @@ def table() -> str:
     rows = [r for r in [gridworld_row()] if r]
     for relative_csv, labels, note in SWEEPS:
         rows += sweep_rows(relative_csv, labels, note)
-    rows += [r for r in [finetuning_gridworld_row()] if r] + finetuning_dmc_rows()
+    rows += [r for r in [finetuning_gridworld_row()] if r] + finetuning_dmc_rows() + two_way_rows()
     return "\n".join(["", "| Learning result (data file) | Measured |", "|---|---|", *rows, ""])
+
+
+def two_way_rows() -> list[str]:
+    """The two-way task: its clones, fine-tuned from them, and from scratch; success at N = 10 / N = 1 (PPO: its
+    mean action), mean [95 % interval] over the committed seeds, from the multimodal pages' files."""
+    page = multimodal_page()
+    flow, gauss = page.clone_numbers("clone_flow", "N=10"), page.clone_numbers("clone_gauss", "mean_action")
+    clones = (
+        f"| point_mass_wall behaviour cloning of the scripted two-way demonstrator (`docs/results/multimodal/"
+        f"clones.json`), success over {flow['episodes']} episodes | flow clone {100 * flow['success']:.0f} % (rarer "
+        f"way {100 * flow['rarer']:.0f} % of its passes); Gaussian clone's mean action {100 * gauss['success']:.0f} % |"
+    )
+    rows = [clones]
+    scratch = multimodal_page("scratch")
+    two_way = importlib.import_module(type(page.RUNS).__module__)  # two_way_runs.py, beside the page scripts
+    for what, runs_of in (("fine-tuned from the clones", page.RUNS), ("from scratch", scratch.RUNS)):
+        cells = []
+        for method in runs_of.methods():
+            label, results = method["label"], runs_of.run_results(method["label"])
+            if not results:
+                continue
+            settings = [n for n in (10, 1) if two_way.setting_of(label, n)]
+            found = [
+                two_way.percent(
+                    two_way.interval(
+                        [
+                            two_way.numbers(r.get(two_way.setting_of(label, n), {}) if r else {})["success"]
+                            for r in results.values()
+                        ]
+                    )
+                )
+                for n in settings
+            ]
+            cells.append(f"{method['name']} {' / '.join(found)}")
+        if cells:
+            steps = steps_text(runs_of.first_config()["total_env_steps"])
+            rows.append(
+                f"| point_mass_wall {what} ({steps} env steps), success at N = 10 / N = 1 (PPO: its mean action), "
+                f"mean [95 % interval] over seeds {seeds_text(runs_of.seeds())} "
+                f"(`{runs_of.runs_csv.relative_to(ROOT)}`) | {'; '.join(cells)} |"
+            )
+    return rows
 
 
 # ------------------------------------------------------------------------------------------------ the GIFs
@@ -478,7 +520,7 @@ def multimodal_scratch() -> tuple[str, int, int]:
     seeds = runs_of.seeds()
     text = (
         f"; from scratch at the task's full CPU budget ({steps_text(runs_of.first_config()['total_env_steps'])} env "
-        f"steps, seeds {page.seeds_text(seeds)}{'' if seeds == sweep['seeds'] else ' so far'}), {reached} of "
+        f"steps, seeds {seeds_text(seeds)}{'' if seeds == sweep['seeds'] else ' so far'}), {reached} of "
         f"{total} runs of the {len(runs_of.methods())} methods reach the target in {100 * page.SUCCESS_FLOOR:.0f} % "
         "of their episodes"
     )
@@ -512,7 +554,7 @@ def multimodal() -> str:
     seeds = runs_of.seeds()
     text += (
         f"; fine-tuned from their clones for {steps_text(steps)} env steps (seed{'s' if len(seeds) > 1 else ''} "
-        f"{page.seeds_text(seeds)}{'' if seeds == sweep['seeds'] else ' so far'}), "
+        f"{seeds_text(seeds)}{'' if seeds == sweep['seeds'] else ' so far'}), "
         f"of {runs} flow-policy runs (ReFPO, ReFPO with adaptive λ, FPO, FPO++) {outcomes['both ways']} kept both "
         f"ways, {outcomes['one way']} one way and {outcomes['lost']} lost the task (success below "
         f"{100 * page.SUCCESS_FLOOR:.0f} % at N = 10)"
