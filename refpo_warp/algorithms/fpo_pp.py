@@ -83,7 +83,7 @@ def knn_entropy(samples: torch.Tensor, k: int = 1) -> torch.Tensor:
         H = psi(n) - psi(k) + log c_d + d * mean_i log rho_i              samples (B, n, d), 1 <= k < n
 
     The neighbours are found without gradient, in chunks of states, by exact squared distances (summed one dimension
-    at a time: the same order as the distances, a third of ``torch.cdist``'s time at a few action dimensions); the
+    at a time: the same order as the distances, 0.27-0.43 times ``torch.cdist``'s time at 1-2 action dimensions); the
     gradient flows through the distances to them, as through FPO++'s ``torch.cdist``."""
     b, n, d = samples.shape
     if not 1 <= k < n:
