@@ -25,7 +25,7 @@ import numpy as np
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, read_rows, seeds_text
 from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
-from refpo_warp.studies.reports.phrases import and_list
+from refpo_warp.studies.reports.phrases import and_list, value_range
 from refpo_warp.studies.reports.results_page import main_args, write_page
 from refpo_warp.utils.atomic_files import save_figure
 
@@ -198,7 +198,7 @@ def health_table(rows: list[dict]) -> str:
 
 
 def health_verdicts(rows: list[dict]) -> str:
-    """How many runs each verdict of the rule has, naming the runs of every verdict but ok."""
+    """How many runs each verdict of the rule has, naming the runs of every verdict but healthy."""
     by_verdict: dict[str, list[str]] = {}
     for r in rows:
         if r.get("health"):
@@ -209,7 +209,7 @@ def health_verdicts(rows: list[dict]) -> str:
         return "no run has a verdict yet"
     return and_list(
         f"{verdict} in {len(runs)} run{'s' if len(runs) != 1 else ''}"
-        + ("" if verdict == "ok" else f" ({and_list(runs)})")
+        + ("" if verdict == "healthy" else f" ({and_list(runs)})")
         for verdict, runs in sorted(by_verdict.items())
     )
 
@@ -287,7 +287,10 @@ def curves(rows: list[dict], path: Path) -> None:
         ax.set_title(task)
         ax.set_xlabel("env steps")
         ax.set_ylabel("return (N = 10; PPO: mean action)")
-        ax.legend(fontsize=7, loc="lower right")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="lower right")
+        else:
+            ax.text(0.5, 0.5, "no run committed yet", ha="center", transform=ax.transAxes, color="grey")
     save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
 
@@ -308,7 +311,7 @@ def run_minutes(rows: list[dict]) -> str:
     minutes = [float(r["minutes"]) for r in rows if r.get("minutes")]
     if not minutes:
         return "No committed run has its wall time yet"
-    return f"The committed runs took {min(minutes):.0f}-{max(minutes):.0f} min each"
+    return f"The committed runs took {value_range(minutes, '.0f')} min each"
 
 
 def values() -> dict[str, object]:
