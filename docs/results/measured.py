@@ -225,7 +225,7 @@ def two_way_rows() -> list[str]:
     """The two-way task: its clones, fine-tuned from them, and from scratch; success at N = 10 / N = 1 (PPO: its
     mean action), mean [95 % interval] over the committed seeds, from the multimodal pages' files."""
     page = multimodal_page()
-    flow, gauss = page.clone_numbers("clone_flow", "N=10"), page.clone_numbers("clone_gauss", "mean_action")
+    flow, gauss = two_way_clones(page)
     clones = (
         f"| point_mass_wall behaviour cloning of the scripted two-way demonstrator (`docs/results/multimodal/"
         f"clones.json`), success over {flow['episodes']} episodes | flow clone {100 * flow['success']:.0f} % (rarer "
@@ -527,9 +527,14 @@ def multimodal_scratch() -> tuple[str, int, int]:
     return text, reached, total
 
 
+def two_way_clones(page) -> tuple[dict[str, float], dict[str, float]]:
+    """The flow clone's numbers at N = 10 and the Gaussian clone's at its mean action (the fine-tuning page's)."""
+    return page.clone_numbers("clone_flow", "N=10"), page.clone_numbers("clone_gauss", "mean_action")
+
+
 def multimodal() -> str:
     page = multimodal_page()
-    flow, gauss = page.clone_numbers("clone_flow", "N=10"), page.clone_numbers("clone_gauss", "mean_action")
+    flow, gauss = two_way_clones(page)
     text = (
         f"on `dmc_point_mass_wall`, a continuous task with two ways to its target, the flow clone of two-mode "
         f"demonstrations reaches the target in {100 * flow['success']:.0f} % of {flow['episodes']} episodes, its "

@@ -43,33 +43,33 @@ def bf16_note(before: dict, after: dict) -> str:
     )
 
 
-def threads_note(before: dict, after: dict) -> str:
+def phase_changes(before: dict, after: dict, phases: tuple[str, ...]) -> str:
+    """Each algo's seconds an iteration in ``phases`` (update, collection), before → after."""
     parts = []
     for b in before["results"]:
         a = next(r for r in after["results"] if r["algo"] == b["algo"])
-        parts.append(
-            f"{NAMES.get(b['algo'], b['algo'])}'s update {b['iteration']['update']:.2f} → "
-            f"{a['iteration']['update']:.2f} s and its collection {b['iteration']['collection']:.2f} → "
-            f"{a['iteration']['collection']:.2f} s an iteration"
+        moved = " and its ".join(
+            f"{phase} {b['iteration'][phase]:.2f} → {a['iteration'][phase]:.2f} s" for phase in phases
         )
+        parts.append(f"{NAMES.get(b['algo'], b['algo'])}'s {moved} an iteration")
+    return "; ".join(parts)
+
+
+def threads_note(before: dict, after: dict) -> str:
     return (
         f"The machine has {after['machine']['cpu_count']} cores; "
-        + "; ".join(parts)
+        + phase_changes(before, after, ("update", "collection"))
         + ". The update's matrix products share the threads; the env kernels (Warp on the CPU) run on one thread "
         "either way."
     )
 
 
 def compile_note(before: dict, after: dict) -> str:
-    parts = []
-    for b in before["results"]:
-        a = next(r for r in after["results"] if r["algo"] == b["algo"])
-        parts.append(
-            f"{NAMES.get(b['algo'], b['algo'])}'s update {b['iteration']['update']:.2f} → "
-            f"{a['iteration']['update']:.2f} s an iteration"
-        )
     warmup = after["results"][0]["warmup"]
-    return f"The update: {'; '.join(parts)}. Compilation falls in the {warmup} warm-up iterations, not timed."
+    return (
+        f"The update: {phase_changes(before, after, ('update',))}. Compilation falls in the {warmup} warm-up "
+        "iterations, not timed."
+    )
 
 
 CHANGES = (
