@@ -320,8 +320,8 @@ def values() -> dict[str, object]:
     if rows:
         curves(rows, HERE / "trend_curves.png")
     return {
-        "committed": len(rows),
-        "grid": len(TASKS) * len(METHODS) * len(SWEEP["seeds"]),
+        "committed": f"{len(rows)} of the grid's {len(TASKS) * len(METHODS) * len(SWEEP['seeds'])} runs "
+        + ("is" if len(rows) == 1 else "are"),
         "still_to_run": still_to_run(rows),
         "run_minutes": run_minutes(rows),
         "machine": MACHINE,
