@@ -31,7 +31,7 @@ from measure import RECORDS, RESULTS, current, read_records  # noqa: E402
 from results_reading import profile, steps_text  # noqa: E402  (docs/results/results_reading.py)
 from table import LEARNING_RUNS, NULL_RUNS, fmt, table_markdown  # noqa: E402
 
-from refpo_warp.studies.reports.committed_runs import seeds_text  # noqa: E402
+from refpo_warp.studies.reports.committed_runs import read_jsonl, seeds_text  # noqa: E402
 from refpo_warp.studies.reports.phrases import and_list  # noqa: E402
 from refpo_warp.studies.reports.results_page import main_args, write_page  # noqa: E402
 
@@ -286,7 +286,7 @@ def same_as_earlier(name: str) -> str:
     """Whether every current record equals the earlier record (other overrides) of the same seed, thread count and
     control in its statistics' inputs, training curve and diagnostics."""
     path = RECORDS / f"{name}.jsonl"
-    every = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    every = read_jsonl(path)
     now = [r for r in every if current(r)]
     earlier = {(r["seed"], r["threads"], r["null"]): r for r in every if not current(r)}
     found = [(r, earlier.get((r["seed"], r["threads"], r["null"]))) for r in now]

@@ -56,7 +56,7 @@ from results_reading import (
     task_runs,
 )
 
-from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.committed_runs import read_jsonl, seeds_text
 from refpo_warp.studies.reports.phrases import and_list
 
 if TYPE_CHECKING:  # imported where used: numpy's import is the cost of a page that needs no interval
@@ -83,7 +83,7 @@ def gridworld_row() -> str | None:
     path = RESULTS / "learning_checks" / "records" / "gridworld_refpo.jsonl"
     if not path.exists():
         return None
-    runs = [r for r in map(json.loads, path.read_text().splitlines()) if not r["null"] and r["threads"] == 1]
+    runs = [r for r in read_jsonl(path) if not r["null"] and r["threads"] == 1]
     final = [r["final"] for r in runs]
     success = [min(f[s]["success_rate"] for s in ("N=1", "N=10")) for f in final]
     length = {s: sum(f[s]["length_mean"] for f in final) / len(final) for s in ("N=1", "N=10")}
@@ -178,7 +178,7 @@ FT_METHODS = ("ppo", "refpo_onestep", "refpo")
 def demonstrator(task_dir: Path) -> tuple[float, int, float]:
     """(the demonstrations' policy's periodic return at its checkpoint, that iteration, their action noise std)."""
     meta = json.loads((task_dir / "data" / "metadata.json").read_text())["refpo"]["policy"]
-    rows = [json.loads(line) for line in (task_dir / "demonstrator" / "progress.jsonl").read_text().splitlines()]
+    rows = read_jsonl(task_dir / "demonstrator" / "progress.jsonl")
     value = next(r["eval/return"] for r in rows if r.get("iteration") == meta["iteration"] and "eval/return" in r)
     return value, meta["iteration"], meta["action_noise_std"]
 
@@ -334,7 +334,7 @@ def budget_runs() -> dict[str, list[dict]]:
     run stopped on a non-finite loss counts as 0 from its stop on (its last return is 0)."""
     out: dict[str, list[dict]] = {}
     for path in sorted((TUNING / "budget").glob("*/*/seed*/progress_eval.jsonl")):
-        rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+        rows = read_jsonl(path)
         key = next((k for k in ("eval/return_N10", "eval/return") if k in rows[0]), None)
         if key is None:
             continue

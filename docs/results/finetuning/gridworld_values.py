@@ -4,7 +4,6 @@ shares, and the learning check's records of the same recipe."""
 from __future__ import annotations
 
 import ast
-import json
 from collections import Counter
 
 from number_text import seconds, span, thousands
@@ -21,7 +20,7 @@ from study_layout import (
     read_yaml,
 )
 
-from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.committed_runs import read_jsonl, seeds_text
 from refpo_warp.studies.reports.phrases import and_list
 
 
@@ -223,7 +222,7 @@ def record_note(records: list[dict]) -> str:
 
 def learning_check_values() -> dict:
     """The learning check's records: each run's statistics as tests/learning/checks.py computes them."""
-    records = [json.loads(line) for line in CHECK_RECORDS.read_text().splitlines() if line.strip()]
+    records = read_jsonl(CHECK_RECORDS)
     constants: dict[str, str] = {}
     for node in ast.parse(CHECKS_SOURCE.read_text()).body:
         if not isinstance(node, ast.Assign):

@@ -4,7 +4,6 @@ page)."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import re
 import statistics
 
@@ -35,7 +34,7 @@ from fpo_pp_runs import (
 )
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.committed_runs import read_jsonl, seeds_text
 from refpo_warp.utils.errors import DataFileError
 
 
@@ -227,7 +226,7 @@ def gpu_values() -> dict[str, str]:
     table = [head, "|---|---|---|---|---|---|"]
     rate, cfg = {}, {}
     for algo in ("fpo_pp", "refpo"):
-        rows = [json.loads(line) for line in (GPU / f"{algo}_progress.jsonl").read_text().splitlines() if line]
+        rows = read_jsonl(GPU / f"{algo}_progress.jsonl")
         cfg[algo] = load_yaml(GPU / f"{algo}_config.yaml")
         last = rows[-1]
         rate[algo] = last["env_steps"] / last["time_s"]

@@ -4,10 +4,10 @@ and the factor a joint clip would scale the actor's gradient by at those norms."
 
 from __future__ import annotations
 
-import json
 import statistics
 from pathlib import Path
 
+from refpo_warp.studies.reports.committed_runs import read_jsonl
 from refpo_warp.studies.reports.phrases import value_range as span
 
 ACTOR, CRITIC = "Loss/grad_norm_actor", "Loss/grad_norm_critic"
@@ -18,7 +18,7 @@ def norms(run: Path) -> list[tuple[float, float]] | None:
     path = run / "progress_train.jsonl"
     if not path.exists():
         return None
-    rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    rows = read_jsonl(path)
     pairs = [(r[ACTOR], r[CRITIC]) for r in rows if ACTOR in r and CRITIC in r]
     return pairs or None
 

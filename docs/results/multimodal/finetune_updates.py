@@ -5,10 +5,10 @@ success), read at the end of the critic's warm-up and after it."""
 from __future__ import annotations
 
 import functools
-import json
 import statistics
 from pathlib import Path
 
+from refpo_warp.studies.reports.committed_runs import read_jsonl
 from refpo_warp.studies.reports.phrases import value_range
 
 span = functools.partial(value_range, sep=" to ")  # this page writes a range as "a to b"
@@ -20,7 +20,7 @@ def read_train_rows(run: Path) -> list[dict] | None:
     path = run / "progress_train.jsonl"
     if not path.exists():
         return None
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    return read_jsonl(path)
 
 
 def update_text(runs: dict[str, tuple[str, list[Path]]], warmup: int) -> str:

@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.studies.reports.committed_runs import append_runs, read_rows, seeds_text
+from refpo_warp.studies.reports.committed_runs import append_runs, read_jsonl, read_rows, seeds_text
 from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
 from refpo_warp.studies.reports.results_page import main_args
 from refpo_warp.utils.atomic_files import save_figure
@@ -110,7 +110,7 @@ class TwoWayRuns:
         for row in self.rows:
             if row["task"] == TASK and row["label"] == label and row["status"] == "ok":
                 path = ROOT / row["run_dir"] / "progress_eval.jsonl"
-                out[int(row["seed"])] = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+                out[int(row["seed"])] = read_jsonl(path)
         return out
 
     def first_config(self) -> dict:

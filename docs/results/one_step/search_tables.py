@@ -52,7 +52,7 @@ from run_rows import (
 
 sys.path.insert(0, str(ROOT))  # refpo_warp, when run from anywhere
 
-from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.committed_runs import read_jsonl, seeds_text
 from refpo_warp.studies.reports.phrases import and_list
 from refpo_warp.studies.reports.results_page import main_args, write_page
 from refpo_warp.utils.errors import DataFileError
@@ -456,7 +456,7 @@ def check_values() -> dict:
     from checks import CHECKS  # tests/learning/checks.py
 
     check = CHECKS[CHECK]
-    records = [json.loads(line) for line in RECORDS.read_text(encoding="utf-8").splitlines() if line.strip()]
+    records = read_jsonl(RECORDS)
     current = [r for r in records if tuple(r["overrides"]) == tuple(check.overrides)]
     latest: dict[tuple, dict] = {}
     for r in current:  # the last record of each (null, threads, seed)

@@ -12,7 +12,6 @@ shows every run committed so far and names the grid's runs still to come.
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -23,7 +22,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.studies.reports.committed_runs import append_runs, read_rows, seeds_text
+from refpo_warp.studies.reports.committed_runs import append_runs, read_jsonl, read_rows, seeds_text
 from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
 from refpo_warp.studies.reports.phrases import and_list, value_range
 from refpo_warp.studies.reports.results_page import main_args, write_page
@@ -59,10 +58,6 @@ def env_steps_per_profile() -> int:
 
     cfg = resolve_config([f"task={TASKS[0]}", "algo=ppo", "device=cpu"], device_type="cpu")
     return env_steps_per_iteration(cfg) * profile_iterations()
-
-
-def read_jsonl(path: Path) -> list[dict]:
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
 
 
 def committed() -> list[dict]:

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from study_files import BUDGET, HERE, NAMES, big_text, read_yaml, steps_text
 
-from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.committed_runs import read_jsonl, seeds_text
 
 
 # ------------------------------------------------------------------------------------------------ budget
@@ -36,7 +36,7 @@ def budget_runs() -> list[BudgetRun]:
     raw = []
     grid = None  # every run evaluates at the same iterations; a stopped run's missing points count as 0
     for path in sorted(BUDGET.glob("*/*/seed*/progress_eval.jsonl")):
-        rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+        rows = read_jsonl(path)
         key = next((k for k in ("eval/return_N10", "eval/return") if rows and k in rows[0]), None)
         if key is None:
             continue

@@ -47,6 +47,12 @@ def train_rows(progress: Path) -> str:
     return progress_rows(progress, TRAIN_PREFIXES, TRAIN_PREFIXES, TRAIN_ROW_KEYS)
 
 
+def read_jsonl(path: Path) -> list[dict]:
+    """The rows of a JSON-lines file a page reads: a committed run's ``progress_eval.jsonl`` or
+    ``progress_train.jsonl``, a learning check's records."""
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
 def copy_run(run: Path, dst: Path) -> None:
     """A run's small files into ``dst``: config.yaml, eval.json, and from its progress.jsonl the periodic evaluations
     (progress_eval.jsonl) and every iteration's training statistics (progress_train.jsonl)."""
