@@ -12,6 +12,8 @@ shows every run committed so far and names the grid's runs still to come.
 
 from __future__ import annotations
 
+import functools
+import itertools
 import sys
 from pathlib import Path
 
@@ -52,6 +54,7 @@ def multiples() -> list[int]:
     return [2**k for k in range(largest.bit_length()) if 2**k <= largest]
 
 
+@functools.cache  # resolves a config; the tables ask for the budgets once per row
 def env_steps_per_profile() -> int:
     from refpo_warp.config.resolve import resolve_config
     from refpo_warp.runner.build import env_steps_per_iteration
@@ -98,9 +101,9 @@ def scores(rows: list[dict], label: str, task: str, multiple: int, setting: str)
     return out
 
 
-def window(row: dict, multiple: int) -> list[dict]:
-    """The run's training rows from the previous budget to this one."""
-    top, bottom = multiple * profile_iterations(), (multiple - 1) * profile_iterations()
+def window(row: dict, after: int, upto: int) -> list[dict]:
+    """The run's training rows from ``after`` to ``upto`` times the profile's budget."""
+    bottom, top = after * profile_iterations(), upto * profile_iterations()
     return [r for r in row["train"] if bottom <= r["iteration"] < top]
 
 
@@ -169,8 +172,8 @@ def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Estimate]]]:
 
 
 def health_table(rows: list[dict]) -> str:
-    """Per flow run's budget window: the largest ratio, the mean explosion rate and the straightness error at the
-    window's end, means over seeds; and the run-health rule's verdict at the run's end."""
+    """Per flow method, each window from the table's previous budget (the start, for the first) to the next: the
+    largest ratio, the mean explosion rate and the straightness error at the window's end, means over seeds."""
     header = ["task", "method", "statistic", *(f"{m}x" for m in multiples())]
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
     stats = (
@@ -185,8 +188,8 @@ def health_table(rows: list[dict]) -> str:
                 continue
             for name, fn in stats:
                 cells = []
-                for m in multiples():
-                    values = [fn(w) for w in (window(r, m) for r in runs) if w]
+                for after, upto in itertools.pairwise([0, *multiples()]):
+                    values = [fn(w) for w in (window(r, after, upto) for r in runs) if w]
                     cells.append(f"{np.mean(values):.3g}" if values else "--")
                 lines.append(f"| `{task}` | {METHODS[label]} | {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
