@@ -240,17 +240,10 @@ def two_way_rows() -> list[str]:
             label, results = method["label"], runs_of.run_results(method["label"])
             if not results:
                 continue
-            settings = [n for n in (10, 1) if two_way.setting_of(label, n)]
             found = [
-                two_way.percent(
-                    two_way.interval(
-                        [
-                            two_way.numbers(r.get(two_way.setting_of(label, n), {}) if r else {})["success"]
-                            for r in results.values()
-                        ]
-                    )
-                )
-                for n in settings
+                two_way.percent(two_way.interval([p["success"] for p in runs_of.numbers_at(label, n).values()]))
+                for n in (10, 1)
+                if two_way.setting_of(label, n)
             ]
             cells.append(f"{method['name']} {' / '.join(found)}")
         if cells:
@@ -510,8 +503,7 @@ def multimodal_scratch() -> tuple[str, int, int]:
     runs_of = page.RUNS
     reached, total = 0, 0
     for method in runs_of.methods():
-        for results in runs_of.run_results(method["label"]).values():
-            n = page.numbers(results.get(page.setting_of(method["label"], 10), {}) if results else {})
+        for n in runs_of.numbers_at(method["label"], 10).values():
             total += 1
             reached += n["success"] >= page.SUCCESS_FLOOR
     if not total:
@@ -543,10 +535,8 @@ def multimodal() -> str:
     )
     outcomes, ppo = {"both ways": 0, "one way": 0, "lost": 0}, []
     runs_of = page.RUNS
-    runs_module = importlib.import_module(type(runs_of).__module__)  # two_way_runs.py, beside the page script
     for method in runs_of.methods():
-        for results in runs_of.run_results(method["label"]).values():
-            n = page.numbers(results.get(runs_module.setting_of(method["label"], 10), {}) if results else {})
+        for n in runs_of.numbers_at(method["label"], 10).values():
             if method["label"] == "ppo":
                 ppo.append(n["success"])
             else:

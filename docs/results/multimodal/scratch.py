@@ -25,11 +25,9 @@ from two_way_runs import (
     curves_figure,
     interval,
     method_table,
-    numbers,
     page_arguments,
     per_run_table,
     percent,
-    setting_of,
     summary,
 )
 
@@ -70,10 +68,8 @@ def against_finetuning() -> str:
         scratch, tuned = RUNS.run_results(label), FINETUNED.run_results(label)
         if not scratch or not tuned:
             continue
-        setting = setting_of(label, 10)
         success = [
-            percent(interval([numbers(r.get(setting, {}) if r else {})["success"] for r in runs.values()]))
-            for runs in (scratch, tuned)
+            percent(interval([p["success"] for p in runs.numbers_at(label, 10).values()])) for runs in (RUNS, FINETUNED)
         ]
         lines.append(
             f"- **{method['name']}**: success {success[0]} from scratch (seeds {seeds_text(scratch)}, "

@@ -102,6 +102,14 @@ class TwoWayRuns:
                 out[int(row["seed"])] = json.loads((ROOT / row["run_dir"] / "eval.json").read_text())["results"]
         return out
 
+    def numbers_at(self, label: str, n: int) -> dict[int, dict[str, float]]:
+        """seed -> the run's numbers at N = n (PPO: its mean action); a failed run, or a setting the method has
+        not (PPO at N = 1), reads as zeros."""
+        setting = setting_of(label, n)
+        return {
+            seed: numbers(r.get(setting, {}) if r and setting else {}) for seed, r in self.run_results(label).items()
+        }
+
     def folders(self, label: str) -> list[Path]:
         return [ROOT / r["run_dir"] for r in self.rows if r["label"] == label and r["status"] == "ok"]
 
@@ -146,7 +154,7 @@ def method_table(runs: TwoWayRuns, n: int, below: Callable[[str, str], str] | No
         results = runs.run_results(label)
         if setting is None or not results:
             continue
-        per = [numbers(r.get(setting, {}) if r else {}) for r in results.values()]
+        per = list(runs.numbers_at(label, n).values())
         kinds = [outcome(p) for p in per]
         cells = [percent(interval([p[k] for p in per])) for k in ("success", "left", "right", "rarer")]
         ret = interval([p["return"] for p in per]).text()
@@ -162,14 +170,14 @@ def per_run_table(runs: TwoWayRuns) -> str:
     lines.append("|---|---|---|---|")
     for method in runs.methods():
         label = method["label"]
-        for seed, results in sorted(runs.run_results(label).items()):
+        by_n = {n: runs.numbers_at(label, n) for n in (10, 1)}
+        for seed in sorted(by_n[10]):
             cells = []
             for n in (10, 1):
-                setting = setting_of(label, n)
-                if setting is None:
+                if setting_of(label, n) is None:
                     cells.append("--")
                     continue
-                p = numbers(results.get(setting, {}) if results else {})
+                p = by_n[n][seed]
                 text = f"{100 * p['success']:.0f} %, {100 * p['left']:.0f} %, {100 * p['right']:.0f} %"
                 cells.append(text + f" ({outcome(p)})" if n == 10 else text)
             lines.append(f"| {method['name']} | {seed} | {cells[0]} | {cells[1]} |")
@@ -187,8 +195,8 @@ def comparison_table(runs: TwoWayRuns) -> str:
             continue
         name = method["name"].split(" from")[0]
         for key, statistic in (("success", "success"), ("rarer", "rarer way among the passes")):
-            x = np.array([[numbers(r.get("N=10", {}) if r else {})[key]] for r in results.values()])
-            y = np.array([[numbers(r.get("mean_action", {}) if r else {})[key]] for r in ppo.values()])
+            x = np.array([[p[key]] for p in runs.numbers_at(label, 10).values()])
+            y = np.array([[p[key]] for p in runs.numbers_at("ppo", 10).values()])
             p = improvement(x, y)
             if p.low > 0.5:
                 says = f"{name} higher: the interval lies above 0.5"
@@ -208,7 +216,7 @@ def summary(runs: TwoWayRuns) -> str:
         results = runs.run_results(label)
         if not results:
             continue
-        per = [numbers(r.get(setting_of(label, 10), {}) if r else {}) for r in results.values()]
+        per = list(runs.numbers_at(label, 10).values())
         kinds = [outcome(p) for p in per]
         lines.append(
             f"- **{method['name']}**: of its {len(per)} runs, {kinds.count('both ways')} kept both ways, "
