@@ -6,7 +6,7 @@ import signal
 
 from refpo_warp.cli.backend_flags import BACKEND_FLAGS, BACKEND_HELP, BACKEND_USAGE, backend_arguments
 from refpo_warp.cli.guard import EXIT_INTERRUPTED, EXIT_UNEXPECTED
-from refpo_warp.config.command_options import EXPLAIN, explain_options, options_help
+from refpo_warp.config.command_options import EXPLAIN, explain_options, named_files, options_help
 from refpo_warp.studies.grid.spec import SweepOptions
 from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
@@ -20,9 +20,8 @@ process in <sweep dir>/<task>/<label>/seed<k> (default sweep dir: runs/sweeps/<n
 resolved before anything starts. Finished runs are skipped; a failed run is reported with its log and retried once
 from scratch.
 
-Named sweeps (configs/sweep/, and sweep/ of your config_dir=DIR or REFPO_CONFIG_PATH folders): cpu_dmc (the CPU-scale
-DMC reproduction), paper_dmc (the paper's DMC grid, CUDA), cpu_humanoid, cpu_reflow_pairs, cpu_fpo_pp (FPO++),
-cpu_onestep (the one-step search).
+Named sweeps: configs/sweep/, and sweep/ of your config_dir=DIR or REFPO_CONFIG_PATH folders; `refpo sweep --list
+[config_dir=DIR]` lists them with their descriptions.
 
 Examples:
     refpo sweep cpu_dmc                                  # then: refpo report runs/sweeps/cpu_dmc
@@ -36,7 +35,7 @@ Sweep-level options (key=value; lists as key=[a,b]):
 {options_help(SweepOptions)}
 Any other key=value is a run option for every run (refpo train's keys, config_dir= included); a list expands the
 grid unless the option itself takes a list.
-Flags: --explain [KEYS] (the sweep-level options' values and where they come from), --jobs N runs at a time
+Flags: --list, --explain [KEYS] (the sweep-level options' values and where they come from), --jobs N runs at a time
 (default: the CPU cores; on CUDA one per GPU; more share the GPUs round-robin), --dry-run.
 {BACKEND_HELP}
 Exit code 1: some run failed (the summary names it and its log).
@@ -44,6 +43,7 @@ Exit code 1: some run failed (the summary names it and its log).
 FLAGS = (
     Flag("--jobs", int, "runs at a time"),
     Flag("--dry-run", doc="list the runs and their states, train nothing"),
+    Flag("--list", doc="list the named sweeps with their descriptions"),
     EXPLAIN,
     *BACKEND_FLAGS,
 )
@@ -51,6 +51,9 @@ SUBJECTS = 1
 
 
 def run(args: Arguments) -> int | None:
+    if args.flag("--list"):
+        print(named_files("sweep", args.options))
+        return None
     if "--explain" in args.flags:
         every = lambda key: True  # noqa: E731  (every other key: a run option, passed on)
         print(explain_options("sweep", SweepOptions, args.options, args.flag("--explain") or "", every))

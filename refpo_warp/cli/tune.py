@@ -6,7 +6,7 @@ import signal
 
 from refpo_warp.cli.backend_flags import BACKEND_FLAGS, BACKEND_HELP, BACKEND_USAGE, backend_arguments
 from refpo_warp.cli.guard import EXIT_INTERRUPTED
-from refpo_warp.config.command_options import EXPLAIN, explain_options, options_help
+from refpo_warp.config.command_options import EXPLAIN, explain_options, named_files, options_help
 from refpo_warp.studies.tuning.spec import TuneOptions
 from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError
@@ -25,7 +25,7 @@ behind earlier ones at a periodic evaluation is pruned. Every config resolves be
 is trained again with the same values (its finished runs kept).
 Records: <out>/trials.csv (every trial: values, state, score, returns), <out>/chosen.yaml (each method's best).
 
-Named tunings: cpu_dmc (PPO, ReFPO and FPO++ on point_mass and reacher_easy, CPU profiles; docs/results/tuning/).
+Named tunings: `refpo tune --list [config_dir=DIR]` lists them with their descriptions.
 
 Examples:
     refpo tune cpu_dmc --dry-run        # validate, show the objective, the enqueued values and the spaces
@@ -35,7 +35,7 @@ Examples:
 Options (key=value; lists as key=[a,b]):
 {options_help(TuneOptions)}
 
-Flags: --explain [KEYS] (each option's value and where it comes from), --jobs N runs of a trial at a time
+Flags: --list, --explain [KEYS] (each option's value and where it comes from), --jobs N runs of a trial at a time
 (default: its tasks, at most the CPU cores; one torch thread each on a CPU), --dry-run.
 {BACKEND_HELP}
 Needs Optuna: pip install "refpo-warp[tune]".
@@ -43,6 +43,7 @@ Needs Optuna: pip install "refpo-warp[tune]".
 FLAGS = (
     Flag("--jobs", int, "runs of a trial at a time"),
     Flag("--dry-run", doc="validate and list, train nothing"),
+    Flag("--list", doc="list the named tunings with their descriptions"),
     EXPLAIN,
     *BACKEND_FLAGS,
 )
@@ -50,6 +51,9 @@ SUBJECTS = 1
 
 
 def run(args: Arguments) -> int | None:
+    if args.flag("--list"):
+        print(named_files("tune", args.options))
+        return None
     if "--explain" in args.flags:
         print(explain_options("tune", TuneOptions, args.options, args.flag("--explain") or ""))
         return None

@@ -15,6 +15,7 @@ import dataclasses
 from collections.abc import Callable, Iterable
 from typing import Any, TypeVar
 
+from refpo_warp.config.config_path import config_path
 from refpo_warp.config.dotted import parse_overrides
 from refpo_warp.utils.command_line import Arguments, Flag
 from refpo_warp.utils.errors import ConfigError, unknown
@@ -138,6 +139,18 @@ def options_or_explain(
         print(explain_options(command, cls, args.options, args.flag("--explain") or "", rest), flush=True)
         return None
     return parse_options(command, cls, args.options, rest, rest_names)
+
+
+def named_files(kind: str, given: Iterable[str]) -> str:
+    """``refpo sweep --list`` / ``refpo tune --list``: every ``<kind>/<name>.yaml`` of the config folders (the shipped
+    ones, then ``config_dir=DIR``'s and ``REFPO_CONFIG_PATH``'s) with its ``description:``."""
+    flat = parse_overrides(list(given))
+    for key in flat:
+        if key != "config_dir":
+            raise unknown(f"option of refpo {kind} --list", key, ["config_dir"])
+    named = config_path(flat.get("config_dir")).described(kind)
+    width = max((len(name) for name, _ in named), default=0)
+    return "\n".join(f"{name:{width}s}  {description}".rstrip() for name, description in named)
 
 
 def _shown(value: Any) -> str:

@@ -17,6 +17,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.utils.errors import ConfigError, unknown
 from refpo_warp.utils.paths import PACKAGED_CONFIG_DIR, shown
 
@@ -69,6 +70,11 @@ class ConfigPath:
     def names(self, kind: str) -> list[str]:
         """The choices of ``kind`` (``algo=`` values, sweep names, task files): names not starting with ``_``."""
         return sorted(name for name in self.files(kind) if not name.startswith("_"))
+
+    def described(self, kind: str) -> list[tuple[str, str]]:
+        """Each choice of ``kind`` (``names``) with its file's ``description:`` ('' where it has none)."""
+        files = self.files(kind)
+        return [(name, str(load_yaml(files[name]).get("description") or "")) for name in self.names(kind)]
 
     def user_files(self, kind: str) -> dict[str, Path]:
         """The ``kind`` files of the user's folders only (checked against the shipped names too)."""

@@ -64,6 +64,19 @@ def test_tasks_lists_the_users_task_and_explain_names_its_file(user_configs, cap
     assert f"algorithm.reflow_coef = 0.3\n  set by  {user_configs / 'algo' / 'my_refpo.yaml'}" in explained
 
 
+def test_list_names_the_users_sweep_beside_the_shipped_ones_with_their_descriptions(user_configs, capsys):
+    (user_configs / "sweep" / "mine.yaml").write_text("description: my grid\n" + SWEEP)
+    assert main(["sweep", "--list", f"config_dir={user_configs}"]) == 0
+    listed = capsys.readouterr().out.splitlines()
+    names = [line.split()[0] for line in listed]
+    assert names == sorted(names) and {"cpu_dmc", "trend_8x", "mine"} <= set(names)
+    assert [line.split(None, 1)[1] for line in listed if line.startswith("mine ")] == ["my grid"]
+    assert main(["tune", "--list"]) == 0
+    assert capsys.readouterr().out.split()[0] == "cpu_dmc"
+    assert main(["sweep", "--list", "tasks=[x]"]) == 2  # only config_dir= applies
+    assert "Valid choices: config_dir" in capsys.readouterr().err
+
+
 def test_a_user_sweep_is_found_by_name(user_configs):
     sweep = load_sweep("mine", [f"config_dir={user_configs}"])
     assert [run.key for run in sweep.runs] == ["grid_small/mine/seed1"]
