@@ -16,9 +16,9 @@ Rolls the policy out on num_envs vectorised envs and writes the K whole episodes
 terminations, truncations; the spaces, task, env options and policy in metadata.json) as a Minari dataset folder at
 out (docs/finetuning.md). Options (refpo_warp/demonstrations/collect_options.py):
 {options_usage()}
-Env options (env.<option>=VALUE, the task's: refpo train task=<task> --explain): over the run's own with run_dir=
-(one that changes the policy's inputs or outputs is refused), over the task's defaults for a scripted demonstrator
-(built for the same env).
+Env options (env.<option>=VALUE, the task's: refpo train task=<task> --explain): with run_dir=, over the env the
+run's evaluation uses (its env options, eval.env's over them; one that changes the policy's inputs or outputs is
+refused); over the task's defaults for a scripted demonstrator (built for the same env).
 Flags: --explain [KEY,KEY,...] (each option's value and where it comes from; nothing is collected).
 GridWorld's scripted demonstrator: demonstrator.up_share=0.7 demonstrator.band=3 (tasks/gridworld/demonstrator.py).
 

@@ -2,12 +2,13 @@
 with optional Gaussian action noise, and write the episodes as a Minari dataset (``dataset_file``).
 
 Every option (``collect_options.CollectOptions``) is checked and the policy loaded before the dataset is written; an
-existing ``out`` is refused unless ``overwrite=true``. Env options (``env.<option>=``) apply over the run's own (a
-run's) or the task's defaults (a scripted demonstrator, which is built for the same env), each checked by the task's
-env cfg. The dataset's metadata records the task, its env options (those set over the task's defaults), the
-observation groups and the policy that made it (run dir, checkpoint, algorithm, flow steps, sampling, noise, seed),
-the env's ``action_transform`` and that the actions are the policy's own (``action_units: pre_squash``: before the
-env's tanh where it squashes; ``dataset_actions``).
+existing ``out`` is refused unless ``overwrite=true``. Env options (``env.<option>=``) apply over the env a run's
+evaluation uses (its ``env`` options with ``eval.env`` over them: the policy rolled out without learning) or over the
+task's defaults (a scripted demonstrator, which is built for the same env), each checked by the task's env cfg. The
+dataset's metadata records the task, its env options (those set over the task's defaults), the observation groups and
+the policy that made it (run dir, checkpoint, algorithm, flow steps, sampling, noise, seed), the env's
+``action_transform`` and that the actions are the policy's own (``action_units: pre_squash``: before the env's tanh
+where it squashes; ``dataset_actions``).
 """
 
 from __future__ import annotations
@@ -90,9 +91,9 @@ def _num_envs(options: dict) -> int:
 
 
 def _run_policy(options: dict, env_given: dict, device: str):
-    """The policy of a trained run (its newest usable checkpoint, or ``checkpoint``) and an env of its task, with the
-    run's env options and ``env_given`` over them (checked as a resumed run's: one that would change the policy's
-    inputs or outputs is refused)."""
+    """The policy of a trained run (its newest usable checkpoint, or ``checkpoint``) and an env of its task: the env
+    its evaluation rolls it out on (the run's ``env`` options, ``eval.env`` over them), with ``env_given`` over that
+    (checked as a resumed run's: one that would change the policy's inputs or outputs is refused)."""
     from refpo_warp.evaluation.evaluate_policy import is_flow
     from refpo_warp.runner.build import build_runner
     from refpo_warp.runner.checkpoints import load_latest
@@ -101,7 +102,9 @@ def _run_policy(options: dict, env_given: dict, device: str):
     run = load_run(run_dir, {"device": device, **{f"env.{k}": v for k, v in env_given.items()}})
     cfg = run.cfg
     seed = options["seed"] if options["seed"] is not None else cfg["seed"] + COLLECT_SEED_OFFSET
-    env = make_env(run.task, num_envs=_num_envs(options), device=device, seed=seed, **cfg["env"])
+    given = {key: cfg["env"][key] for key in env_given}  # as the run's config checked them
+    env_options = {**cfg["env"], **cfg["eval"]["env"], **given}
+    env = make_env(run.task, num_envs=_num_envs(options), device=device, seed=seed, **env_options)
     _, runner = build_runner(run, None, env=env)
     if options["checkpoint"]:
         runner.load(options["checkpoint"], map_location=device)
@@ -133,7 +136,7 @@ def _run_policy(options: dict, env_given: dict, device: str):
         "iteration": runner.current_learning_iteration,
         "seed": seed,
     }
-    return policy, env, list(cfg["runner"]["obs_groups"]["actor"]), source, cfg["task"], dict(cfg["env"])
+    return policy, env, list(cfg["runner"]["obs_groups"]["actor"]), source, cfg["task"], env_options
 
 
 def _scripted_policy(options: dict, demo: dict, env_given: dict, device: str):

@@ -21,11 +21,12 @@ import json
 import os
 import shutil
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
+from refpo_warp.envs.registry import make_env_cfg
 from refpo_warp.utils.errors import ConfigError, DataFileError
 
 METADATA_FILE = "metadata.json"
@@ -288,6 +289,23 @@ def _check_episode(path: Path, i: int, e: Episode, obs_dim: int, action_dim: int
 def _kind_name(dtype: np.dtype) -> str:
     names = {"S": "bytes", "U": "text", "O": "Python objects", "c": "complex numbers", "M": "dates", "m": "time spans"}
     return names.get(dtype.kind, "not numbers")
+
+
+def env_differences(dataset: Dataset, task: str, env_options: dict) -> list[str]:
+    """The env options where the env the dataset was recorded on (its ``refpo.env`` over the task's defaults) differs
+    from ``task``'s env with ``env_options``, as ``env.<key>: <dataset's> in the dataset, <env's> here``."""
+    recorded = dataset.refpo.get("env") or {}
+    try:
+        theirs = make_env_cfg(task, **recorded)
+    except (ConfigError, TypeError, ValueError) as err:
+        raise DataFileError(f"{dataset.path}: its env options {recorded} are not task {task}'s ({err})") from err
+    ours = make_env_cfg(task, **env_options)
+    names = [f.name for f in fields(ours)]
+    return [
+        f"env.{name}: {getattr(theirs, name)!r} in the dataset, {getattr(ours, name)!r} here"
+        for name in names
+        if getattr(theirs, name) != getattr(ours, name)
+    ]
 
 
 def check_spaces(dataset: Dataset, task: str, obs_dim: int, action_dim: int) -> None:

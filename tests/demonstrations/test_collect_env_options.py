@@ -1,9 +1,10 @@
 """``refpo collect``'s env options (``env.<option>=``) on dmc_point_mass_wall, the real env on the CPU: a scripted
-demonstrator's env and the demonstrator itself are built with them, a trained run's own options are the default and
-may be overridden, and the dataset's metadata records them. What each dataset shows is checked against the options'
-numbers: the first observation of every episode (``start_spread``), the rewards recomputed from the observations with
-an independent path length around the options' wall (``wall_half_length``), and where the demonstrator passes the
-wall. A key the task does not have, or one that would change a run's policy, exits 2 before anything is written."""
+demonstrator's env and the demonstrator itself are built with them, the env a trained run's evaluation uses (its env
+options, ``eval.env``'s over them) is the default and may be overridden, and the dataset's metadata records them. What
+each dataset shows is checked against the options' numbers: the first observation of every episode (``start_spread``),
+the rewards recomputed from the observations with an independent path length around the options' wall
+(``wall_half_length``), and where the demonstrator passes the wall. A key the task does not have, or one that would
+change a run's policy, exits 2 before anything is written."""
 
 from __future__ import annotations
 
@@ -99,21 +100,21 @@ def test_a_bad_env_option_exits_2_naming_it(option, message, tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
-    """A one-iteration PPO run of the task with env options of its own (seconds)."""
+    """A one-iteration PPO run of the task with env options of its own, its evaluation's wall shorter (seconds)."""
     from refpo_warp.training import train
 
     run = tmp_path_factory.mktemp("run") / "run"
     train(
         [
             f"task={TASK}", "algo=ppo", "device=cpu", "seed=1", "num_envs=4", "runner.num_steps_per_env=8",
-            "max_iterations=1", "eval.at_end=false", "env.start_spread=0", "env.wall_half_length=0.2",
-            f"run_dir={run}",
+            "max_iterations=1", "eval.at_end=false", "env.start_spread=0", "env.wall_half_length=0.25",
+            "eval.env.wall_half_length=0.2", f"run_dir={run}",
         ]
     )  # fmt: skip
     return run
 
 
-def test_a_run_collects_on_its_own_env_options(run_dir, tmp_path, capsys):
+def test_a_run_collects_on_the_env_its_evaluation_uses(run_dir, tmp_path, capsys):
     out = tmp_path / "data"
     code, err = collect(capsys, "collect", f"run_dir={run_dir}", "episodes=2", "num_envs=2", f"out={out}")
     assert code == 0, err

@@ -13,7 +13,7 @@ pytest.importorskip("minari")
 
 from dataset_helpers import damage, edit_metadata, episode, minari_dataset, rewrite_episode, write
 
-from refpo_warp.demonstrations.dataset_file import check_spaces, read_dataset
+from refpo_warp.demonstrations.dataset_file import REFPO_KEY, check_spaces, env_differences, read_dataset
 from refpo_warp.utils.errors import ConfigError, DataFileError
 
 
@@ -61,6 +61,19 @@ def test_spaces_of_another_task_are_refused(tmp_path):
     data = read_dataset(write(tmp_path / "data"))
     with pytest.raises(DataFileError, match="recorded on task gridworld; this run's task is dmc_point_mass"):
         check_spaces(data, "dmc_point_mass", 2, 2)
+
+
+def test_env_differences_name_each_option_that_differs_from_the_runs_env(tmp_path):
+    data = read_dataset(write(tmp_path / "data"))
+    data.metadata[REFPO_KEY] = {"task": "dmc_point_mass_wall", "env": {"start_spread": 0.0, "wall_half_length": 0.2}}
+    task = "dmc_point_mass_wall"
+    assert env_differences(data, task, {"start_spread": 0.0, "wall_half_length": 0.2}) == []
+    assert env_differences(data, task, {"start_spread": 0.0}) == [
+        "env.wall_half_length: 0.2 in the dataset, 0.15 here"  # the task's default wall
+    ]
+    data.metadata[REFPO_KEY]["env"] = {"wall_lenght": 0.2}
+    with pytest.raises(DataFileError, match=r"data: its env options \{'wall_lenght': 0.2\} are not task"):
+        env_differences(data, task, {})
 
 
 def test_an_existing_dataset_is_kept_unless_overwrite(tmp_path):

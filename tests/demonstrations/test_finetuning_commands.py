@@ -38,6 +38,7 @@ def workflow(tmp_path_factory):
     assert proc.returncode == 0, proc.stderr[-3000:]
     proc = call_tool("pretrain", *PRETRAIN, "algo=refpo", f"dataset={root / 'data'}", f"run_dir={root / 'clone'}")
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
+    assert "note:" not in proc.stdout  # the dataset's env is the clone's
     return root
 
 
@@ -98,6 +99,24 @@ def test_pretrain_writes_a_run_that_rsl_rl_loads(workflow):
     saved = torch.load(clone / "model_0.pt", weights_only=True)["actor_state_dict"]
     for name, tensor in runner.alg.actor.state_dict().items():
         assert torch.equal(tensor, saved[name]), name
+
+
+def test_pretrain_names_the_env_options_where_the_dataset_differs(workflow, tmp_path):
+    run = tmp_path / "clone"
+    proc = call_tool(
+        "pretrain",
+        *PRETRAIN,
+        "algo=refpo",
+        f"dataset={workflow / 'data'}",
+        "env.max_episode_length=77",
+        f"run_dir={run}",
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    from refpo_warp.envs.registry import make_env_cfg
+
+    default = make_env_cfg("gridworld").max_episode_length  # the dataset's: collected at the task's defaults
+    note = "note: the dataset's env is not the one the clone is evaluated on: env.max_episode_length:"
+    assert f"{note} {default} in the dataset, 77 here" in proc.stdout
 
 
 def fine_tune(workflow, run, *options):
