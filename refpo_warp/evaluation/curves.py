@@ -101,7 +101,7 @@ def training_curves(runs: dict[str, list], path: Path) -> Path:
         ax.set_title(title, fontsize=10)
         ax.set_xlabel("env steps")
         ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize=7)
+    _legend(axes[0, 0])
     fig.tight_layout()
     save_figure(fig, path, dpi=130)
     plt.close(fig)
@@ -115,6 +115,12 @@ class _ReadableLogLocator(ticker.LogLocator):
         decades = abs(np.log10(vmax) - np.log10(vmin)) if vmin > 0 and vmax > 0 else 0.0
         self.set_params(subs=(1.0, 2.0, 5.0) if decades <= 2.5 else (1.0,), numticks=7)
         return super().tick_values(vmin, vmax)
+
+
+def _legend(ax) -> None:
+    """The axes' legend, where it has curves (a clone's log of epochs has no returns, a PPO run no ratio spikes)."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7)
 
 
 def readable_log_axis(ax) -> None:
@@ -138,7 +144,7 @@ def diagnostic_curves(runs: dict[str, list[dict]], path: Path) -> Path:
     readable_log_axis(axes[0, 0])
     for ax in axes[1]:
         ax.set_xlabel("env steps")
-    axes[0, 0].legend(fontsize=7)
+    _legend(axes[0, 0])
     fig.tight_layout()
     save_figure(fig, path, dpi=130)
     plt.close(fig)
