@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from dmc_runs import Run, final_returns, first_reaching, group, load_run, n10, return_targets, run_groups
+from half_return_checkpoint import nearest_up_to_crossing
 from number_text import (
     improvement_estimate,
     interval_cell,
@@ -36,7 +37,7 @@ def demonstrator_facts(task: str) -> dict:
     target = round(ppo_final / 2)  # dmc.sh's TARGET: half of PPO's full-profile final
     evaluated = [(r["iteration"], r["eval/return"]) for r in run.rows if "eval/return" in r]
     crossing = next(i for i, (_, v) in enumerate(evaluated) if v >= target)
-    rule = min(evaluated[: crossing + 1], key=lambda e: abs(e[1] - target))  # half_return_checkpoint.py's rule
+    rule = nearest_up_to_crossing(evaluated, target)
     used = next(e for e in evaluated if e[0] == policy["iteration"])
     clones = {name: read_json(root / name / "eval.json") for name in ("clone_refpo", "clone_ppo")}
     per_iteration = cfg["num_envs"] * cfg["runner"]["num_steps_per_env"]

@@ -10,20 +10,26 @@ study asks for.
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
+from refpo_warp.runner.progress import read_rows
 
-def half_return_checkpoint(run_dir: Path, target: float) -> tuple[Path, float] | None:
-    rows = [json.loads(line) for line in (run_dir / "progress.jsonl").read_text().splitlines() if line.strip()]
-    evaluated = [(r["eval/return"], run_dir / f"model_{r['iteration']}.pt") for r in rows if "eval/return" in r]
-    evaluated = [(value, path) for value, path in evaluated if path.exists()]
-    crossing = next((i for i, (value, _) in enumerate(evaluated) if value >= target), None)
+
+def nearest_up_to_crossing(evaluated: list[tuple[int, float]], target: float) -> tuple[int, float] | None:
+    """Of (iteration, return) pairs in order, the one whose return is nearest ``target`` up to the first that reaches
+    it; None while none has."""
+    crossing = next((i for i, (_, value) in enumerate(evaluated) if value >= target), None)
     if crossing is None:
         return None
-    value, path = min(evaluated[: crossing + 1], key=lambda e: abs(e[0] - target))
-    return path, value
+    return min(evaluated[: crossing + 1], key=lambda e: abs(e[1] - target))
+
+
+def half_return_checkpoint(run_dir: Path, target: float) -> tuple[Path, float] | None:
+    rows = read_rows(run_dir)  # the live log of a training run: a torn last line is skipped
+    saved = [(r["iteration"], r["eval/return"]) for r in rows if "eval/return" in r]
+    found = nearest_up_to_crossing([e for e in saved if (run_dir / f"model_{e[0]}.pt").exists()], target)
+    return None if found is None else (run_dir / f"model_{found[0]}.pt", found[1])
 
 
 if __name__ == "__main__":
