@@ -227,6 +227,16 @@ def summary(runs: TwoWayRuns) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ the figure
+def _over_seeds(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The mean, lowest and highest over seeds (rows) of each evaluation (column), NaN where no seed has a value (a
+    left share where no run passed the wall): a gap in the curve."""
+    out = np.full((3, values.shape[1]), np.nan)
+    some = np.isfinite(values).any(axis=0)
+    kept = values[:, some]
+    out[:, some] = np.nanmean(kept, axis=0), np.nanmin(kept, axis=0), np.nanmax(kept, axis=0)
+    return out[0], out[1], out[2]
+
+
 def curves_figure(runs: TwoWayRuns, path: Path, title: str, xlabel: str, mark: tuple[int, str] | None = None) -> None:
     """Success and the left share of the passes through training (N = 10; PPO: its mean action), the mean over
     seeds with a band from the lowest to the highest; ``mark``: (env steps, label) of a dashed line."""
@@ -246,10 +256,9 @@ def curves_figure(runs: TwoWayRuns, path: Path, title: str, xlabel: str, mark: t
         passes = left + right
         share = np.divide(left, passes, out=np.full_like(left, np.nan), where=passes > 0)
         for ax, values in ((axes[0], success), (axes[1], share)):
-            ax.plot(steps, np.nanmean(values, axis=0), color=COLOURS[label], label=method["name"])
-            ax.fill_between(
-                steps, np.nanmin(values, axis=0), np.nanmax(values, axis=0), color=COLOURS[label], alpha=0.15
-            )
+            mean, low, high = _over_seeds(values)
+            ax.plot(steps, mean, color=COLOURS[label], label=method["name"])
+            ax.fill_between(steps, low, high, color=COLOURS[label], alpha=0.15)
     if mark is not None:
         for ax in axes:
             ax.axvline(mark[0], color="grey", lw=0.8, ls="--")
