@@ -6,13 +6,10 @@ another's on a task."""
 from __future__ import annotations
 
 import contextlib
-import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-
-from refpo_warp.utils.errors import ConfigError
 
 REPS = 2000  # bootstrap resamples: the intervals' ends move by well under 1 % between seeds at this count
 
@@ -37,27 +34,25 @@ class Estimate:
         return self.high >= other.low
 
 
-def _rliable():
-    try:
-        from rliable import library, metrics
-    except ImportError as err:
-        raise ConfigError('Confidence intervals need rliable: pip install "refpo-warp[tune]"') from err
-    return library, metrics
-
-
 @contextlib.contextmanager
-def _quiet(seed: int) -> Iterator[None]:
-    """Reproducible intervals: rliable's stratified bootstrap draws its resamples from NumPy's global generator
-    (``StratifiedBootstrap.update_indices``), not from the seeded ``RandomState`` it hands arch (which arch 7 warns
-    is deprecated), so the global generator is seeded here and restored afterwards."""
+def _seeded(seed: int) -> Iterator[None]:
+    """rliable's stratified bootstrap draws its resamples from NumPy's global generator
+    (``StratifiedBootstrap.update_indices``), so the same draws come from seeding it here; the caller's stream is
+    restored afterwards."""
     state = np.random.get_state()
     np.random.seed(seed)
     try:
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", category=FutureWarning, module="arch")
-            yield
+        yield
     finally:
         np.random.set_state(state)
+
+
+def _percentile_interval(estimates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """arch's ``conf_int(method="percentile", size=0.95)`` over (reps x statistics) bootstrap estimates (its
+    percentiles as it computes them: 100 alpha is not exactly 2.5)."""
+    alpha = (1.0 - 0.95) / 2
+    bounds = [np.percentile(estimates[:, i], [100 * alpha, 100 * (1.0 - alpha)]) for i in range(estimates.shape[1])]
+    return np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
 
 
 def _check(scores: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -71,63 +66,75 @@ def _check(scores: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 
 
 def aggregate(scores: dict[str, np.ndarray], seed: int = 0, reps: int = REPS) -> dict[str, dict[str, Estimate]]:
-    """Per method: ``{"mean": Estimate, "iqm": Estimate}`` over all (run, task) scores, stratified bootstrap 95 %."""
-    library, _ = _rliable()
+    """Per method: ``{"mean": Estimate, "iqm": Estimate}`` over all (run, task) scores, stratified bootstrap 95 %.
+
+    rliable's ``get_interval_estimates`` (percentile method) resample by resample, computed on every resample at once:
+    the same draws in the same order (one ``np.random.choice`` of the runs per task for each resample, methods in
+    ``scores``' order) and the same floats (tests/studies/test_intervals.py checks both against rliable)."""
     scores = _check(scores)
+    out = {}
+    with _seeded(seed):
+        for name, matrix in scores.items():
+            runs, tasks = matrix.shape
+            rows = np.random.choice(runs, (reps, runs, tasks), replace=True)
+            resampled = matrix[rows, np.arange(tasks)]  # (reps, runs, tasks): runs resampled within each task
+            means = resampled.mean(axis=1).mean(axis=1)
+            flat = resampled.reshape(reps, -1)
+            low, high = _iqm_slice(flat.shape[1])
+            iqms = np.partition(flat, (low, high - 1), axis=1)[:, low:high].mean(axis=1)
+            lows, highs = _percentile_interval(np.stack([means, iqms], axis=1))
+            points = (float(np.mean(np.mean(matrix, axis=0))), interquartile_mean(matrix))
+            out[name] = {
+                stat: Estimate(points[i], float(lows[i]), float(highs[i])) for i, stat in enumerate(("mean", "iqm"))
+            }
+    return out
 
-    def both(matrix: np.ndarray) -> np.ndarray:
-        return np.array([np.mean(np.mean(matrix, axis=0)), interquartile_mean(matrix)])
 
-    with _quiet(seed):
-        points, intervals = library.get_interval_estimates(
-            scores, both, reps=reps, random_state=np.random.RandomState(seed)
-        )
-    return {
-        name: {
-            stat: Estimate(float(points[name][i]), float(intervals[name][0, i]), float(intervals[name][1, i]))
-            for i, stat in enumerate(("mean", "iqm"))
-        }
-        for name in scores
-    }
+def _iqm_slice(size: int) -> tuple[int, int]:
+    """The sorted positions the IQM averages: SciPy's 25 % ``trim_mean`` cut."""
+    low = int(0.25 * size)
+    return low, size - low
 
 
 def interquartile_mean(scores: np.ndarray) -> float:
     """rliable's ``metrics.aggregate_iqm`` (SciPy's 25 % ``trim_mean`` over all scores), the same partition and so
-    the same float, without SciPy's array-API dispatch, which took most of an interval's time."""
+    the same float, without SciPy's array-API dispatch."""
     flat = np.ravel(scores)
-    low = int(0.25 * flat.size)
-    high = flat.size - low
+    low, high = _iqm_slice(flat.size)
     return float(np.mean(np.partition(flat, (low, high - 1))[low:high]))
 
 
 def probability_of_improvement(x: np.ndarray, y: np.ndarray) -> float:
     """rliable's ``metrics.probability_of_improvement`` without SciPy's Mann-Whitney test (its U statistic is the
-    count of pairs with x > y plus half the ties, the same float): each bootstrap resample calls it once, and the
-    test made an interval take seconds."""
-    per_task = []
-    for task in range(x.shape[1]):
-        a, b = x[:, task], y[:, task]
-        if np.array_equal(a, b):
-            per_task.append(0.5)
-            continue
-        u = float(np.greater.outer(a, b).sum()) + 0.5 * float(np.equal.outer(a, b).sum())
-        per_task.append(u / (a.size * b.size))
-    return float(np.mean(per_task))
+    count of pairs with x > y plus half the ties, the same float)."""
+    return float(_improvements(x[None], y[None])[0])
+
+
+def _improvements(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``probability_of_improvement`` of each resample: x (reps x runs x tasks), y (reps x runs' x tasks). Identical
+    columns give one half, as rliable's shortcut does (the count gives it exactly too)."""
+    greater = (x[:, :, None, :] > y[:, None, :, :]).sum(axis=(1, 2)).astype(float)
+    ties = (x[:, :, None, :] == y[:, None, :, :]).sum(axis=(1, 2)).astype(float)
+    per_task = (greater + 0.5 * ties) / (x.shape[1] * y.shape[1])
+    return per_task.mean(axis=1)
 
 
 def improvement(x: np.ndarray, y: np.ndarray, seed: int = 0, reps: int = REPS) -> Estimate:
     """P(a run of x beats a run of y on the same task), averaged over tasks (ties count one half), with its
-    stratified bootstrap 95 % interval."""
-    library, _ = _rliable()
+    stratified bootstrap 95 % interval: rliable's (``StratifiedIndependentBootstrap``: x's and y's runs resampled
+    independently, x's draw first in each resample), computed on every resample at once."""
     pair = _check({"x": x, "y": y})
-    if pair["x"].shape[1] != pair["y"].shape[1]:
+    x, y = pair["x"], pair["y"]
+    if x.shape[1] != y.shape[1]:
         raise ValueError("x and y must have the same tasks (columns)")
-    with _quiet(seed):
-        points, intervals = library.get_interval_estimates(
-            {"xy": (pair["x"], pair["y"])},
-            probability_of_improvement,
-            reps=reps,
-            random_state=np.random.RandomState(seed),
-        )
-    low, high = np.asarray(intervals["xy"], dtype=float).ravel()
-    return Estimate(float(np.asarray(points["xy"]).ravel()[0]), float(low), float(high))
+    with _seeded(seed):
+        if len(x) == len(y):  # one call draws what the resamples' x-then-y calls draw, in that order
+            both = np.random.choice(len(x), (reps, 2 * len(x), x.shape[1]))
+            x_rows, y_rows = both[:, : len(x)], both[:, len(x) :]
+        else:
+            draws = [(np.random.choice(len(x), x.shape), np.random.choice(len(y), y.shape)) for _ in range(reps)]
+            x_rows, y_rows = np.stack([d[0] for d in draws]), np.stack([d[1] for d in draws])
+    columns = np.arange(x.shape[1])
+    xs, ys = x[x_rows, columns], y[y_rows, columns]
+    low, high = _percentile_interval(_improvements(xs, ys)[:, None])
+    return Estimate(probability_of_improvement(x, y), float(low[0]), float(high[0]))
