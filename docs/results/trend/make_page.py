@@ -77,12 +77,13 @@ def committed() -> list[dict]:
 
 
 def at_budget(row: dict, multiple: int, key: str) -> float | None:
-    """The run's periodic evaluation of ``key`` at ``multiple`` x the profile's budget; a failed run scores 0."""
-    if row["status"] == "failed":
-        return 0.0
+    """The run's periodic evaluation of ``key`` at ``multiple`` x the profile's budget; 0 at a budget a failed run
+    stopped before (it has no policy there); None at one a run still going has not reached."""
     iteration = multiple * profile_iterations() - 1
     found = [e for e in row["evals"] if e["iteration"] == iteration and key in e]
-    return float(found[0][key]) if found else None
+    if found:
+        return float(found[0][key])
+    return 0.0 if row["status"] == "failed" else None
 
 
 def return_key(label: str, setting: str) -> str:
@@ -183,7 +184,7 @@ def health_table(rows: list[dict]) -> str:
     )
     for task in TASKS:
         for label in FLOWS:
-            runs = [r for r in rows if r["label"] == label and r["task"] == task and r["status"] == "ok"]
+            runs = [r for r in rows if r["label"] == label and r["task"] == task]
             if not runs:
                 continue
             for name, fn in stats:
@@ -193,6 +194,27 @@ def health_table(rows: list[dict]) -> str:
                     cells.append(f"{np.mean(values):.3g}" if values else "--")
                 lines.append(f"| `{task}` | {METHODS[label]} | {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def failures(rows: list[dict]) -> str:
+    """The runs that stopped on a non-finite loss: where (the iteration whose update was refused)."""
+    failed = [r for r in rows if r["status"] == "failed"]
+    if not failed:
+        return "No committed run has failed."
+    per_iteration = env_steps_per_profile() // profile_iterations()
+    parts = []
+    for r in failed:
+        stopped = max((t["iteration"] for t in r["train"]), default=-1) + 1
+        steps = stopped * per_iteration
+        parts.append(
+            f"{r['task'].removeprefix('dmc_')}/{r['label']}/seed{r['seed']} in iteration {stopped} ({steps:,} env "
+            f"steps, {steps / env_steps_per_profile():.1f}x the profile's budget)"
+        )
+    return (
+        "Stopped on a non-finite loss (the update refused before it was applied; `refpo report`'s status failed): "
+        + and_list(parts)
+        + "."
+    )
 
 
 def health_verdicts(rows: list[dict]) -> str:
@@ -272,13 +294,18 @@ def curves(rows: list[dict], path: Path) -> None:
     fig, axes = plt.subplots(1, len(TASKS), figsize=(5.5 * len(TASKS), 4))
     for ax, task in zip(axes, TASKS, strict=True):
         for label, name in METHODS.items():
-            runs = [r for r in rows if r["label"] == label and r["task"] == task and r["status"] == "ok"]
+            runs = [r for r in rows if r["label"] == label and r["task"] == task]
             if not runs:
                 continue
             key = return_key(label, "10")
             series = [[(e["env_steps"], e[key]) for e in r["evals"] if key in e] for r in runs]
+            longest = max(series, key=len)
+            series = [  # a failed run scores 0 where it did not reach
+                s + [(x, 0.0) for x, _ in longest[len(s) :]] if run["status"] == "failed" else s
+                for run, s in zip(runs, series, strict=True)
+            ]
             length = min(len(s) for s in series)
-            steps = np.array([x for x, _ in series[0][:length]])
+            steps = np.array([x for x, _ in longest[:length]])
             values = np.array([[y for _, y in s[:length]] for s in series])
             ax.plot(steps, values.mean(axis=0), color=COLOURS[label], label=f"{name} ({len(runs)})")
             ax.fill_between(steps, values.min(axis=0), values.max(axis=0), color=COLOURS[label], alpha=0.15)
@@ -333,6 +360,7 @@ def values() -> dict[str, object]:
         "degradation": degradation(rows),
         "health_table": health_table(rows),
         "health_verdicts": health_verdicts(rows),
+        "failures": failures(rows),
         "figure": "![Returns through training to 8x the budget](trend_curves.png)"
         if rows
         else "(no run committed yet)",
