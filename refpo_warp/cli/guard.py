@@ -17,10 +17,20 @@ import traceback
 from collections.abc import Callable
 from pathlib import Path
 
-from refpo_warp.utils.errors import ConfigError, DataFileError, NonFiniteLossError, SystemRefusedError
+from refpo_warp.utils.errors import (
+    EXIT_BAD_FILE,
+    EXIT_INTERRUPTED,
+    EXIT_NONFINITE,
+    EXIT_OK,
+    EXIT_SYSTEM,
+    EXIT_UNEXPECTED,
+    EXIT_USAGE,
+    ConfigError,
+    DataFileError,
+    NonFiniteLossError,
+    SystemRefusedError,
+)
 
-EXIT_OK, EXIT_UNEXPECTED, EXIT_USAGE, EXIT_NONFINITE, EXIT_BAD_FILE, EXIT_SYSTEM = 0, 1, 2, 3, 4, 5
-EXIT_INTERRUPTED = 130
 ERROR_LOG = "error.log"
 
 

@@ -10,9 +10,9 @@ import importlib
 import os
 import sys
 
-from refpo_warp.cli.guard import EXIT_OK, EXIT_USAGE, run_guarded
+from refpo_warp.cli.guard import run_guarded
 from refpo_warp.utils.command_line import HELP, Arguments, parse_arguments, wants_help
-from refpo_warp.utils.errors import unknown
+from refpo_warp.utils.errors import EXIT_OK, EXIT_USAGE, unknown
 
 # command -> its module (imported when the command runs: `refpo --help` loads none of them)
 COMMANDS = {

@@ -5,11 +5,10 @@ from __future__ import annotations
 import signal
 
 from refpo_warp.cli.backend_flags import BACKEND_FLAGS, BACKEND_HELP, BACKEND_USAGE, backend_arguments
-from refpo_warp.cli.guard import EXIT_INTERRUPTED, EXIT_UNEXPECTED
 from refpo_warp.config.command_options import EXPLAIN, explain_options, named_files, options_help
 from refpo_warp.studies.grid.spec import SweepOptions
 from refpo_warp.utils.command_line import Arguments, Flag
-from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.errors import EXIT_INTERRUPTED, EXIT_UNEXPECTED, ConfigError
 
 SUMMARY = "a grid of tasks x methods x seeds, each run a training process (local or on a Ray cluster)"
 USAGE = f"""Run a sweep: refpo sweep <sweep name or file> [key=value ...] [--jobs N] [--dry-run]
@@ -18,7 +17,7 @@ USAGE = f"""Run a sweep: refpo sweep <sweep name or file> [key=value ...] [--job
 A grid of tasks x methods x seeds (x list-valued overrides), each run a separate `python -m refpo_warp train`
 process in <sweep dir>/<task>/<label>/seed<k> (default sweep dir: runs/sweeps/<name>). Every run's config is
 resolved before anything starts. Finished runs are skipped; a failed run is reported with its log and retried once
-from scratch.
+from scratch (not one stopped on a non-finite loss, exit 3: a rerun repeats it).
 
 Named sweeps: configs/sweep/, and sweep/ of your config_dir=DIR or REFPO_CONFIG_PATH folders; `refpo sweep --list
 [config_dir=DIR]` lists them with their descriptions.

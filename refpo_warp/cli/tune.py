@@ -5,11 +5,10 @@ from __future__ import annotations
 import signal
 
 from refpo_warp.cli.backend_flags import BACKEND_FLAGS, BACKEND_HELP, BACKEND_USAGE, backend_arguments
-from refpo_warp.cli.guard import EXIT_INTERRUPTED
 from refpo_warp.config.command_options import EXPLAIN, explain_options, named_files, options_help
 from refpo_warp.studies.tuning.spec import TuneOptions
 from refpo_warp.utils.command_line import Arguments, Flag
-from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.errors import EXIT_INTERRUPTED, ConfigError
 
 SUMMARY = "an equal tuning budget for several methods (Optuna studies of training runs), resumable"
 USAGE = f"""Tune: refpo tune <tuning name or file> [trials=N] [methods=[a,b]] [out=DIR] [config_dir=DIR] [--jobs N]

@@ -8,7 +8,7 @@
 - A run that is unfinished with nothing to continue, or stale (its config changed), is trained again from scratch;
   only its log files are kept.
 - A run that exits non-zero is reported with its log and retried once from scratch (``retries``), a continued one
-  too.
+  too; not one stopped on a non-finite loss (exit 3), whose rerun would repeat it and whose files are the result.
 - The sweep dir holds ``sweep.yaml`` (the resolved spec: methods, runs, their arguments and config fingerprints,
   merged over earlier invocations) and ``status.json`` (per run: state, attempts, exit codes, seconds, node, log).
 - Backends (``backends.py``): ``local`` (subprocesses of this machine, ``grid/local.py``) and ``ray`` (one Ray task per

@@ -12,6 +12,10 @@ import difflib
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
+# The exit code of each (docs/cli.md); a sweep reads a run's to tell a non-finite loss, a result, from a crash.
+EXIT_OK, EXIT_UNEXPECTED, EXIT_USAGE, EXIT_NONFINITE, EXIT_BAD_FILE, EXIT_SYSTEM = 0, 1, 2, 3, 4, 5
+EXIT_INTERRUPTED = 130
+
 
 class ConfigError(ValueError):
     """A configuration key, value or task id is invalid."""

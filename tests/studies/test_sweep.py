@@ -130,7 +130,7 @@ def test_fingerprint_ignores_options_that_do_not_change_the_run():
     assert fingerprint({**cfg, "seed": cfg["seed"] + 1}) != fingerprint(cfg)
 
 
-def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
+def test_sweep_runs_skips_finished_and_keeps_a_non_finite_failure(tmp_path):
     spec = write_spec(
         tmp_path / "tiny.yaml",
         overrides=TINY,
@@ -163,15 +163,15 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     assert result.returncode == 1, text + result.stderr
     broken = out / "gridworld" / "broken" / "seed1"
     assert "FAILED gridworld/broken/seed1 (attempt 1, exit 3" in text and f"log: {broken / 'train.log'}" in text
-    assert "retrying gridworld/broken/seed1 from scratch (attempt 2)" in text
-    assert "FAILED gridworld/broken/seed1 (attempt 2, exit 3" in text
+    # A non-finite loss is the run's outcome: not retried (a rerun repeats it), its files kept as it stopped.
+    assert "not retrying gridworld/broken/seed1: a non-finite loss" in text and "(attempt 2" not in text
     assert "finished 2 run(s), skipped 0 already done, failed 1" in text
-    assert "failed gridworld/broken/seed1: exit 3, 2 attempt(s)" in text
-    assert "Non-finite" in (broken / "train.attempt1.log").read_text()
-    assert "attempt 2" in (broken / "train.log").read_text() and "Non-finite" in (broken / "train.log").read_text()
+    assert "failed gridworld/broken/seed1: exit 3, 1 attempt(s)" in text
+    assert "Non-finite" in (broken / "train.log").read_text() and not (broken / "train.attempt1.log").exists()
+    assert (broken / "config.yaml").exists()  # it stops in its first update, before any progress row
     status = json.loads((out / "status.json").read_text())
     assert status["gridworld/broken/seed1"]["state"] == "failed"
-    assert status["gridworld/broken/seed1"]["exit_codes"] == [3, 3]
+    assert status["gridworld/broken/seed1"]["exit_codes"] == [3]
     progress = [line for line in text.splitlines() if line.startswith("[sweep ")]
     assert progress[0].startswith("[sweep 1/3] done gridworld/")
     assert "ETA" in text
@@ -212,7 +212,7 @@ def test_sweep_runs_skips_finished_and_retries_a_crash(tmp_path):
     assert result.returncode == 0, result.stderr
     report = (out / "report" / "report.md").read_text()
     assert "| ppo | 1/1 |" in report and "| broken | 0/1 | -- | -- | -- | -- |" in report
-    assert f"- gridworld / broken / seed 1: failed: exit codes [3, 3]; log {broken / 'train.log'}" in report
+    assert f"- gridworld / broken / seed 1: failed: exit codes [3]; log {broken / 'train.log'}" in report
     assert "- gridworld / refpo / seed 1: missing" in report
 
 

@@ -176,12 +176,12 @@ def test_a_trial_run_that_fails_is_retried_by_the_executor_and_without_retries_f
     assert tuner.run(), "\n".join(lines)
     trial, run_dir = out / "ppo" / "trial00", out / "ppo" / "trial00" / "gridworld"
     status = json.loads((trial / "status.json").read_text())["gridworld/ppo/seed101"]
-    assert (status["state"], status["attempts"], status["exit_codes"]) == ("done", 2, [3, 0]), lines
+    assert (status["state"], status["attempts"], status["exit_codes"]) == ("done", 2, [1, 0]), lines
     first = (run_dir / "train.attempt1.log").read_text().splitlines()
     assert first[0].startswith("# tune tiny, ppo trial 00, attempt 1 on ") and "fail_once.py" in first[0]
     assert first[1] == "error: fail_once.py fails the first run it starts"
     assert (run_dir / "train.log").read_text().startswith("# tune tiny, ppo trial 00, attempt 2 on ")
-    assert any("FAILED gridworld/ppo/seed101 (attempt 1, exit 3" in line for line in lines), lines
+    assert any("FAILED gridworld/ppo/seed101 (attempt 1, exit 1" in line for line in lines), lines
     rows = list(csv.DictReader((out / TRIALS_FILE).open()))
     assert [(r["state"], r["why"]) for r in rows] == [("complete", "")]
     assert float(rows[0]["score"]) == pytest.approx(float(rows[0]["gridworld/return_multi"]) / 20.0)
@@ -198,7 +198,7 @@ def test_a_trial_run_that_fails_is_retried_by_the_executor_and_without_retries_f
     assert tuner.run()
     rows = list(csv.DictReader((out / TRIALS_FILE).open()))
     log = out / "ppo" / "trial00" / "gridworld" / "train.log"
-    assert [(r["state"], r["score"], r["why"]) for r in rows] == [("fail", "", f"gridworld exited 3; log {log}")]
+    assert [(r["state"], r["score"], r["why"]) for r in rows] == [("fail", "", f"gridworld exited 1; log {log}")]
     assert (
         json.loads((out / "ppo" / "trial00" / "status.json").read_text())["gridworld/ppo/seed101"]["state"] == "failed"
     )

@@ -1,9 +1,10 @@
 """What every backend shares: the queue of runs, ``jobs`` of them at a time, a failed run reported with its log and
-retried from scratch, one progress line with the ETA per finished run, ``status.json`` kept up to date, and the
-summary. A backend is a ``Launcher``: it starts one run, reports the runs that ended and stops the others
-(``local.py``: subprocesses of this machine; ``studies/ray/backend.py``: one Ray task per run). A sweep runs its whole
-grid through one executor; a tuning study runs each trial's runs through one (``studies/tuning/study.py``), whose
-``watch`` stops them early (a pruned or failed trial).
+retried from scratch (not one stopped on a non-finite loss: a rerun repeats it, and its files are the result), one
+progress line with the ETA per finished run, ``status.json`` kept up to date, and the summary. A backend is a
+``Launcher``: it starts one run, reports the runs that ended and stops the others (``local.py``: subprocesses of this
+machine; ``studies/ray/backend.py``: one Ray task per run). A sweep runs its whole grid through one executor; a tuning
+study runs each trial's runs through one (``studies/tuning/study.py``), whose ``watch`` stops them early (a pruned or
+failed trial).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from typing import Any
 from refpo_warp.studies.grid.spec import Run, Sweep
 from refpo_warp.studies.grid.state import LOG_FILE, STATUS_FILE, run_state
 from refpo_warp.utils.atomic_files import write_text
+from refpo_warp.utils.errors import EXIT_NONFINITE
 
 POLL_S = 0.2
 
@@ -209,7 +211,12 @@ class SweepExecutor:
                         f"[{self.tag}] FAILED {job.run.key} (attempt {job.attempt}, {why}, {duration(out.seconds)}"
                         f"{where}): {self._last_error(job.log)}\n        log: {job.log}"
                     )
-                    if job.attempt <= self.retries:
+                    if rc == EXIT_NONFINITE:  # a result, not an accident: kept as it stopped, not retried
+                        self.echo(
+                            f"[{self.tag}] not retrying {job.run.key}: a non-finite loss is the run's outcome (a "
+                            "rerun repeats it); its checkpoints and progress log are kept"
+                        )
+                    if job.attempt <= self.retries and rc != EXIT_NONFINITE:
                         self.echo(f"[{self.tag}] retrying {job.run.key} from scratch (attempt {job.attempt + 1})")
                         queue.appendleft((job.run.from_scratch(), job.attempt + 1))
                     else:
