@@ -207,8 +207,8 @@ def failures(rows: list[dict]) -> str:
         stopped = max((t["iteration"] for t in r["train"]), default=-1) + 1
         steps = stopped * per_iteration
         parts.append(
-            f"{r['task'].removeprefix('dmc_')}/{r['label']}/seed{r['seed']} in iteration {stopped} ({steps:,} env "
-            f"steps, {steps / env_steps_per_profile():.1f}x the profile's budget)"
+            f"{r['task'].removeprefix('dmc_')}/{r['label']}/seed{r['seed']} in iteration {stopped}, after {steps:,} "
+            f"env steps ({steps / env_steps_per_profile():.1f}x the profile's budget)"
         )
     return (
         "Stopped on a non-finite loss (the update refused before it was applied; `refpo report`'s status failed): "
@@ -299,13 +299,13 @@ def curves(rows: list[dict], path: Path) -> None:
                 continue
             key = return_key(label, "10")
             series = [[(e["env_steps"], e[key]) for e in r["evals"] if key in e] for r in runs]
-            longest = max(series, key=len)
-            series = [  # a failed run scores 0 where it did not reach
-                s + [(x, 0.0) for x, _ in longest[len(s) :]] if run["status"] == "failed" else s
+            evaluations = [k * env_steps_per_profile() for k in range(1, multiples()[-1] + 1)]
+            series = [  # a failed run scores 0 at the evaluations it did not reach
+                s + [(x, 0.0) for x in evaluations[len(s) :]] if run["status"] == "failed" else s
                 for run, s in zip(runs, series, strict=True)
             ]
             length = min(len(s) for s in series)
-            steps = np.array([x for x, _ in longest[:length]])
+            steps = np.array([x for x, _ in series[0][:length]])
             values = np.array([[y for _, y in s[:length]] for s in series])
             ax.plot(steps, values.mean(axis=0), color=COLOURS[label], label=f"{name} ({len(runs)})")
             ax.fill_between(steps, values.min(axis=0), values.max(axis=0), color=COLOURS[label], alpha=0.15)
