@@ -60,6 +60,8 @@ from refpo_warp.utils.rsl_rl_versions import (
     uncompiled,
 )
 
+ADAPTIVE_LR_RANGE = (1e-5, 1e-2)  # rsl_rl's adaptive schedule keeps the learning rate within these
+
 
 @dataclass
 class Minibatch:
@@ -349,9 +351,9 @@ class OnPolicyAlgorithm(RslPPO):
         lr = self.learning_rate
         if self.gpu_global_rank == 0:
             if kl > self.desired_kl * 2.0:
-                lr = max(1e-5, lr / 1.5)
+                lr = max(ADAPTIVE_LR_RANGE[0], lr / 1.5)
             elif 0.0 < kl < self.desired_kl / 2.0:
-                lr = min(1e-2, lr * 1.5)
+                lr = min(ADAPTIVE_LR_RANGE[1], lr * 1.5)
         if self.is_multi_gpu:
             lr_tensor = torch.tensor(lr, device=self.device)
             torch.distributed.broadcast(lr_tensor, src=0)

@@ -1,16 +1,20 @@
-"""The clip ablation's gradient norms: each network's norm before clipping, read from the committed runs'
-``progress_train.jsonl`` (``Loss/grad_norm_actor``, ``Loss/grad_norm_critic``: the mean over an update's minibatches),
-and the factor a joint clip would scale the actor's gradient by at those norms."""
+"""Gradient norms of the clip ablation and of the small-task recipe: each network's norm before clipping, read from the
+committed runs' ``progress_train.jsonl`` (``Loss/grad_norm_actor``, ``Loss/grad_norm_critic``: the mean over an update's
+minibatches), the factor a joint clip scales the actor's gradient by at those norms, and where the recipe's adaptive
+learning rate sat."""
 
 from __future__ import annotations
 
 import statistics
 from pathlib import Path
 
+from refpo_warp.algorithms.on_policy import ADAPTIVE_LR_RANGE
+from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import read_jsonl
 from refpo_warp.studies.reports.phrases import value_range as span
 
 ACTOR, CRITIC = "Loss/grad_norm_actor", "Loss/grad_norm_critic"
+LR, KL = "Loss/learning_rate", "Flow/noise_prediction_kl"
 
 
 def norms(run: Path) -> list[tuple[float, float]] | None:
@@ -63,4 +67,32 @@ def grad_norm_text(runs: dict[str, list[Path]], joint_runs: list[Path], max_norm
         "the mean over an update's minibatches; each run's `progress_train.jsonl`): "
         + "; ".join(parts)
         + f". The critic's norm sets a joint clip, and the actor's step shrinks with it; {joint}."
+    )
+
+
+def small_recipe_text(folders: list[Path]) -> str:
+    """What the small-task recipe's runs logged: the share of iterations its adaptive learning rate spent at the
+    schedule's upper bound, the KL estimate it steers by against the band that raises the rate, and the joint clip's
+    factor on the actor's gradient (the recipe clips actor and critic together)."""
+    logged = [(f, read_jsonl(f / "progress_train.jsonl")) for f in folders if (f / "progress_train.jsonl").exists()]
+    logged = [(f, rows) for f, rows in logged if rows and all(k in rows[0] for k in (LR, KL, ACTOR, CRITIC))]
+    if not logged:
+        return ""
+    cfg = load_yaml(logged[0][0] / "config.yaml")["algorithm"]
+    desired, max_norm, top = float(cfg["desired_kl"]), float(cfg["max_grad_norm"]), ADAPTIVE_LR_RANGE[1]
+    at_top = [sum(r[LR] >= top for r in rows) / len(rows) for _, rows in logged]
+    below = [sum(r[KL] < desired / 2 for r in rows) / len(rows) for _, rows in logged]
+    kl = [statistics.median(r[KL] for r in rows) for _, rows in logged]
+    factor = [statistics.median(joint_factor(r[ACTOR], r[CRITIC], max_norm) for r in rows) for _, rows in logged]
+    critic = [statistics.median(r[CRITIC] for r in rows) for _, rows in logged]
+    actor = [statistics.median(r[ACTOR] for r in rows) for _, rows in logged]
+    shares = [span([100 * a for a in at_top], ".0f"), span([100 * b for b in below], ".0f")]
+    return (
+        f"**What the small-task recipe's runs logged** ({len(logged)} runs, each run's `progress_train.jsonl`): its "
+        f"adaptive learning rate sat at the schedule's upper bound, {top:g}, in {shares[0]} % of iterations; the KL "
+        "estimate it steers by (the change of the noise-end prediction, `Flow/noise_prediction_kl`) had a median of "
+        f"{span(kl, '.1e', ' to ')} a run and was below half the desired {desired:g}, which raises the rate, in "
+        f"{shares[1]} % of iterations. Its joint clip of {max_norm:g} multiplied the actor's gradient by a median "
+        f"{span(factor, '.2g', ' to ')} a run: the critic's median norm was {span(critic, '.0f')}, the actor's "
+        f"{span(actor, '.2f')}."
     )

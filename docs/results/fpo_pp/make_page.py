@@ -72,7 +72,7 @@ from fpo_pp_text import (
     sweep_text,
     what_ran,
 )
-from grad_norms import grad_norm_text
+from grad_norms import grad_norm_text, small_recipe_text
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs
@@ -226,6 +226,7 @@ def values() -> dict[str, object]:
     v["lr_text"] = lr_text(data, ms)
     v["clip_text"] = clip_text(data, ms)
     max_norm = (run_config(ms[AUTHORS], TASKS[1]) or {}).get("algorithm.max_grad_norm", 1.0)
+    v["small_recipe_text"] = small_recipe_text([d for t in TASKS for d in run_dirs(RUNS, t, SMALL)])
     v["grad_norm_text"] = grad_norm_text(
         {label: run_dirs(RUNS, TASKS[1], label) for label in CLIP_LABELS}, run_dirs(RUNS, TASKS[1], AUTHORS), max_norm
     )
