@@ -280,7 +280,13 @@ def degradation(rows: list[dict]) -> str:
         if len(means) < 2:
             continue
         best = max(means, key=lambda m: np.mean(list(means[m].values())))
-        last = max(means)
+        first, last = min(means), max(means)
+        if best == last:
+            lines.append(
+                f"- {METHODS[label]} on `{task}` (N = 10): from {mean_cell(means[first])} at {first}x to its best at "
+                f"{last}x, {mean_cell(means[last])}."
+            )
+            continue
         lines.append(
             f"- {METHODS[label]} on `{task}` (N = 10): best at {best}x, {mean_cell(means[best])}; at {last}x, "
             f"{mean_cell(means[last])}."
@@ -313,7 +319,7 @@ def curves(rows: list[dict], path: Path) -> None:
         ax.set_xlabel("env steps")
         ax.set_ylabel("return (N = 10; PPO: mean action)")
         if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=7, loc="lower right")
+            ax.legend(fontsize=7, loc="center right")
         else:
             ax.text(0.5, 0.5, "no run committed yet", ha="center", transform=ax.transAxes, color="grey")
     save_figure(fig, path, dpi=110, bbox_inches="tight")
