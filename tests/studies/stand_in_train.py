@@ -7,7 +7,7 @@ JSON line to ``<sweep dir>/stand_in.jsonl``, sleeps ``STAND_IN_SECONDS`` (defaul
 run leaves: ``config.yaml`` (the config ``refpo train`` would resolve from these arguments) and ``eval.json``.
 
 The run's method label picks a behaviour, for the first execution only (no ``train.attempt1.log`` beside it yet):
-``crash`` exits 3 with an error line; ``lost`` kills its parent, the Ray worker (SIGKILL), as a lost node would;
+``crash`` exits 1 with an error line; ``lost`` kills its parent, the Ray worker (SIGKILL), as a lost node would;
 ``sleepy`` sleeps 600 s whatever the attempt (for Ctrl-C).
 """
 
@@ -64,7 +64,7 @@ if label == "lost" and first:
     sys.exit("error: the stand-in outlived its killed worker")
 if label == "crash" and first:
     print("error: stand-in crash on its first attempt", flush=True)
-    sys.exit(3)
+    sys.exit(1)
 time.sleep(600 if label == "sleepy" else float(os.environ.get("STAND_IN_SECONDS", "1")))
 finish()
 record("end")

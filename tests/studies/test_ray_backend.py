@@ -93,9 +93,9 @@ def test_runs_get_their_own_gpu_a_crash_is_retried_and_a_lost_worker_rerun(local
     assert {s["node"] for s in status.values()} == {socket.gethostname()}
     assert {s["ray_node_id"] for s in status.values()} == {local_ray}
     crash = out / "gridworld" / "crash" / "seed1"
-    assert "FAILED gridworld/crash/seed1 (attempt 1, exit 3" in text and f"log: {crash / 'train.log'}" in text
+    assert "FAILED gridworld/crash/seed1 (attempt 1, exit 1" in text and f"log: {crash / 'train.log'}" in text
     assert "retrying gridworld/crash/seed1 from scratch (attempt 2)" in text
-    assert (status["gridworld/crash/seed1"]["attempts"], status["gridworld/crash/seed1"]["exit_codes"]) == (2, [3, 0])
+    assert (status["gridworld/crash/seed1"]["attempts"], status["gridworld/crash/seed1"]["exit_codes"]) == (2, [1, 0])
     assert "stand-in crash" in (crash / "train.attempt1.log").read_text()
     assert "attempt 2 on" in (crash / "train.log").read_text().splitlines()[0]
 
@@ -141,7 +141,7 @@ def test_status_agrees_with_the_local_backend(local_ray, tmp_path):
         }
         assert Path(entry["log"]).relative_to(tmp_path / "local") == Path(other["log"]).relative_to(tmp_path / "ray")
         assert entry["seconds"] > 0 and other["seconds"] > 0
-    assert local["gridworld/crash/seed1"]["exit_codes"] == [3, 0] and local["gridworld/ppo/seed1"]["node"]
+    assert local["gridworld/crash/seed1"]["exit_codes"] == [1, 0] and local["gridworld/ppo/seed1"]["node"]
 
 
 def test_a_node_without_the_working_directory_stops_the_sweep_before_it_starts(local_ray, tmp_path, monkeypatch):
