@@ -152,6 +152,7 @@ def play(args: list[str]) -> list[Path]:
 
 def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -> list[Path]:
     from refpo_warp.config.saved import load_run
+    from refpo_warp.evaluation.evaluate_policy import eval_env_options
     from refpo_warp.evaluation.videos import VIDEO_DIR, policy_panels, record
     from refpo_warp.runner.build import build_runner
     from refpo_warp.runner.checkpoints import load_latest
@@ -159,7 +160,7 @@ def _play_run(run_dir: Path, checkpoint, overrides: dict, video: VideoOptions) -
 
     run = load_run(run_dir, overrides)
     cfg, task = run.cfg, run.task
-    env_options = {**cfg["env"], **cfg["eval"]["env"]}
+    env_options = eval_env_options(cfg)
     from refpo_warp.envs.registry import make_env
 
     host = make_env(

@@ -94,7 +94,7 @@ def _run_policy(options: dict, env_given: dict, device: str):
     """The policy of a trained run (its newest usable checkpoint, or ``checkpoint``) and an env of its task: the env
     its evaluation rolls it out on (the run's ``env`` options, ``eval.env`` over them), with ``env_given`` over that
     (checked as a resumed run's: one that would change the policy's inputs or outputs is refused)."""
-    from refpo_warp.evaluation.evaluate_policy import is_flow
+    from refpo_warp.evaluation.evaluate_policy import eval_env_options, is_flow
     from refpo_warp.runner.build import build_runner
     from refpo_warp.runner.checkpoints import load_latest
 
@@ -103,7 +103,7 @@ def _run_policy(options: dict, env_given: dict, device: str):
     cfg = run.cfg
     seed = options["seed"] if options["seed"] is not None else cfg["seed"] + COLLECT_SEED_OFFSET
     given = {key: cfg["env"][key] for key in env_given}  # as the run's config checked them
-    env_options = {**cfg["env"], **cfg["eval"]["env"], **given}
+    env_options = {**eval_env_options(cfg), **given}
     env = make_env(run.task, num_envs=_num_envs(options), device=device, seed=seed, **env_options)
     _, runner = build_runner(run, None, env=env)
     if options["checkpoint"]:

@@ -37,7 +37,13 @@ from refpo_warp.demonstrations.behaviour_cloning import (
 )
 from refpo_warp.demonstrations.dataset_actions import ActionUnits, action_units, squashes
 from refpo_warp.demonstrations.dataset_file import check_spaces, env_differences, read_dataset
-from refpo_warp.evaluation.evaluate_policy import evaluate_actor, family_evaluation, make_eval_envs, tau_sampler
+from refpo_warp.evaluation.evaluate_policy import (
+    eval_env_options,
+    evaluate_actor,
+    family_evaluation,
+    make_eval_envs,
+    tau_sampler,
+)
 from refpo_warp.evaluation.evaluate_run import write_eval_json
 from refpo_warp.runner.build import build_runner, seed_everything
 from refpo_warp.runner.checkpoints import META_KEY, latest_checkpoint
@@ -89,7 +95,7 @@ def pretrain(options: list[str] | dict[str, Any]) -> dict:
     check_clonable(actor, cfg["algo"])
     groups = {g: int(env.get_observations()[g].shape[-1]) for g in cfg["runner"]["obs_groups"]["actor"]}
     check_spaces(dataset, cfg["task"], sum(groups.values()), env.num_actions)
-    differences = env_differences(dataset, cfg["task"], {**cfg["env"], **cfg["eval"]["env"]})
+    differences = env_differences(dataset, cfg["task"], eval_env_options(cfg))
     if differences:  # allowed (a clone may be meant for another env), but said: a mistake here is easy to miss
         print(f"[pretrain] note: the dataset's env is not the one the clone is evaluated on: {'; '.join(differences)}")
     p = cfg["pretrain"]

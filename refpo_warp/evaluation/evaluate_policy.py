@@ -67,6 +67,11 @@ def make_policy(actor, flow_steps: int | None, initial_noise: str = "random", pe
     return lambda obs: actor.sample(obs, flow_steps, initial_noise, perturbation)
 
 
+def eval_env_options(cfg: dict) -> dict:
+    """The env options a run is evaluated with: its ``env`` options, ``eval.env``'s over them."""
+    return {**cfg["env"], **cfg["eval"]["env"]}
+
+
 def eval_num_envs(run: Resolution, interval: bool = False) -> int:
     """Evaluation env count: ``eval.num_envs``, or what the task's env class asks for when that is null."""
     cfg = run.cfg
@@ -74,7 +79,7 @@ def eval_num_envs(run: Resolution, interval: bool = False) -> int:
     if n:
         return int(n)
     env_class = run.task.env_class()
-    env_cfg = make_env_cfg(run.task, **{**cfg["env"], **cfg["eval"]["env"]})
+    env_cfg = make_env_cfg(run.task, **eval_env_options(cfg))
     return int(env_class.eval_num_envs(env_cfg)) if hasattr(env_class, "eval_num_envs") else 64
 
 
@@ -86,7 +91,7 @@ def make_eval_env(run: Resolution, interval: bool = False) -> Any:
         num_envs=eval_num_envs(run, interval),
         device=resolve_device(cfg["device"]),
         seed=cfg["seed"] + EVAL_SEED_OFFSET,
-        **{**cfg["env"], **cfg["eval"]["env"]},
+        **eval_env_options(cfg),
     )
 
 

@@ -160,6 +160,8 @@ def agent_policy(agent: str, seed: int) -> Callable:
 def run_video(run: Resolution, runner: Any, run_dir: Path, name: str) -> list[Path]:
     """Record the runner's current policy under the run's evaluation protocol into ``<run dir>/videos/<name>.*``
     (the ``video`` options of the run's config)."""
+    from refpo_warp.evaluation.evaluate_policy import eval_env_options
+
     cfg = run.cfg
     options = VideoOptions.from_dict(cfg["video"])
     actor = runner.alg.get_policy()
@@ -170,7 +172,7 @@ def run_video(run: Resolution, runner: Any, run_dir: Path, name: str) -> list[Pa
         seed = cfg["seed"] if options.seed is None else options.seed
         return record(
             run.task,
-            {**cfg["env"], **cfg["eval"]["env"]},
+            eval_env_options(cfg),
             runner.device,
             panels,
             options,

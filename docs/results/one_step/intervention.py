@@ -85,7 +85,7 @@ def evaluate_returns(actor, cfg: dict, device: str) -> dict[str, float]:
     """N = 10 and N = 1 returns of 32 evaluation episodes (the run's evaluation protocol and env seed)."""
     from refpo_warp.envs.registry import make_env
     from refpo_warp.evaluation.episodes import run_episodes
-    from refpo_warp.evaluation.evaluate_policy import EVAL_SEED_OFFSET, make_policy
+    from refpo_warp.evaluation.evaluate_policy import EVAL_SEED_OFFSET, eval_env_options, make_policy
 
     out = {}
     for n in (actor.num_flow_steps, 1):
@@ -94,7 +94,7 @@ def evaluate_returns(actor, cfg: dict, device: str) -> dict[str, float]:
             num_envs=32,
             device=device,
             seed=cfg["seed"] + EVAL_SEED_OFFSET,
-            **{**cfg["env"], **cfg["eval"]["env"]},
+            **eval_env_options(cfg),
         )
         policy = make_policy(actor, n, cfg["eval"]["initial_noise"][0], cfg["eval"]["perturbation"])
         out[f"N={n}"] = float(run_episodes(policy, env)["return"].mean())
