@@ -17,7 +17,8 @@ USAGE = f"""Run a sweep: refpo sweep <sweep name or file> [key=value ...] [--job
 A grid of tasks x methods x seeds (x list-valued overrides), each run a separate `python -m refpo_warp train`
 process in <sweep dir>/<task>/<label>/seed<k> (default sweep dir: runs/sweeps/<name>). Every run's config is
 resolved before anything starts. Finished runs are skipped; a failed run is reported with its log and retried once
-from scratch (not one stopped on a non-finite loss, exit 3: a rerun repeats it).
+from scratch. A run stopped by a non-finite loss (exit 3) is not retried, by this sweep or the next: a retry repeats
+it, so it is kept as it stopped (its stopped.json says where; delete its run dir to train it again).
 
 Named sweeps: configs/sweep/, and sweep/ of your config_dir=DIR or REFPO_CONFIG_PATH folders; `refpo sweep --list
 [config_dir=DIR]` lists them with their descriptions.

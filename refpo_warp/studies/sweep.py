@@ -47,6 +47,7 @@ def run_sweep(
     echo(f"[sweep] {sweep.name}: {len(sweep.runs)} runs ({shape}) in {sweep.out_dir}; every config resolves")
     words = {
         "done": "done (skipped)",
+        "failed": "stopped by a non-finite loss (kept, not trained again)",
         "new": "new",
         "paused": "paused (continued from its newest checkpoint)",
         "unfinished": "unfinished (rerun from scratch)",

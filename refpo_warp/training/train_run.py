@@ -31,14 +31,14 @@ from refpo_warp.render.gl import select_gl_platform
 from refpo_warp.runner.build import build_runner, env_steps_per_iteration, num_iterations, seed_everything
 from refpo_warp.runner.checkpoints import checkpoint_progress, latest_checkpoint, load_latest
 from refpo_warp.runner.distributed import process_rank
-from refpo_warp.runner.progress import progress_path, truncate_after
-from refpo_warp.runner.run_dir import RUN_FILES, check_new_run_dir, check_writable, run_lock
+from refpo_warp.runner.progress import progress_path, read_rows, truncate_after
+from refpo_warp.runner.run_dir import RUN_FILES, STOPPED_FILE, check_new_run_dir, check_writable, run_lock
 from refpo_warp.runner.run_state import RUN_STATE_KEY, restore_run_state
 from refpo_warp.runner.runner import Runner
 from refpo_warp.training.fine_tuning import actor_frozen, clone_statistics_kept
 from refpo_warp.training.init_from import load_init_from
 from refpo_warp.training.pieces import PieceEnd
-from refpo_warp.utils.atomic_files import remove_stale_temp_files
+from refpo_warp.utils.atomic_files import remove_stale_temp_files, write_json
 from refpo_warp.utils.errors import ConfigError, NonFiniteLossError, tag_run_dir
 
 
@@ -94,6 +94,7 @@ def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:
             if not resume and latest_checkpoint(run_dir) is not None:  # another process got here first
                 raise ConfigError(f"{run_dir} received checkpoints from another process meanwhile; not touching it")
             remove_stale_temp_files(run_dir, RUN_FILES)
+            (run_dir / STOPPED_FILE).unlink(missing_ok=True)  # a resumed run goes on; a new one starts over
             if not resume:
                 for stale in (progress_path(run_dir), run_dir / "eval.json", run_dir / "eval.prev.json"):
                     stale.unlink(missing_ok=True)
@@ -112,8 +113,6 @@ def _resume(runner: Runner, cfg: dict, run_dir: Path, flat: dict, world_size: in
     iteration = int(data["iter"])
     env_steps, time_s = checkpoint_progress(data)
     if env_steps is None:  # not written by refpo_warp: read the count from the progress log, or assume this batch
-        from refpo_warp.runner.progress import read_rows
-
         rows = [r for r in read_rows(run_dir) if r["iteration"] == iteration] if progress_path(run_dir).exists() else []
         env_steps = rows[-1]["env_steps"] if rows else (iteration + 1) * env_steps_per_iteration(cfg, world_size)
         time_s = rows[-1].get("time_s", 0.0) if rows else 0.0
@@ -170,6 +169,8 @@ def _train_and_evaluate(
         except NonFiniteLossError as err:  # the CLI's message says what survives and how to go on
             err.checkpoint, err.run_dir = latest_checkpoint(run_dir), run_dir
             err.learning_rate = float(runner.alg.learning_rate)
+            if rank.is_main:
+                _record_stop(run_dir, err)
             raise
     else:
         print(
@@ -243,6 +244,22 @@ def _restore(runner: Runner, saved_state: Any) -> bool:
     if why is not None:
         print(f"[refpo_warp] note: resuming from fresh envs, not bit-identical to an unbroken run: {why}", flush=True)
     return why is None
+
+
+def _record_stop(run_dir: Path, err: NonFiniteLossError) -> None:
+    """``stopped.json``: why and where the run stopped, so a sweep keeps it as its outcome instead of continuing it."""
+    rows = read_rows(run_dir) if progress_path(run_dir).exists() else []
+    last = rows[-1] if rows else {}
+    write_json(
+        {
+            "reason": "non-finite loss",
+            "error": str(err),
+            "last_logged_iteration": last.get("iteration"),
+            "env_steps": last.get("env_steps"),
+            "newest_checkpoint": err.checkpoint.name if err.checkpoint else None,
+        },
+        run_dir / STOPPED_FILE,
+    )
 
 
 def _learn_in_chunks(

@@ -163,8 +163,10 @@ def test_sweep_runs_skips_finished_and_keeps_a_non_finite_failure(tmp_path):
     assert result.returncode == 1, text + result.stderr
     broken = out / "gridworld" / "broken" / "seed1"
     assert "FAILED gridworld/broken/seed1 (attempt 1, exit 3" in text and f"log: {broken / 'train.log'}" in text
-    # A non-finite loss is the run's outcome: not retried (a rerun repeats it), its files kept as it stopped.
+    # A non-finite loss is the run's outcome: not retried (a retry repeats it), its files kept as it stopped.
     assert "not retrying gridworld/broken/seed1: a non-finite loss" in text and "(attempt 2" not in text
+    stopped = json.loads((broken / "stopped.json").read_text())
+    assert stopped["reason"] == "non-finite loss" and "Non-finite" in stopped["error"]
     assert "finished 2 run(s), skipped 0 already done, failed 1" in text
     assert "failed gridworld/broken/seed1: exit 3, 1 attempt(s)" in text
     assert "Non-finite" in (broken / "train.log").read_text() and not (broken / "train.attempt1.log").exists()
@@ -200,6 +202,14 @@ def test_sweep_runs_skips_finished_and_keeps_a_non_finite_failure(tmp_path):
     lines.clear()
     run_sweep(load_sweep(str(spec), [f"out={out}", "methods=[ppo,refpo]"]), dry_run=True, echo=lines.append)
     assert "1 done (skipped), 1 paused (continued from its newest checkpoint)" in lines[1]
+
+    # A later invocation keeps the stopped run as it is: listed as failed, nothing launched, its files untouched.
+    files = {p.name: p.stat().st_mtime_ns for p in broken.iterdir()}
+    lines.clear()
+    summary = run_sweep(load_sweep(str(spec), [f"out={out}", "methods=[broken]"]), jobs=1, echo=lines.append)
+    assert "1 stopped by a non-finite loss (kept, not trained again)" in lines[1], lines
+    assert [key for key, _ in summary.failed] == ["gridworld/broken/seed1"] and not summary.finished
+    assert {p.name: p.stat().st_mtime_ns for p in broken.iterdir()} == files
 
     # The report lists the crashed run as missing, with its log.
     result = subprocess.run(

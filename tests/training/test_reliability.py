@@ -507,6 +507,8 @@ def test_non_finite_loss_advice_works(tmp_path, monkeypatch):
     _nan_at_update(monkeypatch, 3)
     proc = call_tool("train", *tiny("max_iterations=4", f"run_dir={run_dir}"))
     assert_refused(proc, NONFINITE, "iteration 2", str(run_dir / "model_1.pt"), "resume=true")
+    stopped = json.loads((run_dir / "stopped.json").read_text())  # what keeps a sweep from continuing it
+    assert (stopped["last_logged_iteration"], stopped["newest_checkpoint"]) == (1, "model_1.pt")
     monkeypatch.undo()  # the advised resume runs the real update
     command = proc.stderr.split("refpo train ", 1)[1].split("\n")[0]
     args = command.replace("<value>", "1e-4").split() + ["max_iterations=4", "eval.at_end=false"]
@@ -516,3 +518,4 @@ def test_non_finite_loss_advice_works(tmp_path, monkeypatch):
     assert saved["optimizer_state_dict"]["param_groups"][0]["lr"] == pytest.approx(1e-4)
     rows = [json.loads(line) for line in (run_dir / "progress.jsonl").read_text().splitlines()]
     assert [r["iteration"] for r in rows] == [0, 1, 2, 3]
+    assert not (run_dir / "stopped.json").exists()  # a resumed run is no longer the stopped one

@@ -1,5 +1,5 @@
 """What every backend shares: the queue of runs, ``jobs`` of them at a time, a failed run reported with its log and
-retried from scratch (not one stopped on a non-finite loss: a rerun repeats it, and its files are the result), one
+retried from scratch (not one stopped on a non-finite loss: a retry repeats it, and its files are the result), one
 progress line with the ETA per finished run, ``status.json`` kept up to date, and the summary. A backend is a
 ``Launcher``: it starts one run, reports the runs that ended and stops the others (``local.py``: subprocesses of this
 machine; ``studies/ray/backend.py``: one Ray task per run). A sweep runs its whole grid through one executor; a tuning
@@ -153,14 +153,19 @@ class SweepExecutor:
         return "  ".join(f"{k} {v['return_mean']:.1f}" for k, v in results.items() if "return_mean" in v)
 
     # ------------------------------------------------------------------------------------------------ main loop
-    def execute(
-        self, todo: list[Run], prints: dict[str, str], skipped: list[Run], watch: Watch | None = None
-    ) -> Summary:
-        """Train ``todo`` (``prints``: each run's config fingerprint by key; ``skipped``: runs already done). ``watch``
-        may stop the runs left: they are stopped as on Ctrl-C, and the summary says why."""
-        summary = Summary(total=len(todo) + len(skipped), skipped=[r.key for r in skipped])
-        for run in skipped:
-            self._record(run, state="done")
+    def execute(self, todo: list[Run], prints: dict[str, str], kept: list[Run], watch: Watch | None = None) -> Summary:
+        """Train ``todo`` (``prints``: each run's config fingerprint by key; ``kept``: runs already done, or stopped
+        by a non-finite loss). ``watch`` may stop the runs left: they are stopped as on Ctrl-C; the summary says why."""
+        summary = Summary(total=len(todo) + len(kept))
+        for run in kept:
+            state = run_state(run, prints[run.key])
+            self._record(run, state=state)
+            if state == "failed":
+                summary.failed.append(
+                    (run.key, f"stopped by a non-finite loss earlier, kept; log {run.run_dir / LOG_FILE}")
+                )
+            else:
+                summary.skipped.append(run.key)
         queue: deque[tuple[Run, int]] = deque((run, 1) for run in todo)
         running: list[Job] = []
         start = time.monotonic()
@@ -214,7 +219,7 @@ class SweepExecutor:
                     if rc == EXIT_NONFINITE:  # a result, not an accident: kept as it stopped, not retried
                         self.echo(
                             f"[{self.tag}] not retrying {job.run.key}: a non-finite loss is the run's outcome (a "
-                            "rerun repeats it); its checkpoints and progress log are kept"
+                            "retry repeats it); it is kept as it stopped, by this sweep and the next"
                         )
                     if job.attempt <= self.retries and rc != EXIT_NONFINITE:
                         self.echo(f"[{self.tag}] retrying {job.run.key} from scratch (attempt {job.attempt + 1})")

@@ -1,6 +1,6 @@
-"""What a sweep dir says about its runs: each run's state (done, paused, stale, unfinished, new), the plan of what to
-train, an earlier attempt cleared (its logs kept) and ``sweep.yaml``, the resolved spec merged over earlier
-invocations."""
+"""What a sweep dir says about its runs: each run's state (done, failed, paused, stale, unfinished, new), the plan
+of what to train, an earlier attempt cleared (its logs kept) and ``sweep.yaml``, the resolved spec merged over
+earlier invocations."""
 
 from __future__ import annotations
 
@@ -20,9 +20,9 @@ LOG_FILE = "train.log"
 
 
 def run_state(run: Run, expected: str) -> str:
-    """``done`` (eval.json of this config), ``paused`` (this config, no eval.json yet, a checkpoint to continue: a run
-    stopped at a piece's end, or interrupted), ``stale`` (another config), ``unfinished`` (nothing to continue) or
-    ``new``."""
+    """``done`` (eval.json of this config), ``failed`` (this config, stopped by a non-finite loss: its outcome, kept;
+    a rerun would repeat it), ``paused`` (this config, no eval.json yet, a checkpoint to continue: a run stopped at a
+    piece's end, or interrupted), ``stale`` (another config), ``unfinished`` (nothing to continue) or ``new``."""
     config = run.run_dir / "config.yaml"
     if not config.exists():
         return "unfinished" if run.run_dir.exists() and _not_logs(run.run_dir) else "new"
@@ -38,7 +38,10 @@ def run_state(run: Run, expected: str) -> str:
     if report.get("task") == run.task and report.get("algo") == run.method.algo:
         return "done"
     from refpo_warp.runner.checkpoints import list_checkpoints  # torch: not for a Ray worker's light imports
+    from refpo_warp.runner.run_dir import STOPPED_FILE
 
+    if (run.run_dir / STOPPED_FILE).exists():
+        return "failed"
     return "paused" if list_checkpoints(run.run_dir) else "unfinished"
 
 
@@ -96,15 +99,15 @@ def write_spec(sweep: Sweep, prints: dict[str, str]) -> Path:
 
 
 def plan(sweep: Sweep, prints: dict[str, str]) -> tuple[list[Run], list[Run], dict[str, list[str]]]:
-    """(runs to train, runs already done, run keys per state) for the current state of the sweep dir; a paused run is
-    continued from its newest checkpoint."""
+    """(runs to train, runs kept as they are: done or failed, run keys per state) for the current state of the sweep
+    dir; a paused run is continued from its newest checkpoint."""
     states: dict[str, list[str]] = {}
     todo: list[Run] = []
     done: list[Run] = []
     for run in sweep.runs:
         state = run_state(run, prints[run.key])
         states.setdefault(state, []).append(run.key)
-        if state == "done":
+        if state in ("done", "failed"):
             done.append(run)
         else:
             todo.append(run.continued() if state == "paused" else run)

@@ -113,9 +113,11 @@ class TrialRunner:
         """``origin`` heads each run's log (``tune <name>, <method> trial <k>``) and tags the progress lines."""
         started = time.monotonic()
         prints = {run.key: fingerprint(run_config(self.tuning, run)) for run in runs}
-        done = [run for run in runs if run_state(run, prints[run.key]) == "done"]
+        states = {run.key: run_state(run, prints[run.key]) for run in runs}
+        done = [run for run in runs if states[run.key] in ("done", "failed")]  # a non-finite loss stays the outcome
         if done:
-            self.echo(f"        kept finished run(s) of an earlier attempt: {', '.join(r.task for r in done)}")
+            kept = ", ".join(f"{r.task} ({states[r.key]})" for r in done)
+            self.echo(f"        kept run(s) of an earlier attempt: {kept}")
         grid = study_sweep(self.tuning, runs[0].run_dir.parent, runs)
         executor = SweepExecutor(grid, self.launcher, self.retries, self.echo, origin=origin, tag=origin)
         watch = TrialWatch(self.tuning, runs, trial, executor)
