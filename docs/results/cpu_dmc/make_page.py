@@ -14,7 +14,6 @@ A failed run counts as return 0, as the tuning page counts it.
 from __future__ import annotations
 
 import csv
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +21,7 @@ import numpy as np
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, seeds_text
 from refpo_warp.studies.reports.intervals import aggregate, improvement
-from refpo_warp.studies.reports.results_page import main_args, write_page
+from refpo_warp.studies.reports.results_page import page_main
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
@@ -164,13 +163,7 @@ def values() -> dict[str, object]:
 
 
 def main() -> None:
-    parser = main_args(__doc__.splitlines()[0])
-    parser.add_argument("--add-runs", nargs="*", default=[], type=Path, help="sweep dirs whose new seeds to add")
-    args = parser.parse_args()
-    for sweep_dir in args.add_runs:
-        add_runs(sweep_dir)
-    same = write_page(HERE / "README.template.md", values(), check=args.check)
-    sys.exit(0 if same or not args.check else 1)
+    page_main(__doc__.splitlines()[0], HERE / "README.template.md", values, add_runs)
 
 
 if __name__ == "__main__":

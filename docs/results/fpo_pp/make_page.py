@@ -26,7 +26,6 @@ Intervals: rliable's stratified bootstrap (``refpo_warp/studies/reports/interval
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from fpo_pp_runs import (
@@ -76,7 +75,7 @@ from grad_norms import grad_norm_text, small_recipe_text
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs
-from refpo_warp.studies.reports.results_page import main_args, write_page
+from refpo_warp.studies.reports.results_page import page_main
 
 
 # ------------------------------------------------------------------------------------------------ adding runs
@@ -256,13 +255,7 @@ def values() -> dict[str, object]:
 
 
 def main() -> None:
-    parser = main_args(__doc__.splitlines()[0])
-    parser.add_argument("--add-runs", nargs="*", default=[], type=Path, help="sweep dirs whose new runs to add")
-    args = parser.parse_args()
-    for sweep_dir in args.add_runs:
-        add_runs(sweep_dir)
-    same = write_page(HERE / "README.template.md", values(), check=args.check)
-    sys.exit(0 if same or not args.check else 1)
+    page_main(__doc__.splitlines()[0], HERE / "README.template.md", values, add_runs)
 
 
 if __name__ == "__main__":

@@ -13,10 +13,9 @@ from __future__ import annotations
 
 import ast
 import re
-import sys
 from pathlib import Path
 
-from refpo_warp.studies.reports.results_page import main_args, write_page
+from refpo_warp.studies.reports.results_page import page_main
 
 HERE = Path(__file__).resolve().parent
 DOC = HERE.parents[2] / "docs" / "humanoid.md"
@@ -49,11 +48,7 @@ def rows() -> str:
 
 
 def main() -> None:
-    args = main_args(__doc__.split("\n\n")[0]).parse_args()
-    same = write_page(HERE / "README.template.md", {"scripts_table": rows()}, check=args.check)
-    if args.check and not same:
-        sys.exit(1)
-    print(f"{HERE / 'README.md'}: {'unchanged' if same else 'written'}")
+    page_main(__doc__.split("\n\n")[0], HERE / "README.template.md", lambda: {"scripts_table": rows()})
 
 
 if __name__ == "__main__":

@@ -8,12 +8,11 @@ the JSON files ``refpo bench train ... out=<task>.json`` wrote here (one per tas
 from __future__ import annotations
 
 import json
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from refpo_warp.studies.reports.results_page import main_args, write_page
+from refpo_warp.studies.reports.results_page import page_main
 
 HERE = Path(__file__).resolve().parent
 TASKS = ("dmc_point_mass", "dmc_cartpole_swingup")
@@ -278,11 +277,10 @@ def ceiling() -> str:
     )
 
 
-def main() -> None:
-    args = main_args(__doc__.splitlines()[1]).parse_args()
+def values() -> dict[str, object]:
     runs = {task: load(task) for task in TASKS}
     first = next(iter(runs.values()))["results"][0]
-    values = {
+    return {
         "sizes": f"{first['num_envs']} envs x {first['num_steps_per_env']} steps = "
         f"{first['env_steps_per_iteration']:,} env steps per iteration",
         "warmup": f"{first['warmup']} warm-up iteration{'s' if first['warmup'] != 1 else ''} (not timed)",
@@ -295,8 +293,10 @@ def main() -> None:
         "changes": changes(),
         "ceiling": ceiling(),
     }
-    same = write_page(HERE / "README.template.md", values, check=args.check)
-    sys.exit(0 if same or not args.check else 1)
+
+
+def main() -> None:
+    page_main(__doc__.splitlines()[1], HERE / "README.template.md", values)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import functools
 import itertools
-import sys
 from pathlib import Path
 
 import matplotlib
@@ -27,7 +26,7 @@ from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, read_jsonl, read_rows, seeds_text
 from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
 from refpo_warp.studies.reports.phrases import and_list, value_range
-from refpo_warp.studies.reports.results_page import main_args, write_page
+from refpo_warp.studies.reports.results_page import page_main
 from refpo_warp.utils.atomic_files import save_figure
 
 HERE = Path(__file__).resolve().parent
@@ -373,15 +372,14 @@ def values() -> dict[str, object]:
     }
 
 
+def add_runs(sweep_dir: Path) -> None:
+    """Append the sweep's finished runs to runs.csv, copying their small files under runs/."""
+    added = append_runs(sweep_dir, RUNS_CSV, RUNS_DIR, ROOT)
+    print(f"{RUNS_CSV.relative_to(ROOT)}: {added} run(s) added from {sweep_dir}")
+
+
 def main() -> None:
-    parser = main_args(__doc__.splitlines()[0])
-    parser.add_argument("--add-runs", nargs="*", default=[], type=Path, help="sweep dirs whose finished runs to add")
-    args = parser.parse_args()
-    for sweep_dir in args.add_runs:
-        added = append_runs(sweep_dir, RUNS_CSV, RUNS_DIR, ROOT)
-        print(f"{RUNS_CSV.relative_to(ROOT)}: {added} run(s) added from {sweep_dir}")
-    same = write_page(HERE / "README.template.md", values(), check=args.check)
-    sys.exit(0 if same or not args.check else 1)
+    page_main(__doc__.splitlines()[0], HERE / "README.template.md", values, add_runs)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import difflib
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -131,6 +131,26 @@ def main_args(description: str):
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--check", action="store_true", help="compare the page with what the data says; exit 1 if not")
     return parser
+
+
+def page_main(
+    description: str,
+    template: Path,
+    values: Callable[[], Mapping[str, object]],
+    add_runs: Callable[[Path], None] | None = None,
+) -> None:
+    """A page script's command line: write its page from ``values()`` (``--check``: compare, exit 1 on a difference).
+    With ``add_runs``, ``--add-runs DIR ...`` first adds each sweep dir's finished runs to the page's committed data."""
+    import sys
+
+    parser = main_args(description)
+    if add_runs is not None:
+        parser.add_argument("--add-runs", nargs="*", default=[], type=Path, help="sweep dirs whose new runs to add")
+    args = parser.parse_args()
+    for sweep_dir in getattr(args, "add_runs", []):
+        add_runs(sweep_dir)
+    same = write_page(template, values(), check=args.check)
+    sys.exit(0 if same or not args.check else 1)
 
 
 def main() -> None:
