@@ -168,6 +168,8 @@ def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Estimate]]]:
             cells.append(f"{p.text(2)}: {verdict(p, 'flow')}")
         if label in found:
             lines.append(f"| {METHODS[label]} | {seeds_text(sorted(seeds))} | " + " | ".join(cells) + " |")
+    if not found:
+        return "(no flow method has a seed in common with PPO on both tasks yet)", found
     return "\n".join(lines), found
 
 
@@ -253,7 +255,10 @@ def movement(p0: Estimate, p1: Estimate) -> str:
 def answer(found: dict[str, dict[int, Estimate]]) -> str:
     """Per flow method: the probability of beating PPO at the smallest and the largest budget both reached."""
     if not found:
-        return "No flow method and PPO share a committed seed yet: the page answers when they do."
+        return (
+            "Not yet: the comparison pairs seeds over both tasks, and no flow method and PPO share a committed seed on "
+            "both; the page answers when they do."
+        )
     lines = []
     for label, by_budget in found.items():
         first, last = min(by_budget), max(by_budget)
