@@ -221,14 +221,14 @@ class SweepExecutor:
                             f"[{self.tag}] not retrying {job.run.key}: a non-finite loss is the run's outcome (a "
                             "retry repeats it); it is kept as it stopped, by this sweep and the next"
                         )
-                    if job.attempt <= self.retries and rc != EXIT_NONFINITE:
+                    elif job.attempt <= self.retries:
                         self.echo(f"[{self.tag}] retrying {job.run.key} from scratch (attempt {job.attempt + 1})")
                         queue.appendleft((job.run.from_scratch(), job.attempt + 1))
-                    else:
-                        done_count += 1
-                        earlier = " (earlier attempts: train.attempt*.log beside it)" if job.attempt > 1 else ""
-                        summary.failed.append((job.run.key, f"{why}, {job.attempt} attempt(s); log {job.log}{earlier}"))
-                        self._record(job.run, state="failed")
+                        continue
+                    done_count += 1
+                    earlier = " (earlier attempts: train.attempt*.log beside it)" if job.attempt > 1 else ""
+                    summary.failed.append((job.run.key, f"{why}, {job.attempt} attempt(s); log {job.log}{earlier}"))
+                    self._record(job.run, state="failed")
                 summary.stopped = watch(summary) if watch is not None else ""
                 if summary.stopped:
                     self._stop(running, "stopped")
