@@ -70,29 +70,46 @@ def grad_norm_text(runs: dict[str, list[Path]], joint_runs: list[Path], max_norm
     )
 
 
-def small_recipe_text(folders: list[Path]) -> str:
-    """What the small-task recipe's runs logged: the share of iterations its adaptive learning rate spent at the
-    schedule's upper bound, the KL estimate it steers by against the band that raises the rate, and the joint clip's
-    factor on the actor's gradient (the recipe clips actor and critic together)."""
-    logged = [(f, read_jsonl(f / "progress_train.jsonl")) for f in folders if (f / "progress_train.jsonl").exists()]
-    logged = [(f, rows) for f, rows in logged if rows and all(k in rows[0] for k in (LR, KL, ACTOR, CRITIC))]
+def small_recipe_text(runs: dict[str, list[Path]]) -> str:
+    """What the small-task recipe's runs (by task) logged: the share of iterations its adaptive learning rate spent at
+    the schedule's upper bound, the KL estimate it steers by against the band that raises the rate, and, per task, the
+    joint clip's factor on the actor's gradient (the recipe clips actor and critic together)."""
+    logged = {
+        task: [rows for rows in (read_jsonl(f / "progress_train.jsonl") for f in folders if has_progress(f)) if rows]
+        for task, folders in runs.items()
+    }
+    logged = {t: [r for r in rs if all(k in r[0] for k in (LR, KL, ACTOR, CRITIC))] for t, rs in logged.items()}
+    logged = {t: rs for t, rs in logged.items() if rs}
     if not logged:
         return ""
-    cfg = load_yaml(logged[0][0] / "config.yaml")["algorithm"]
+    first = next(f for folders in runs.values() for f in folders if has_progress(f))
+    cfg = load_yaml(first / "config.yaml")["algorithm"]
     desired, max_norm, top = float(cfg["desired_kl"]), float(cfg["max_grad_norm"]), ADAPTIVE_LR_RANGE[1]
-    at_top = [sum(r[LR] >= top for r in rows) / len(rows) for _, rows in logged]
-    below = [sum(r[KL] < desired / 2 for r in rows) / len(rows) for _, rows in logged]
-    kl = [statistics.median(r[KL] for r in rows) for _, rows in logged]
-    factor = [statistics.median(joint_factor(r[ACTOR], r[CRITIC], max_norm) for r in rows) for _, rows in logged]
-    critic = [statistics.median(r[CRITIC] for r in rows) for _, rows in logged]
-    actor = [statistics.median(r[ACTOR] for r in rows) for _, rows in logged]
+    every = [rows for rs in logged.values() for rows in rs]
+    at_top = [sum(r[LR] >= top for r in rows) / len(rows) for rows in every]
+    below = [sum(r[KL] < desired / 2 for r in rows) / len(rows) for rows in every]
+    kl = [statistics.median(r[KL] for r in rows) for rows in every]
     shares = [span([100 * a for a in at_top], ".0f"), span([100 * b for b in below], ".0f")]
+
+    def clip(task: str, rs: list[list[dict]]) -> str:
+        factor = [statistics.median(joint_factor(r[ACTOR], r[CRITIC], max_norm) for r in rows) for rows in rs]
+        critic = [statistics.median(r[CRITIC] for r in rows) for rows in rs]
+        actor = [statistics.median(r[ACTOR] for r in rows) for rows in rs]
+        return (
+            f"{span(factor, '.2g', ' to ')} on {task} ({len(rs)} run{'s' if len(rs) != 1 else ''}; the critic's "
+            f"median norm {span(critic, '.0f')}, the actor's {span(actor, '.2f')})"
+        )
+
     return (
-        f"**What the small-task recipe's runs logged** ({len(logged)} runs, each run's `progress_train.jsonl`): its "
+        f"**What the small-task recipe's runs logged** ({len(every)} runs, each run's `progress_train.jsonl`): its "
         f"adaptive learning rate sat at the schedule's upper bound, {top:g}, in {shares[0]} % of iterations; the KL "
         "estimate it steers by (the change of the noise-end prediction, `Flow/noise_prediction_kl`) had a median of "
         f"{span(kl, '.1e', ' to ')} a run and was below half the desired {desired:g}, which raises the rate, in "
         f"{shares[1]} % of iterations. Its joint clip of {max_norm:g} multiplied the actor's gradient by a median "
-        f"{span(factor, '.2g', ' to ')} a run: the critic's median norm was {span(critic, '.0f')}, the actor's "
-        f"{span(actor, '.2f')}."
+        + "; ".join(clip(task, rs) for task, rs in logged.items())
+        + "."
     )
+
+
+def has_progress(folder: Path) -> bool:
+    return (folder / "progress_train.jsonl").exists()

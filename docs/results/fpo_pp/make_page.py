@@ -225,7 +225,7 @@ def values() -> dict[str, object]:
     v["lr_text"] = lr_text(data, ms)
     v["clip_text"] = clip_text(data, ms)
     max_norm = (run_config(ms[AUTHORS], TASKS[1]) or {}).get("algorithm.max_grad_norm", 1.0)
-    v["small_recipe_text"] = small_recipe_text([d for t in TASKS for d in run_dirs(RUNS, t, SMALL)])
+    v["small_recipe_text"] = small_recipe_text({short(t): run_dirs(RUNS, t, SMALL) for t in TASKS})
     v["grad_norm_text"] = grad_norm_text(
         {label: run_dirs(RUNS, TASKS[1], label) for label in CLIP_LABELS}, run_dirs(RUNS, TASKS[1], AUTHORS), max_norm
     )
