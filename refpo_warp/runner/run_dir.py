@@ -11,10 +11,8 @@ from pathlib import Path
 
 from refpo_warp.config.saved import IDENTITY_KEYS, RUN_CONFIG
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.utils.errors import ConfigError, DataFileError
+from refpo_warp.utils.errors import STOPPED_FILE, ConfigError, DataFileError
 
-# Written when a non-finite loss stops the run: the run's outcome, which a sweep keeps instead of continuing it.
-STOPPED_FILE = "stopped.json"
 # Files a run writes into its directory (glob patterns): only their interrupted temp files are ever removed.
 RUN_FILES = (
     "model_*.pt",

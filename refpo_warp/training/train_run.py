@@ -32,14 +32,14 @@ from refpo_warp.runner.build import build_runner, env_steps_per_iteration, num_i
 from refpo_warp.runner.checkpoints import checkpoint_progress, latest_checkpoint, load_latest
 from refpo_warp.runner.distributed import process_rank
 from refpo_warp.runner.progress import progress_path, read_rows, truncate_after
-from refpo_warp.runner.run_dir import RUN_FILES, STOPPED_FILE, check_new_run_dir, check_writable, run_lock
+from refpo_warp.runner.run_dir import RUN_FILES, check_new_run_dir, check_writable, run_lock
 from refpo_warp.runner.run_state import RUN_STATE_KEY, restore_run_state
 from refpo_warp.runner.runner import Runner
 from refpo_warp.training.fine_tuning import actor_frozen, clone_statistics_kept
 from refpo_warp.training.init_from import load_init_from
 from refpo_warp.training.pieces import PieceEnd
 from refpo_warp.utils.atomic_files import remove_stale_temp_files, write_json
-from refpo_warp.utils.errors import ConfigError, NonFiniteLossError, tag_run_dir
+from refpo_warp.utils.errors import STOPPED_FILE, ConfigError, NonFiniteLossError, tag_run_dir
 
 
 def train(overrides: list[str] | dict[str, Any] | None = None) -> dict:

@@ -15,6 +15,9 @@ from pathlib import Path
 # The exit code of each (docs/cli.md); a sweep reads a run's to tell a non-finite loss, a result, from a crash.
 EXIT_OK, EXIT_UNEXPECTED, EXIT_USAGE, EXIT_NONFINITE, EXIT_BAD_FILE, EXIT_SYSTEM = 0, 1, 2, 3, 4, 5
 EXIT_INTERRUPTED = 130
+# What a run stopped by a non-finite loss leaves in its run dir (and exits EXIT_NONFINITE): where and why it stopped.
+# A sweep keeps such a run as failed instead of continuing it (a retry repeats the failure).
+STOPPED_FILE = "stopped.json"
 
 
 class ConfigError(ValueError):

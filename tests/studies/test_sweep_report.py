@@ -15,7 +15,7 @@ import yaml
 from refpo_warp.studies.grid.run_metrics import headline_setting, run_metrics
 from refpo_warp.studies.grid.spec import fingerprint
 from refpo_warp.studies.reports.figures import seed_mean
-from refpo_warp.studies.reports.report import write_report
+from refpo_warp.studies.reports.report import load_record, write_report
 from refpo_warp.studies.reports.tables import aggregate, fmt_number
 from refpo_warp.utils.paths import REPO_ROOT
 
@@ -194,6 +194,20 @@ def test_per_task_csv_and_runs_csv(sweep_dir):
     assert failed["status"] == "failed" and failed["return_multi"] == ""
     flagged = next(r for r in runs if (r["task"], r["label"], r["seed"]) == ("dmc_b", "refpo", "2"))
     assert (flagged["health"], flagged["return_1_zero"], flagged["minutes"]) == ("cliff_detected", "600.0", "5.0")
+
+
+def test_a_run_stopped_by_a_non_finite_loss_is_failed_whatever_status_json_says(tmp_path):
+    run_dir = tmp_path / "dmc_a" / "fpo" / "seed1"
+    run_dir.mkdir(parents=True)
+    entry = {"task": "dmc_a", "label": "fpo", "seed": 1, "run_dir": "dmc_a/fpo/seed1"}
+    interrupted = {"state": "interrupted"}  # e.g. a later invocation continued it and was stopped
+    assert (load_record(tmp_path, entry, interrupted).status, load_record(tmp_path, entry, interrupted).note) == (
+        "missing",
+        "interrupted",
+    )
+    (run_dir / "stopped.json").write_text(json.dumps({"reason": "non-finite loss"}))
+    record = load_record(tmp_path, entry, interrupted)
+    assert record.status == "failed" and "stopped by a non-finite loss" in record.note
 
 
 def test_figures_written(sweep_dir):

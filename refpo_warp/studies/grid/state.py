@@ -12,7 +12,7 @@ import yaml
 
 from refpo_warp.config.yaml_files import dump_config, load_yaml
 from refpo_warp.studies.grid.spec import Run, Sweep, fingerprint
-from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.errors import STOPPED_FILE, ConfigError
 
 SPEC_FILE = "sweep.yaml"
 STATUS_FILE = "status.json"
@@ -38,7 +38,6 @@ def run_state(run: Run, expected: str) -> str:
     if report.get("task") == run.task and report.get("algo") == run.method.algo:
         return "done"
     from refpo_warp.runner.checkpoints import list_checkpoints  # torch: not for a Ray worker's light imports
-    from refpo_warp.runner.run_dir import STOPPED_FILE
 
     if (run.run_dir / STOPPED_FILE).exists():
         return "failed"

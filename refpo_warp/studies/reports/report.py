@@ -49,7 +49,7 @@ from refpo_warp.studies.reports.tables import (
     to_csv,
 )
 from refpo_warp.utils.atomic_files import write_text
-from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.errors import STOPPED_FILE, ConfigError
 
 REPORT_DIR = "report"
 
@@ -84,9 +84,13 @@ def load_spec(sweep_dir: Path) -> dict:
 
 def _missing(record: RunRecord, status: dict) -> RunRecord:
     state = status.get("state", "")
+    stopped = record.run_dir / STOPPED_FILE  # the run's own record, whatever a later invocation left in status.json
     if state == "failed":
         record.status = "failed"
         record.note = f"exit codes {status.get('exit_codes')}; log {status.get('log')}"
+    elif stopped.exists():
+        record.status = "failed"
+        record.note = f"stopped by a non-finite loss ({stopped}); log {record.run_dir / 'train.log'}"
     else:
         record.status = "missing"
         record.note = {"interrupted": "interrupted", "running": "was running (or the sweep stopped)"}.get(

@@ -147,8 +147,9 @@ def page_main(
     if add_runs is not None:
         parser.add_argument("--add-runs", nargs="*", default=[], type=Path, help="sweep dirs whose new runs to add")
     args = parser.parse_args()
-    for sweep_dir in getattr(args, "add_runs", []):
-        add_runs(sweep_dir)
+    if add_runs is not None:
+        for sweep_dir in args.add_runs:
+            add_runs(sweep_dir)
     same = write_page(template, values(), check=args.check)
     sys.exit(0 if same or not args.check else 1)
 
