@@ -198,12 +198,21 @@ def what_ran() -> tuple[str, str]:
         if not mine:
             continue
         tasks = sorted({r["task"] for r in mine}, key=TASKS.index)
-        seeds = sorted({int(r["seed"]) for r in mine})
-        where = "the three tasks" if len(tasks) == len(TASKS) else ", ".join(short(t) for t in tasks)
+        by_task = {t: sorted({int(r["seed"]) for r in mine if r["task"] == t}) for t in tasks}
+
+        def seeds_of(seeds: list[int]) -> str:
+            return f"seed{'s' if len(seeds) > 1 else ''} {seeds_text(seeds)}"
+
+        if len(set(map(tuple, by_task.values()))) == 1:  # the same seeds on every task
+            where = "the three tasks" if len(tasks) == len(TASKS) else ", ".join(short(t) for t in tasks)
+            ran = f"on {where}, {seeds_of(by_task[tasks[0]])}"
+        else:
+            ran = ", ".join(f"on {short(t)} {seeds_of(seeds)}" for t, seeds in by_task.items())
         failed = sum(r["status"] == "failed" for r in mine)
         parts.append(
-            f"`{m['label']}` on {where}, seed{'s' if len(seeds) > 1 else ''} {seeds_text(seeds)} "
-            f"({len(mine)} run{'s' if len(mine) > 1 else ''}" + (f", {failed} failed" if failed else "") + ")"
+            f"`{m['label']}` {ran} ({len(mine)} run{'s' if len(mine) > 1 else ''}"
+            + (f", {failed} failed" if failed else "")
+            + ")"
         )
     missing = [f"`{m['label']}`" for m in spec["methods"] if not any(r["label"] == m["label"] for r in rows)]
     return "; ".join(parts), (", ".join(missing) if missing else "none")
