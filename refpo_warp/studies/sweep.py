@@ -54,17 +54,17 @@ def run_sweep(
         "stale": "stale: config changed (rerun from scratch)",
     }
     if dry_run:
-        todo, done, states = plan(sweep, prints)
+        todo, kept, states = plan(sweep, prints)
         echo("[sweep] " + ", ".join(f"{len(v)} {words[k]}" for k, v in states.items()))
         for run in sweep.runs:
             state = next(k for k, v in states.items() if run.key in v)
             echo(f"  {state:10s} {run.key}: refpo train {shlex.join(run.args)}")
-        return Summary(total=len(sweep.runs), skipped=[r.key for r in done])
+        return Summary(total=len(sweep.runs), skipped=[run.key for run, _ in kept])
     runner = make_launcher(backend, sweep, jobs, launcher, ray, echo)
     try:
         lock = SweepLock(sweep.out_dir)
         try:
-            todo, done, states = plan(sweep, prints)
+            todo, kept, states = plan(sweep, prints)
             runner.prepare(sweep)
             echo(
                 "[sweep] "
@@ -72,7 +72,7 @@ def run_sweep(
                 + f"; {runner.jobs} at a time {runner.where}"
             )
             write_spec(sweep, prints)
-            summary = SweepExecutor(sweep, runner, retries, echo).execute(todo, prints, done)
+            summary = SweepExecutor(sweep, runner, retries, echo).execute(todo, prints, kept)
         finally:
             lock.release()
     finally:

@@ -153,12 +153,14 @@ class SweepExecutor:
         return "  ".join(f"{k} {v['return_mean']:.1f}" for k, v in results.items() if "return_mean" in v)
 
     # ------------------------------------------------------------------------------------------------ main loop
-    def execute(self, todo: list[Run], prints: dict[str, str], kept: list[Run], watch: Watch | None = None) -> Summary:
-        """Train ``todo`` (``prints``: each run's config fingerprint by key; ``kept``: runs already done, or stopped
-        by a non-finite loss). ``watch`` may stop the runs left: they are stopped as on Ctrl-C; the summary says why."""
+    def execute(
+        self, todo: list[Run], prints: dict[str, str], kept: list[tuple[Run, str]], watch: Watch | None = None
+    ) -> Summary:
+        """Train ``todo`` (``prints``: each run's config fingerprint by key; ``kept``: runs not trained again, each
+        with its state: ``done``, or ``failed`` when a non-finite loss stopped it). ``watch`` may stop the runs left:
+        they are stopped as on Ctrl-C; the summary says why."""
         summary = Summary(total=len(todo) + len(kept))
-        for run in kept:
-            state = run_state(run, prints[run.key])
+        for run, state in kept:
             self._record(run, state=state)
             if state == "failed":
                 summary.failed.append(

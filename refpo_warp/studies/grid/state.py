@@ -17,6 +17,7 @@ from refpo_warp.utils.errors import STOPPED_FILE, ConfigError
 SPEC_FILE = "sweep.yaml"
 STATUS_FILE = "status.json"
 LOG_FILE = "train.log"
+KEPT_STATES = ("done", "failed")  # not trained again: a finished run, or one a non-finite loss stopped (its outcome)
 
 
 def run_state(run: Run, expected: str) -> str:
@@ -97,17 +98,17 @@ def write_spec(sweep: Sweep, prints: dict[str, str]) -> Path:
     return path
 
 
-def plan(sweep: Sweep, prints: dict[str, str]) -> tuple[list[Run], list[Run], dict[str, list[str]]]:
-    """(runs to train, runs kept as they are: done or failed, run keys per state) for the current state of the sweep
-    dir; a paused run is continued from its newest checkpoint."""
+def plan(sweep: Sweep, prints: dict[str, str]) -> tuple[list[Run], list[tuple[Run, str]], dict[str, list[str]]]:
+    """(runs to train, runs kept as they are with their state: done or failed, run keys per state) for the current
+    state of the sweep dir; a paused run is continued from its newest checkpoint."""
     states: dict[str, list[str]] = {}
     todo: list[Run] = []
-    done: list[Run] = []
+    kept: list[tuple[Run, str]] = []
     for run in sweep.runs:
         state = run_state(run, prints[run.key])
         states.setdefault(state, []).append(run.key)
-        if state in ("done", "failed"):
-            done.append(run)
+        if state in KEPT_STATES:
+            kept.append((run, state))
         else:
             todo.append(run.continued() if state == "paused" else run)
-    return todo, done, states
+    return todo, kept, states

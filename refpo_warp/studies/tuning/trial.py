@@ -17,7 +17,7 @@ from typing import Any
 from refpo_warp.studies.grid.executor import Launcher, Summary, SweepExecutor
 from refpo_warp.studies.grid.run_metrics import run_metrics
 from refpo_warp.studies.grid.spec import Run, Sweep, fingerprint
-from refpo_warp.studies.grid.state import LOG_FILE, run_state
+from refpo_warp.studies.grid.state import KEPT_STATES, LOG_FILE, run_state
 from refpo_warp.studies.tuning.spec import Tuning
 from refpo_warp.studies.tuning.values import run_config
 
@@ -114,14 +114,14 @@ class TrialRunner:
         started = time.monotonic()
         prints = {run.key: fingerprint(run_config(self.tuning, run)) for run in runs}
         states = {run.key: run_state(run, prints[run.key]) for run in runs}
-        done = [run for run in runs if states[run.key] in ("done", "failed")]  # a non-finite loss stays the outcome
-        if done:
-            kept = ", ".join(f"{r.task} ({states[r.key]})" for r in done)
-            self.echo(f"        kept run(s) of an earlier attempt: {kept}")
+        kept = [(run, states[run.key]) for run in runs if states[run.key] in KEPT_STATES]
+        todo = [run for run in runs if states[run.key] not in KEPT_STATES]
+        if kept:
+            self.echo("        kept run(s) of an earlier attempt: " + ", ".join(f"{r.task} ({s})" for r, s in kept))
         grid = study_sweep(self.tuning, runs[0].run_dir.parent, runs)
         executor = SweepExecutor(grid, self.launcher, self.retries, self.echo, origin=origin, tag=origin)
         watch = TrialWatch(self.tuning, runs, trial, executor)
-        summary = executor.execute([r for r in runs if r not in done], prints, done, watch)
+        summary = executor.execute(todo, prints, kept, watch)
         seconds = time.monotonic() - started
         if summary.interrupted:
             return TrialResult("interrupted", None, {}, seconds)
