@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import itertools
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
@@ -142,19 +143,32 @@ def paired(rows: list[dict], label: str, multiple: int) -> tuple[np.ndarray, np.
     )
 
 
-def verdict(p: Estimate, name: str) -> str:
-    if p.low > 0.5:
-        return f"{name} ahead"
-    if p.high < 0.5:
-        return "PPO ahead"
-    return "not separated"
+@dataclass(frozen=True)
+class Gap:
+    """P(the flow at N = 10 beats PPO) at one budget, over ``seeds`` seeds paired on both tasks. One seed leaves the
+    bootstrap nothing to resample: its interval is the point itself and separates nothing."""
+
+    p: Estimate
+    seeds: int
+
+    @property
+    def separates(self) -> bool:
+        return self.seeds > 1 and self.p.separates
+
+    def text(self, name: str) -> str:
+        """The estimate, its interval and who it says leads (``name``: the flow's)."""
+        if self.seeds < 2:
+            return f"{self.p.point:.2f} (one seed, no interval)"
+        if self.p.low > 0.5:
+            return f"{self.p.text(2)}: {name} ahead"
+        return f"{self.p.text(2)}: {'PPO ahead' if self.p.high < 0.5 else 'not separated'}"
 
 
-def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Estimate]]]:
+def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Gap]]]:
     """P(a run of the flow at N = 10 beats a run of PPO) at each budget over both tasks, and the estimates."""
     header = ["method", "seeds", *(f"{m}x" for m in multiples())]
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    found: dict[str, dict[int, Estimate]] = {}
+    found: dict[str, dict[int, Gap]] = {}
     for label in FLOWS:
         cells, seeds = [], set()
         for m in multiples():
@@ -162,10 +176,10 @@ def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Estimate]]]:
             if pair is None:
                 cells.append("--")
                 continue
-            p = improvement(pair[0], pair[1])
-            found.setdefault(label, {})[m] = p
+            gap = Gap(improvement(pair[0], pair[1]), len(pair[2]))
+            found.setdefault(label, {})[m] = gap
             seeds |= set(pair[2])
-            cells.append(f"{p.text(2)}: {verdict(p, 'flow')}")
+            cells.append(gap.text("flow"))
         if label in found:
             lines.append(f"| {METHODS[label]} | {seeds_text(sorted(seeds))} | " + " | ".join(cells) + " |")
     if not found:
@@ -236,8 +250,9 @@ def health_verdicts(rows: list[dict]) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ the answer
-def movement(p0: Estimate, p1: Estimate) -> str:
+def movement(g0: Gap, g1: Gap) -> str:
     """How the probability of improvement moved between two budgets, in words of who leads."""
+    p0, p1 = g0.p, g1.p
     leader = "PPO's lead" if p0.point < 0.5 else "the flow's lead"
     if p1.point == p0.point:
         moved = f"{leader} holds"
@@ -246,13 +261,15 @@ def movement(p0: Estimate, p1: Estimate) -> str:
     else:
         toward_flow = p1.point > p0.point
         moved = f"{leader} {'narrows' if toward_flow == (p0.point < 0.5) else 'widens'}"
-    both = p0.separates and p1.separates
+    if min(g0.seeds, g1.seeds) < 2:
+        return f"by the point estimates {moved}; one seed separates nothing"
+    both = g0.separates and g1.separates
     return (
         f"by the point estimates {moved}; {'both intervals leave out' if both else 'not both intervals leave out'} 0.5"
     )
 
 
-def answer(found: dict[str, dict[int, Estimate]]) -> str:
+def answer(found: dict[str, dict[int, Gap]]) -> str:
     """Per flow method: the probability of beating PPO at the smallest and the largest budget both reached."""
     if not found:
         return (
@@ -262,14 +279,13 @@ def answer(found: dict[str, dict[int, Estimate]]) -> str:
     lines = []
     for label, by_budget in found.items():
         first, last = min(by_budget), max(by_budget)
-        p0, p1 = by_budget[first], by_budget[last]
+        g0, g1 = by_budget[first], by_budget[last]
         if first == last:
-            lines.append(f"- **{METHODS[label]}**: only {first}x reached so far: {p0.text(2)} ({verdict(p0, 'it')}).")
+            lines.append(f"- **{METHODS[label]}**: only {first}x reached so far: {g0.text('it')}.")
             continue
         lines.append(
-            f"- **{METHODS[label]}** against PPO: P(improvement) {p0.text(2)} at {first}x "
-            f"({verdict(p0, METHODS[label])}), {p1.text(2)} at {last}x ({verdict(p1, METHODS[label])}): "
-            f"{movement(p0, p1)}."
+            f"- **{METHODS[label]}** against PPO: P(improvement) {g0.text(METHODS[label])} at {first}x, "
+            f"{g1.text(METHODS[label])} at {last}x: {movement(g0, g1)}."
         )
     return "\n".join(lines)
 
