@@ -291,10 +291,10 @@ def answer(found: dict[str, dict[int, Gap]]) -> str:
 
 
 def degradation(rows: list[dict]) -> str:
-    """The paper's Figure 3 question on point_mass: does FPO fall from its best budget where ReFPO holds?"""
-    task = "dmc_point_mass"
+    """The paper's Figure 3 question (there on point_mass; here on every task): does FPO fall from its best budget
+    where ReFPO holds?"""
     lines = []
-    for label in ("fpo", "refpo"):
+    for task, label in itertools.product(TASKS, ("fpo", "refpo")):
         means = {m: scores(rows, label, task, m, "10") for m in multiples()}
         means = {m: v for m, v in means.items() if v}
         if len(means) < 2:
@@ -307,11 +307,18 @@ def degradation(rows: list[dict]) -> str:
                 f"{last}x, {mean_cell(means[last])}."
             )
             continue
+        runs = [r for r in rows if (r["task"], r["label"]) == (task, label)]
+        failed = sum(r["status"] == "failed" for r in runs)
         lines.append(
             f"- {METHODS[label]} on `{task}` (N = 10): best at {best}x, {mean_cell(means[best])}; at {last}x, "
-            f"{mean_cell(means[last])}."
+            f"{mean_cell(means[last])}"
+            + (
+                f" ({failed} of its {len(runs)} run(s) stopped on a non-finite loss before {last}x, counted as zero)."
+                if failed
+                else "."
+            )
         )
-    return "\n".join(lines) if lines else "- Not enough committed runs on `dmc_point_mass` yet."
+    return "\n".join(lines) if lines else "- Not enough committed runs yet."
 
 
 # ------------------------------------------------------------------------------------------------ figure
