@@ -128,6 +128,14 @@ def common_matrix(runs: dict[str, dict[int, float]]) -> np.ndarray | None:
     return np.array([[runs[t][s] for t in TASKS] for s in seeds]) if seeds else None
 
 
+def seed_count(runs: dict[str, dict[int, float]], task: str | None) -> int:
+    """The seeds ``poi`` compares on ``task`` (None: the seeds every task has)."""
+    if task is not None:
+        return len(runs[task])
+    matrix = common_matrix(runs)
+    return 0 if matrix is None else len(matrix)
+
+
 # ------------------------------------------------------------------------------------------------ intervals
 _CELLS: dict[tuple, str] = {}
 

@@ -27,6 +27,7 @@ from fpo_pp_runs import (
     poi,
     read_rows,
     run_config,
+    seed_count,
     separates,
     short,
     short_verdict,
@@ -84,7 +85,7 @@ def poi_rows(pairs, ms, data, settings=("multi", "headline")) -> tuple[list[str]
             if all(p is None for p in ps.values()):
                 continue
             where = short(task) if task else "the three tasks"
-            if task is not None and min(len(data[x][settings[0]][task]), len(data[y][settings[0]][task])) < 2:
+            if min(seed_count(data[x][settings[0]], task), seed_count(data[y][settings[0]], task)) < 2:
                 # one seed's bootstrap is that seed: its interval is a point, whatever the runs are
                 dashes = " | ".join("--" for _ in settings)
                 rows.append(f"| {where} | {label[0]} over {label[1]} | {dashes} | one seed on a side: not compared |")
