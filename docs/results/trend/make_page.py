@@ -251,16 +251,23 @@ def health_verdicts(rows: list[dict]) -> str:
 
 # ------------------------------------------------------------------------------------------------ the answer
 def movement(g0: Gap, g1: Gap) -> str:
-    """How the probability of improvement moved between two budgets, in words of who leads."""
-    p0, p1 = g0.p, g1.p
-    leader = "PPO's lead" if p0.point < 0.5 else "the flow's lead"
-    if p1.point == p0.point:
-        moved = f"{leader} holds"
-    elif (p0.point < 0.5) != (p1.point < 0.5) and p1.point != 0.5:
-        moved = f"{leader} turns into the other's"
+    """How the probability of improvement moved between two budgets, in words of who leads (one half: level)."""
+    p0, p1 = g0.p.point, g1.p.point
+
+    def side(p: float) -> str:
+        return "level" if p == 0.5 else "PPO" if p < 0.5 else "the flow"
+
+    s0, s1 = side(p0), side(p1)
+    if s0 == "level":
+        moved = "they stay level" if s1 == "level" else f"from level, {s1} moves ahead"
+    elif s1 == "level":
+        moved = f"{s0}'s lead closes to level"
+    elif s0 != s1:
+        moved = f"{s0}'s lead turns into {s1}'s"
+    elif p1 == p0:
+        moved = f"{s0}'s lead holds"
     else:
-        toward_flow = p1.point > p0.point
-        moved = f"{leader} {'narrows' if toward_flow == (p0.point < 0.5) else 'widens'}"
+        moved = f"{s0}'s lead {'narrows' if abs(p1 - 0.5) < abs(p0 - 0.5) else 'widens'}"
     if min(g0.seeds, g1.seeds) < 2:
         return f"by the point estimates {moved}; one seed separates nothing"
     both = g0.separates and g1.separates
