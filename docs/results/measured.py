@@ -361,17 +361,17 @@ def budget() -> str:
     )
     best_text = (
         f"{FLOW_NAMES[best]}, reaches tuned PPO's 95 % interval on {flows[best]['reach']} of {ntasks} tasks, with a "
-        f"probability of improvement over PPO of {poi.point:.2f} [{poi.low:.2f}, {poi.high:.2f}]"
+        f"probability of improvement over PPO of {poi.text(2)}"
     )
     ppo_leads = all(f["poi"].point < 0.5 for f in flows.values())
-    if all(f["poi"].high < 0.5 for f in flows.values()):
+    if all(f["poi"].side < 0 for f in flows.values()):
         verdict = f"with equal tuning, Gaussian PPO leads (the best tuned flow method, {best_text})"
     elif ppo_leads:
         verdict = (
             "with equal tuning, Gaussian PPO leads on the point estimates, not beyond their intervals (the best "
             f"tuned flow method, {best_text}, an interval that reaches 0.5)"
         )
-    elif poi.low > 0.5:
+    elif poi.side > 0:
         verdict = f"with equal tuning, a flow method leads PPO ({best_text})"
     else:
         verdict = f"with equal tuning, no method leads (the best tuned flow method, {best_text})"

@@ -35,6 +35,18 @@ def test_probability_of_improvement():
     assert improvement(x, y).point == pytest.approx(0.5)
 
 
+def test_one_run_on_a_side_compares_nothing():
+    """One run on a side leaves the bootstrap nothing to resample: the interval is the point, so even a point of 1
+    separates nothing and the text says there is no interval; two runs a side separate again."""
+    one = improvement(np.array([[2.0, 3.0]]), np.array([[1.0, 1.0], [0.0, 0.0]]))
+    assert (one.point, one.low, one.high) == (1.0, 1.0, 1.0)
+    assert not one.compared and not one.separates and one.side == 0
+    assert one.text(2) == "1.00 (one seed, no interval)"
+    two = improvement(np.array([[2.0, 3.0], [4.0, 5.0]]), np.array([[1.0, 1.0], [0.0, 0.0]]))
+    assert two.compared and two.side == 1 and two.text(2) == "1.00 [1.00, 1.00]"
+    assert improvement(np.zeros((2, 1)), np.ones((3, 1))).side == -1
+
+
 def test_intervals_are_reproducible_and_leave_numpys_generator_alone():
     scores = np.array([[765.0], [765.0], [365.0], [332.0], [720.0], [526.0]])
     np.random.seed(7)

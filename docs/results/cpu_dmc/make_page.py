@@ -80,9 +80,9 @@ def add_runs(sweep_dir: Path) -> None:
 # ------------------------------------------------------------------------------------------------ the page
 def verdict(p, x: str, y: str) -> str:
     """What a probability of improvement's interval says about x against y."""
-    if p.low > 0.5:
+    if p.side > 0:
         return f"{x} beats {y}: the interval lies above 0.5"
-    if p.high < 0.5:
+    if p.side < 0:
         return f"{y} beats {x}: the interval lies below 0.5"
     return "the interval holds 0.5: these seeds do not separate them"
 

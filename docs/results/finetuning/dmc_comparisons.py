@@ -153,9 +153,9 @@ def versus_scratch(task: str, label: str) -> tuple[tuple[Run, ...], tuple[Run, .
 
 
 def verdict(p: Estimate, better: str, worse: str) -> str:
-    if p.low > 0.5:
+    if p.side > 0:
         return f"{better} above"
-    if p.high < 0.5:
+    if p.side < 0:
         return f"{worse} above"
     return "not separated"
 
@@ -175,7 +175,7 @@ def scratch_values() -> dict:
                 f"{seeds_text(r.seed for r in scratch)}) | {p.text(2)} | {verdict(p, 'fine-tuned', 'scratch')} |"
             )
             name = f"{prose(label)} on {task[4:]}"
-            if p.low > 0.5:
+            if p.side > 0:
                 separated.append(name)
             else:
                 not_separated.append(
@@ -256,7 +256,7 @@ def ppo_values() -> dict:
         values = n10(group(DMC_KEPT, task, label), fresh)
         p = improvement_estimate(tuple(values), tuple(ppo_fresh))
         item = f"{prose(label)} ({span(values)})"
-        (beaten if max(values) < min(ppo_fresh) else above if p.low > 0.5 else split).append(item)
+        (beaten if max(values) < min(ppo_fresh) else above if p.side > 0 else split).append(item)
     text = (
         f"On point_mass's fresh seeds {seeds_text(fresh)} (run after adaptive λ and ASPO were chosen on seeds "
         f"{seeds_text(chosen)}, which the all-seed rows pool with them) every PPO seed ({span(ppo_fresh)}) ends above "

@@ -125,8 +125,8 @@ def held_values() -> dict:
                 f"{p.text(2)} | {verdict(p, 'held', 'updated')} |"
             )
             verdicts[(task, label)] = p
-    pm = [prose(m) for (t, m), p in verdicts.items() if t == "dmc_point_mass" and p.low > 0.5]
-    pm_not = [prose(m) for (t, m), p in verdicts.items() if t == "dmc_point_mass" and not p.low > 0.5]
+    pm = [prose(m) for (t, m), p in verdicts.items() if t == "dmc_point_mass" and p.side > 0]
+    pm_not = [prose(m) for (t, m), p in verdicts.items() if t == "dmc_point_mass" and p.side <= 0]
     re_sep = [prose(m) for (t, m), p in verdicts.items() if t == "dmc_reacher_easy" and p.separates]
     sentence = (
         "On point_mass the interval puts the held normalisers above the updated ones for "
@@ -221,9 +221,9 @@ def adaptive_values() -> dict:
         return "the interval separates them" if p.separates else "the interval holds one half: not separated"
 
     def against(p: Estimate, name: str, other: str) -> str:
-        if p.low > 0.5:
+        if p.side > 0:
             return f"{name} ends above {other}"
-        if p.high < 0.5:
+        if p.side < 0:
             return f"{other} ends above {name}"
         return f"the seeds do not separate {name} from {other}"
 

@@ -128,14 +128,6 @@ def common_matrix(runs: dict[str, dict[int, float]]) -> np.ndarray | None:
     return np.array([[runs[t][s] for t in TASKS] for s in seeds]) if seeds else None
 
 
-def seed_count(runs: dict[str, dict[int, float]], task: str | None) -> int:
-    """The seeds ``poi`` compares on ``task`` (None: the seeds every task has)."""
-    if task is not None:
-        return len(runs[task])
-    matrix = common_matrix(runs)
-    return 0 if matrix is None else len(matrix)
-
-
 # ------------------------------------------------------------------------------------------------ intervals
 _CELLS: dict[tuple, str] = {}
 
@@ -156,13 +148,9 @@ def num(x: float) -> str:
     return f"{x:.0f}" if abs(x) >= 100 else f"{x:.1f}"
 
 
-def separates(p: Estimate) -> int:
-    return 1 if p.low > 0.5 else -1 if p.high < 0.5 else 0
-
-
 def short_verdict(p: Estimate, x: str, y: str) -> str:
     """What a probability of improvement's interval says about x against y: who is ahead, or neither."""
-    side = separates(p)
+    side = p.side
     return f"{x} ahead" if side > 0 else f"{y} ahead" if side < 0 else "not separated (the interval holds 0.5)"
 
 

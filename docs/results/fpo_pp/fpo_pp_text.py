@@ -27,8 +27,6 @@ from fpo_pp_runs import (
     poi,
     read_rows,
     run_config,
-    seed_count,
-    separates,
     short,
     short_verdict,
     sweep_spec,
@@ -85,8 +83,7 @@ def poi_rows(pairs, ms, data, settings=("multi", "headline")) -> tuple[list[str]
             if all(p is None for p in ps.values()):
                 continue
             where = short(task) if task else "the three tasks"
-            if min(seed_count(data[x][settings[0]], task), seed_count(data[y][settings[0]], task)) < 2:
-                # one seed's bootstrap is that seed: its interval is a point, whatever the runs are
+            if any(p is not None and not p.compared for p in ps.values()):
                 dashes = " | ".join("--" for _ in settings)
                 rows.append(f"| {where} | {label[0]} over {label[1]} | {dashes} | one seed on a side: not compared |")
                 continue
@@ -120,7 +117,7 @@ def small_verdicts(kept: list[tuple], ms: dict[str, Method]) -> str:
                 continue
             groups: dict[int, list[str]] = {1: [], -1: [], 0: []}
             for task, p in got.items():
-                groups[separates(p)].append("over the three tasks" if task is None else f"on {short(task)}")
+                groups[p.side].append("over the three tasks" if task is None else f"on {short(task)}")
             bits = []
             if groups[1]:
                 bits.append("its runs beat them " + ", ".join(groups[1]))

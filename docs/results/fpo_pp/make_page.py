@@ -53,7 +53,6 @@ from fpo_pp_runs import (
     run_config,
     run_dirs,
     run_size,
-    separates,
     short,
     sweep_spec,
     values_table,
@@ -159,7 +158,7 @@ def values() -> dict[str, object]:
     tuned_groups: dict[int, list[str]] = {1: [], -1: [], 0: []}
     for x, y, task, s, p in kept:
         if x == TUNED_KEY and y == AUTHORS and s == "multi":
-            tuned_groups[separates(p)].append("over the three tasks" if task is None else f"on {short(task)}")
+            tuned_groups[p.side].append("over the three tasks" if task is None else f"on {short(task)}")
     bits = []
     if tuned_groups[1]:
         bits.append("its runs beat the locomotion defaults' " + ", ".join(tuned_groups[1]))
@@ -187,8 +186,8 @@ def values() -> dict[str, object]:
     reflow = [p for x, _, _, _, p in kept_other if x == "refpo_pp"]
     v["reflow_separate"] = (
         "no task and no setting in which the seeds separate them"
-        if reflow and not any(separates(p) for p in reflow)
-        else f"the seeds separate them in {sum(bool(separates(p)) for p in reflow)} of {len(reflow)} cases"
+        if reflow and not any(p.separates for p in reflow)
+        else f"the seeds separate them in {sum(p.separates for p in reflow)} of {len(reflow)} cases"
     )
     spec = {m["label"]: m for m in sweep_spec()["methods"]}
     authors = spec[AUTHORS].get("overrides") or {}

@@ -198,9 +198,9 @@ def comparison_table(runs: TwoWayRuns) -> str:
             x = np.array([[p[key]] for p in runs.numbers_at(label, 10).values()])
             y = np.array([[p[key]] for p in runs.numbers_at("ppo", 10).values()])
             p = improvement(x, y)
-            if p.low > 0.5:
+            if p.side > 0:
                 says = f"{name} higher: the interval lies above 0.5"
-            elif p.high < 0.5:
+            elif p.side < 0:
                 says = "PPO higher: the interval lies below 0.5"
             else:
                 says = "the interval holds 0.5: these seeds do not separate them"

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import functools
 import itertools
-from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
@@ -143,32 +142,18 @@ def paired(rows: list[dict], label: str, multiple: int) -> tuple[np.ndarray, np.
     )
 
 
-@dataclass(frozen=True)
-class Gap:
-    """P(the flow at N = 10 beats PPO) at one budget, over ``seeds`` seeds paired on both tasks. One seed leaves the
-    bootstrap nothing to resample: its interval is the point itself and separates nothing."""
-
-    p: Estimate
-    seeds: int
-
-    @property
-    def separates(self) -> bool:
-        return self.seeds > 1 and self.p.separates
-
-    def text(self, name: str) -> str:
-        """The estimate, its interval and who it says leads (``name``: the flow's)."""
-        if self.seeds < 2:
-            return f"{self.p.point:.2f} (one seed, no interval)"
-        if self.p.low > 0.5:
-            return f"{self.p.text(2)}: {name} ahead"
-        return f"{self.p.text(2)}: {'PPO ahead' if self.p.high < 0.5 else 'not separated'}"
+def gap_text(p: Estimate, name: str) -> str:
+    """P(the flow at N = 10 beats PPO), its interval and who it says leads (``name``: the flow's)."""
+    if not p.compared:
+        return p.text(2)
+    return f"{p.text(2)}: " + {1: f"{name} ahead", -1: "PPO ahead", 0: "not separated"}[p.side]
 
 
-def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Gap]]]:
+def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Estimate]]]:
     """P(a run of the flow at N = 10 beats a run of PPO) at each budget over both tasks, and the estimates."""
     header = ["method", "seeds", *(f"{m}x" for m in multiples())]
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    found: dict[str, dict[int, Gap]] = {}
+    found: dict[str, dict[int, Estimate]] = {}
     for label in FLOWS:
         cells, seeds = [], set()
         for m in multiples():
@@ -176,10 +161,10 @@ def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Gap]]]:
             if pair is None:
                 cells.append("--")
                 continue
-            gap = Gap(improvement(pair[0], pair[1]), len(pair[2]))
+            gap = improvement(pair[0], pair[1])
             found.setdefault(label, {})[m] = gap
             seeds |= set(pair[2])
-            cells.append(gap.text("flow"))
+            cells.append(gap_text(gap, "flow"))
         if label in found:
             lines.append(f"| {METHODS[label]} | {seeds_text(sorted(seeds))} | " + " | ".join(cells) + " |")
     if not found:
@@ -250,9 +235,9 @@ def health_verdicts(rows: list[dict]) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ the answer
-def movement(g0: Gap, g1: Gap) -> str:
+def movement(g0: Estimate, g1: Estimate) -> str:
     """How the probability of improvement moved between two budgets, in words of who leads (one half: level)."""
-    p0, p1 = g0.p.point, g1.p.point
+    p0, p1 = g0.point, g1.point
 
     def side(p: float) -> str:
         return "level" if p == 0.5 else "PPO" if p < 0.5 else "the flow"
@@ -268,7 +253,7 @@ def movement(g0: Gap, g1: Gap) -> str:
         moved = f"{s0}'s lead holds"
     else:
         moved = f"{s0}'s lead {'narrows' if abs(p1 - 0.5) < abs(p0 - 0.5) else 'widens'}"
-    if min(g0.seeds, g1.seeds) < 2:
+    if not (g0.compared and g1.compared):
         return f"by the point estimates {moved}; one seed separates nothing"
     both = g0.separates and g1.separates
     return (
@@ -276,7 +261,7 @@ def movement(g0: Gap, g1: Gap) -> str:
     )
 
 
-def answer(found: dict[str, dict[int, Gap]]) -> str:
+def answer(found: dict[str, dict[int, Estimate]]) -> str:
     """Per flow method: the probability of beating PPO at the smallest and the largest budget both reached."""
     if not found:
         return (
@@ -288,11 +273,11 @@ def answer(found: dict[str, dict[int, Gap]]) -> str:
         first, last = min(by_budget), max(by_budget)
         g0, g1 = by_budget[first], by_budget[last]
         if first == last:
-            lines.append(f"- **{METHODS[label]}**: only {first}x reached so far: {g0.text('it')}.")
+            lines.append(f"- **{METHODS[label]}**: only {first}x reached so far: {gap_text(g0, 'it')}.")
             continue
         lines.append(
-            f"- **{METHODS[label]}** against PPO: P(improvement) {g0.text(METHODS[label])} at {first}x, "
-            f"{g1.text(METHODS[label])} at {last}x: {movement(g0, g1)}."
+            f"- **{METHODS[label]}** against PPO: P(improvement) {gap_text(g0, METHODS[label])} at {first}x, "
+            f"{gap_text(g1, METHODS[label])} at {last}x: {movement(g0, g1)}."
         )
     return "\n".join(lines)
 

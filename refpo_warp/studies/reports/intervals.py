@@ -19,15 +19,32 @@ class Estimate:
     point: float
     low: float
     high: float
+    fewest_runs: int | None = None  # a probability of improvement's: the fewer runs (seeds) of its two sides
+
+    @property
+    def compared(self) -> bool:
+        """False for a probability of improvement with one run on a side: the bootstrap has nothing to resample
+        there, so its interval is the point itself, whatever the runs are."""
+        return self.fewest_runs is None or self.fewest_runs > 1
 
     def text(self, digits: int = 0) -> str:
-        """``point [low, high]`` with ``digits`` decimals: how every page writes an estimate and its interval."""
+        """``point [low, high]`` with ``digits`` decimals: how every page writes an estimate and its interval (the
+        point alone, so marked, where one run on a side leaves no interval)."""
+        if not self.compared:
+            return f"{self.point:.{digits}f} (one seed, no interval)"
         return f"{self.point:.{digits}f} [{self.low:.{digits}f}, {self.high:.{digits}f}]"
 
     @property
+    def side(self) -> int:
+        """For a probability of improvement: 1 where its interval lies above one half (x's runs beat y's), -1 below,
+        0 where it holds one half or rests on one run a side (the runs do not tell the methods apart)."""
+        if not self.compared:
+            return 0
+        return 1 if self.low > 0.5 else -1 if self.high < 0.5 else 0
+
+    @property
     def separates(self) -> bool:
-        """For a probability of improvement: its interval leaves out one half, so the runs tell the methods apart."""
-        return self.low > 0.5 or self.high < 0.5
+        return self.side != 0
 
     def overlaps_or_above(self, other: Estimate) -> bool:
         """This interval reaches ``other``'s (they overlap), or lies above it."""
@@ -137,4 +154,4 @@ def improvement(x: np.ndarray, y: np.ndarray, seed: int = 0, reps: int = REPS) -
     columns = np.arange(x.shape[1])
     xs, ys = x[x_rows, columns], y[y_rows, columns]
     low, high = _percentile_interval(_improvements(xs, ys)[:, None])
-    return Estimate(probability_of_improvement(x, y), float(low[0]), float(high[0]))
+    return Estimate(probability_of_improvement(x, y), float(low[0]), float(high[0]), min(len(x), len(y)))
