@@ -16,7 +16,6 @@ import contextlib
 import datetime
 import functools
 import io
-import platform
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +23,7 @@ import torch
 
 from refpo_warp.config.run_options import FLOW_STEPS
 from refpo_warp.utils.device import resolve_device
+from refpo_warp.utils.machine import cpu_model
 from refpo_warp.utils.option_rules import DEVICE_DOC, DEVICE_RULE, Int, ListOf, Rule, Text
 from refpo_warp.utils.options import option
 from refpo_warp.utils.timing import print_table, time_call
@@ -32,11 +32,7 @@ from refpo_warp.utils.timing import print_table, time_call
 def device_name(device: str) -> str:
     if device.startswith("cuda"):
         return torch.cuda.get_device_name(torch.device(device))
-    with contextlib.suppress(OSError):  # Linux: the CPU model; elsewhere the platform's word for it
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    return platform.processor() or platform.machine() or "cpu"
+    return cpu_model()
 
 
 def policy_latency(

@@ -38,7 +38,6 @@ import contextlib
 import io
 import json
 import math
-import platform
 import tempfile
 import time
 from dataclasses import dataclass
@@ -48,6 +47,7 @@ from typing import Any
 import torch
 
 from refpo_warp.config.run_options import run_defaults
+from refpo_warp.utils.machine import machine
 from refpo_warp.utils.option_rules import Check, Flag, Int, Text
 from refpo_warp.utils.option_tables import shown_value
 from refpo_warp.utils.options import option
@@ -322,33 +322,6 @@ def result_row(cfg, algo, clock: Clock, whole, iterations, counted, per_iteratio
         parts["other"] = iteration["update"] - sum(parts.values())
         row["update"] = parts
     return row
-
-
-def machine() -> dict[str, Any]:
-    import os
-
-    from refpo_warp.utils.device import cpu_has_native_bfloat16
-
-    cpu = platform.processor() or platform.machine()
-    with contextlib.suppress(OSError):
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    out: dict[str, Any] = {
-        "cpu": cpu,
-        "cpu_count": os.cpu_count(),
-        "torch_threads": torch.get_num_threads(),
-        "torch": torch.__version__,
-        # the widest vector instructions torch's CPU kernels use, and whether bfloat16 matrix products run natively
-        "cpu_capability": torch.backends.cpu.get_cpu_capability(),
-        "native_bfloat16": cpu_has_native_bfloat16(),
-    }
-    with contextlib.suppress(OSError):  # how busy the machine was (other work may share it): 1, 5, 15 minutes
-        out["load_average"] = [round(x, 2) for x in os.getloadavg()]
-    if torch.cuda.is_available():
-        out["gpu"] = torch.cuda.get_device_name()
-    return out
 
 
 def print_results(rows: list[dict[str, Any]]) -> None:

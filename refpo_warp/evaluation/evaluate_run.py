@@ -8,7 +8,9 @@ policies, diagnostics: the training-time means over the run of the per-update va
 ``explosion_rate_pair``, ``clip_fraction``, ``one_step_error``, ``one_step_ratio``; ``ratio_max`` is the run's
 maximum), and, on observations visited by the evaluated policy, ``straightness_error_eval``, the one-step consistency
 (``one_step_error_eval``, ``policy_spread_eval``, ``one_step_ratio_eval``) and the Jacobian statistics
-(``refpo_warp/models/flow_diagnostics.py``).
+(``refpo_warp/models/flow_diagnostics.py``). ``machine`` records where it was written (``refpo_warp.utils.machine``):
+at the end of ``refpo train``, the machine that trained the run's last piece (earlier pieces of a run trained in
+pieces may have run elsewhere; ``train_time_s`` sums them all).
 An existing ``eval.json`` is kept as ``eval.prev.json`` before the new one is written (both writes atomic).
 
 The evaluation draws from random streams of its own, seeded from the run's seed and the checkpoint's iteration
@@ -37,6 +39,7 @@ from refpo_warp.runner.checkpoints import latest_checkpoint, load_latest
 from refpo_warp.runner.progress import progress_path, read_rows
 from refpo_warp.utils.atomic_files import write_json, write_text
 from refpo_warp.utils.errors import ConfigError
+from refpo_warp.utils.machine import machine
 from refpo_warp.utils.rng import FINAL_EVALUATION, own_random_streams, stream_seed
 
 DIAGNOSTIC_OBSERVATIONS = 1024  # on-policy observations kept from the evaluation for the flow diagnostics
@@ -125,6 +128,7 @@ def evaluate_run(
         "env_steps": int(runner.logger.tot_timesteps) or (iteration + 1) * env_steps_per_iteration(cfg),
         "eval_envs": env.num_envs,
         "train_time_s": float(runner.logger.tot_time),
+        "machine": machine(),
         "protocol": (
             {"initial_noise": cfg["eval"]["initial_noise"], "perturbation": bool(cfg["eval"]["perturbation"])}
             if flow

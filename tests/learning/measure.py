@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import subprocess
 import sys
 import tempfile
@@ -23,22 +22,14 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from refpo_warp.utils.machine import cpu_model
+
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from checks import CHECKS, run_check  # noqa: E402  (tests/learning/checks.py)
 
 RESULTS = HERE.parents[1] / "docs" / "results" / "learning_checks"
 RECORDS = RESULTS / "records"
-
-
-def cpu_name() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def record_key(record: dict) -> tuple:
@@ -68,7 +59,7 @@ def run_one(check: str, seed: int, threads: int, null: bool) -> None:
     with tempfile.TemporaryDirectory(prefix=f"{check}_") as tmp:
         start = time.monotonic()
         record = run_check(CHECKS[check], seed, Path(tmp) / "run", null=null)
-    record.update(threads=threads, wall_s=round(time.monotonic() - start, 1), cpu=cpu_name())
+    record.update(threads=threads, wall_s=round(time.monotonic() - start, 1), cpu=cpu_model())
     RECORDS.mkdir(parents=True, exist_ok=True)
     with open(RECORDS / f"{check}.jsonl", "a", encoding="utf-8") as f:  # one write of a line: appends stay whole
         f.write(json.dumps(record) + "\n")

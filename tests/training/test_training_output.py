@@ -5,8 +5,10 @@ import json
 import re
 
 import pytest
+import torch
 
 from refpo_warp.training import train
+from refpo_warp.utils.machine import cpu_model
 
 pytestmark = pytest.mark.rsl_rl  # runs again on the lowest supported rsl-rl-lib (.ci/run)
 
@@ -37,6 +39,8 @@ def test_iterations_count_from_zero_everywhere_and_the_run_ends_with_its_summary
     assert shown == [r["iteration"] for r in rows] == [0, 1, 2]
     assert sorted(p.name for p in tmp_run_dir.glob("model_*.pt")) == ["model_0.pt", "model_2.pt"]
     assert results["checkpoint_iteration"] == 2
+    # the machine that trained it, as every benchmark file records its own
+    assert results["machine"]["cpu"] == cpu_model() and results["machine"]["torch_threads"] == torch.get_num_threads()
     block = out[out.index("Trained gridworld / refpo") :]
     for name, where in [
         ("checkpoint", tmp_run_dir / "model_2.pt"),

@@ -192,19 +192,13 @@ def machine() -> dict:
     import torch
     import warp
 
-    cpu = next(
-        (
-            line.split(":", 1)[1].strip()
-            for line in Path("/proc/cpuinfo").read_text().splitlines()
-            if "model name" in line
-        ),
-        platform.processor(),
-    )
+    from refpo_warp.utils.machine import cpu_model
+
     commit = subprocess.run(
         ["git", "rev-parse", "--short", "HEAD"], check=False, capture_output=True, text=True, cwd=ROOT
     )
     return {
-        "cpu_model": cpu,
+        "cpu_model": cpu_model(),
         "cpu_count": os.cpu_count(),
         "load_average_1_5_15": [float(x) for x in Path("/proc/loadavg").read_text().split()[:3]],
         "python": platform.python_version(),

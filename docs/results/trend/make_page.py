@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import itertools
+import json
 from pathlib import Path
 
 import matplotlib
@@ -37,7 +38,8 @@ METHODS = {m["label"]: m["name"] for m in SWEEP["methods"]}
 FLOWS = tuple(label for label in METHODS if label != "ppo")
 COLOURS = {"ppo": "#2ca02c", "fpo": "#ff7f0e", "refpo": "#1f77b4", "refpo_onestep": "#9467bd"}
 RUNS_CSV, RUNS_DIR = HERE / "runs.csv", HERE / "runs"
-MACHINE = "a 2-core AMD EPYC (AVX2) shared with other work, one torch thread a run"  # the runs record no machine
+# Where the runs made before eval.json recorded its machine ran (docs/results/history.md, sessions 7-9)
+UNRECORDED_MACHINE = "a 2-core AMD EPYC (AVX2) shared with other work, one torch thread a run (not recorded by the run)"
 
 
 # ------------------------------------------------------------------------------------------------ data
@@ -71,6 +73,7 @@ def committed() -> list[dict]:
         run = ROOT / row["run_dir"]
         row["evals"] = read_jsonl(run / "progress_eval.jsonl") if (run / "progress_eval.jsonl").exists() else []
         row["train"] = read_jsonl(run / "progress_train.jsonl") if (run / "progress_train.jsonl").exists() else []
+        row["machine"] = json.loads((run / "eval.json").read_text()).get("machine") if row["status"] == "ok" else None
         rows.append(row)
     return rows
 
@@ -357,11 +360,27 @@ def still_to_run(rows: list[dict]) -> str:
     return and_list(missing) if missing else "none"
 
 
+def machine_text(machine: dict | None) -> str:
+    if machine is None:
+        return UNRECORDED_MACHINE
+    threads = machine["torch_threads"]
+    return (
+        f"a {machine['cpu_count']}-core {machine['cpu']} ({machine['cpu_capability']}), {threads} torch "
+        f"thread{'s' if threads > 1 else ''} a run"
+    )
+
+
 def run_minutes(rows: list[dict]) -> str:
-    minutes = [float(r["minutes"]) for r in rows if r.get("minutes")]
-    if not minutes:
+    """The finished runs' wall times, by the machine that trained them."""
+    by_machine: dict[str, list[float]] = {}
+    for r in rows:
+        if r.get("minutes"):
+            by_machine.setdefault(machine_text(r["machine"]), []).append(float(r["minutes"]))
+    if not by_machine:
         return "No committed run has its wall time yet"
-    return f"The committed runs took {value_range(minutes, '.0f')} min each"
+    return "The committed runs took " + "; ".join(
+        f"{value_range(minutes, '.0f')} min each on {where}" for where, minutes in by_machine.items()
+    )
 
 
 def values() -> dict[str, object]:
@@ -374,7 +393,6 @@ def values() -> dict[str, object]:
         + ("is" if len(rows) == 1 else "are"),
         "still_to_run": still_to_run(rows),
         "run_minutes": run_minutes(rows),
-        "machine": MACHINE,
         "budget": f"{env_steps_per_profile():,} env steps ({profile_iterations()} iterations)",
         "largest": f"{multiples()[-1]}x",
         "seeds": seeds_text(SWEEP["seeds"]),
