@@ -34,11 +34,15 @@ class Change:
 
 def bf16_note(before: dict, after: dict) -> str:
     cpu = after["machine"]
-    return f"Its CPU (torch's capability: {cpu.get('cpu_capability', 'not recorded')}) has " + (
-        "native bfloat16 matrix products."
-        if cpu.get("native_bfloat16")
-        else "no native bfloat16 (AVX512-BF16 or AMX): torch emulates the bfloat16 matrix products, and training "
-        "warns when the option is set on such a CPU."
+    if cpu.get("native_bfloat16"):
+        return (
+            f"Its CPU (torch's capability: {cpu.get('cpu_capability', 'not recorded')}) multiplies bfloat16 "
+            f"matrices in hardware (AVX512-BF16 or AMX): {phase_changes(before, after, ('update', 'collection'))}."
+        )
+    return (
+        f"Its CPU (torch's capability: {cpu.get('cpu_capability', 'not recorded')}) has no native bfloat16 "
+        "(AVX512-BF16 or AMX): torch emulates the bfloat16 matrix products, and training warns when the option is set "
+        "on such a CPU."
     )
 
 
@@ -74,6 +78,14 @@ def compile_note(before: dict, after: dict) -> str:
 CHANGES = (
     Change(
         "bf16",
+        "algorithm.use_mixed_precision=true",
+        "false",
+        "bfloat16 autocast of the update's forward passes and losses",
+        ("float32", "bfloat16"),
+        bf16_note,
+    ),
+    Change(
+        "bf16_native",
         "algorithm.use_mixed_precision=true",
         "false",
         "bfloat16 autocast of the update's forward passes and losses",
@@ -203,6 +215,7 @@ def change_rows() -> tuple[list[list[str]], list[str], list[str]]:
                 rows.append(
                     [
                         f"`{option}` (default {default})",
+                        f"{after['machine']['cpu']} ({after['machine'].get('cpu_capability', 'not recorded')})",
                         f"`{task}`",
                         NAMES.get(b["algo"], b["algo"]),
                         f"{b['env_steps_per_s']:,.0f}",
@@ -212,7 +225,8 @@ def change_rows() -> tuple[list[list[str]], list[str], list[str]]:
                     ]
                 )
             said.append(
-                f"- `{option}` ({change.what}) {'pays' if min(ratios) > 1 else 'does not pay'} on `{task}`: "
+                f"- `{option}` ({change.what}) {'pays' if min(ratios) > 1 else 'does not pay'} on `{task}` "
+                f"({after['machine']['cpu']}): "
                 f"{min(ratios):.2f} to {max(ratios):.2f} times the env steps per second of its default (load average "
                 f"{before['machine'].get('load_average', ['?'])[0]} and "
                 f"{after['machine'].get('load_average', ['?'])[0]} when the two commands ended). "
@@ -223,7 +237,10 @@ def change_rows() -> tuple[list[list[str]], list[str], list[str]]:
 
 def changes() -> str:
     rows, lines, said = change_rows()
-    header = ["change", "task", "algo", "env steps/s before", "after", "ratio", "s / iteration"]
+    header = [
+        *("change", "CPU (torch's capability)", "task", "algo"),
+        *("env steps/s before", "after", "ratio", "s / iteration"),
+    ]
     return table(header, rows) + "\n\n" + "\n".join(said) + "\n\nMeasured by:\n\n```\n" + "\n".join(lines) + "\n```"
 
 
