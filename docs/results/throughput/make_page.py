@@ -2,7 +2,7 @@
 """Training throughput at the CPU profile: ``README.md`` in this folder, written whole from ``README.template.md`` and
 the JSON files ``refpo bench train ... out=<task>.json`` wrote here (one per task, PPO and ReFPO in each):
 
-    python docs/results/throughput/make_page.py [--check]
+    python docs/results/throughput/make_page.py [--add-runs runs/sweeps/bf16_amx] [--check]
 """
 
 from __future__ import annotations
@@ -11,6 +11,8 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+
+import bf16_runs  # bf16_runs.py beside this script
 
 from refpo_warp.studies.reports.results_page import page_main
 
@@ -309,11 +311,12 @@ def values() -> dict[str, object]:
         "commands": commands(runs),
         "changes": changes(),
         "ceiling": ceiling(),
+        "bf16_learning": bf16_runs.section(),
     }
 
 
 def main() -> None:
-    page_main(__doc__.splitlines()[1], HERE / "README.template.md", values)
+    page_main(__doc__.splitlines()[1], HERE / "README.template.md", values, bf16_runs.add_runs)
 
 
 if __name__ == "__main__":
