@@ -356,7 +356,9 @@ def still_to_run(rows: list[dict]) -> str:
         for label in METHODS:
             seeds = [s for s in SWEEP["seeds"] if (task, label, s) not in have]
             if seeds:
-                missing.append(f"{task.removeprefix('dmc_')}/{label} (seeds {seeds_text(seeds)})")
+                missing.append(
+                    f"{task.removeprefix('dmc_')}/{label} (seed{'s' * (len(seeds) > 1)} {seeds_text(seeds)})"
+                )
     return and_list(missing) if missing else "none"
 
 
@@ -365,8 +367,9 @@ def machine_text(machine: dict | None) -> str:
         return UNRECORDED_MACHINE
     threads = machine["torch_threads"]
     return (
-        f"a {machine['cpu_count']}-core {machine['cpu']} ({machine['cpu_capability']}), {threads} torch "
-        f"thread{'s' if threads > 1 else ''} a run"
+        f"a {machine['cpu_count']}-core {machine['cpu']} ({machine['cpu_capability']}), "
+        + ("one torch thread" if threads == 1 else f"{threads} torch threads")
+        + " a run"
     )
 
 
@@ -379,7 +382,8 @@ def run_minutes(rows: list[dict]) -> str:
     if not by_machine:
         return "No committed run has its wall time yet"
     return "The committed runs took " + "; ".join(
-        f"{value_range(minutes, '.0f')} min each on {where}" for where, minutes in by_machine.items()
+        f"{value_range(minutes, '.0f')} min{' each' * (len(minutes) > 1)} on {where}"
+        for where, minutes in by_machine.items()
     )
 
 
