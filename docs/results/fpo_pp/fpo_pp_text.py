@@ -34,6 +34,7 @@ from fpo_pp_runs import (
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import read_jsonl, seeds_text
+from refpo_warp.studies.reports.phrases import and_list
 from refpo_warp.utils.errors import DataFileError
 
 
@@ -120,11 +121,11 @@ def small_verdicts(kept: list[tuple], ms: dict[str, Method]) -> str:
                 groups[p.side].append("over the three tasks" if task is None else f"on {short(task)}")
             bits = []
             if groups[1]:
-                bits.append("its runs beat them " + ", ".join(groups[1]))
+                bits.append("its runs beat them " + and_list(groups[1]))
             if groups[-1]:
-                bits.append("theirs beat it " + ", ".join(groups[-1]))
+                bits.append("theirs beat it " + and_list(groups[-1]))
             if groups[0]:
-                bits.append("the seeds do not separate them " + ", ".join(groups[0]))
+                bits.append("the seeds do not separate them " + and_list(groups[0]))
             parts.append(f"at {SETTINGS[s][1]}, " + "; ".join(bits))
         if parts:
             out.append(f"- **The small-task recipe against {shown[y]}**: " + "; ".join(parts) + ".")
