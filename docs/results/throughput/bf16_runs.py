@@ -1,7 +1,7 @@
 """Whole runs under bfloat16 autocast on a CPU that multiplies bfloat16 in hardware: does learning hold, and how fast
-is a whole run? cpu_dmc's PPO and ReFPO on point_mass at the CPU profile, at float32 (the default) and under autocast,
-the two alternating run by run on one core (``COMMAND``). The committed files: ``bf16_native/runs.csv`` and each run's
-small files under ``bf16_native/runs/``."""
+is a whole run? cpu_dmc's PPO and ReFPO on point_mass at the CPU profile (seeds 1-5), at float32 (the default) and
+under autocast, the two alternating run by run on one core (``COMMAND``). The committed files:
+``bf16_native/runs.csv`` and each run's small files under ``bf16_native/runs/``."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ HERE = Path(__file__).resolve().parent / "bf16_native"
 ROOT = HERE.parents[3]
 RUNS_CSV, RUNS_DIR = HERE / "runs.csv", HERE / "runs"
 COMMAND = (
-    "refpo sweep cpu_dmc tasks=[dmc_point_mass] methods=[ppo,refpo] seeds=[1,2,3] "
+    "refpo sweep cpu_dmc tasks=[dmc_point_mass] methods=[ppo,refpo] seeds=[1,2,3,4,5] "
     "algorithm.use_mixed_precision=[false,true] out=runs/sweeps/bf16_amx --jobs 1"
 )
 NAMES = {"ppo": "PPO", "refpo": "ReFPO"}
