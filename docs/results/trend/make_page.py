@@ -287,31 +287,31 @@ def answer(found: dict[str, dict[int, Estimate]]) -> str:
 
 def degradation(rows: list[dict]) -> str:
     """The paper's Figure 3 question (there on point_mass; here on every task): does FPO fall from its best budget
-    where ReFPO holds?"""
+    where ReFPO holds? The mean over seeds and each run's own best against its last budget (a mean can hide one run
+    falling while another climbs)."""
     lines = []
     for task, label in itertools.product(TASKS, ("fpo", "refpo")):
         means = {m: scores(rows, label, task, m, "10") for m in multiples()}
         means = {m: v for m, v in means.items() if v}
         if len(means) < 2:
             continue
-        best = max(means, key=lambda m: np.mean(list(means[m].values())))
         first, last = min(means), max(means)
-        if best == last:
-            lines.append(
-                f"- {METHODS[label]} on `{task}` (N = 10): from {mean_cell(means[first])} at {first}x to its best at "
-                f"{last}x, {mean_cell(means[last])}."
+        runs = {int(r["seed"]): r for r in rows if (r["task"], r["label"]) == (task, label)}
+        by_seed = []
+        for seed in sorted(means[last]):
+            path = {m: means[m][seed] for m in means if seed in means[m]}
+            best = max(path, key=lambda m: path[m])
+            text = (
+                f"seed {seed} best at {last}x, {path[last]:.0f}"
+                if best == last
+                else f"seed {seed} best at {best}x, {path[best]:.0f}, then {path[last]:.0f} at {last}x"
             )
-            continue
-        runs = [r for r in rows if (r["task"], r["label"]) == (task, label)]
-        failed = sum(r["status"] == "failed" for r in runs)
+            if runs[seed]["status"] == "failed":
+                text += " (stopped on a non-finite loss before it, counted as zero)"
+            by_seed.append(text)
         lines.append(
-            f"- {METHODS[label]} on `{task}` (N = 10): best at {best}x, {mean_cell(means[best])}; at {last}x, "
-            f"{mean_cell(means[last])}"
-            + (
-                f" ({failed} of its {len(runs)} run(s) stopped on a non-finite loss before {last}x, counted as zero)."
-                if failed
-                else "."
-            )
+            f"- {METHODS[label]} on `{task}` (N = 10): the mean {mean_cell(means[first])} at {first}x, "
+            f"{mean_cell(means[last])} at {last}x; {'; '.join(by_seed)}."
         )
     return "\n".join(lines) if lines else "- Not enough committed runs yet."
 
