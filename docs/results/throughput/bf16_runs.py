@@ -12,7 +12,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, read_rows, seeds_text
-from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
+from refpo_warp.studies.reports.intervals import improvement, mean_estimate
 
 HERE = Path(__file__).resolve().parent / "bf16_native"
 ROOT = HERE.parents[3]
@@ -56,10 +56,6 @@ def committed() -> list[dict]:
     return out
 
 
-def mean(values: list[float]) -> Estimate:
-    return aggregate({"m": np.array(values, dtype=float)[:, None]})["m"]["mean"]
-
-
 def section() -> str:
     runs = committed()
     if not runs:
@@ -77,7 +73,7 @@ def section() -> str:
             n1 = [r["return_1"] for r in g if r["return_1"] is not None]
             lines.append(
                 f"| {name} | {precision} | {seeds_text(r['seed'] for r in g)} | "
-                f"{mean([r['return'] for r in g]).text()} | {mean(n1).text() if n1 else '--'} | "
+                f"{mean_estimate(r['return'] for r in g).text()} | {mean_estimate(n1).text() if n1 else '--'} | "
                 f"{np.mean([r['steps_per_s'] for r in g]):,.0f} | "
                 f"{min(r['minutes'] for r in g):.1f}-{max(r['minutes'] for r in g):.1f} |"
             )

@@ -25,7 +25,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, read_jsonl, read_rows, seeds_text
-from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
+from refpo_warp.studies.reports.intervals import Estimate, improvement, mean_estimate
 from refpo_warp.studies.reports.phrases import and_list, value_range
 from refpo_warp.studies.reports.results_page import page_main
 from refpo_warp.utils.atomic_files import save_figure
@@ -114,7 +114,7 @@ def window(row: dict, after: int, upto: int) -> list[dict]:
 def mean_cell(values: dict[int, float]) -> str:
     if not values:
         return "--"
-    estimate = aggregate({"m": np.array(list(values.values()), dtype=float)[:, None]})["m"]["mean"]
+    estimate = mean_estimate(values.values())
     return f"{estimate.text()} ({len(values)})"
 
 

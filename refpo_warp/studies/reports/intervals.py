@@ -107,6 +107,11 @@ def aggregate(scores: dict[str, np.ndarray], seed: int = 0, reps: int = REPS) ->
     return out
 
 
+def mean_estimate(values) -> Estimate:
+    """The mean of one task's runs with its 95 % bootstrap interval: ``aggregate`` of a (runs x 1) matrix."""
+    return aggregate({"m": np.asarray(list(values), dtype=float)[:, None]})["m"]["mean"]
+
+
 def _iqm_slice(size: int) -> tuple[int, int]:
     """The sorted positions the IQM averages: SciPy's 25 % ``trim_mean`` cut."""
     low = int(0.25 * size)
