@@ -241,7 +241,7 @@ def two_way_rows() -> list[str]:
             if not results:
                 continue
             found = [
-                two_way.percent(two_way.interval([p["success"] for p in runs_of.numbers_at(label, n).values()]))
+                two_way.percent(interval([p["success"] for p in runs_of.numbers_at(label, n).values()]))
                 for n in (10, 1)
                 if two_way.setting_of(label, n)
             ]

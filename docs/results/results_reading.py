@@ -46,18 +46,11 @@ def number(text: str | None) -> float | None:
     return float(text) if text not in ("", None) else None
 
 
-@functools.cache
-def _interval(values: tuple[float, ...]) -> Estimate:
-    import numpy as np
-
-    from refpo_warp.studies.reports.intervals import aggregate
-
-    return aggregate({"x": np.array([[v] for v in values])})["x"]["mean"]
-
-
 def interval(values) -> Estimate:
     """The mean over ``values`` (one per seed) with its 95 % stratified-bootstrap interval (``intervals.Estimate``)."""
-    return _interval(tuple(float(v) for v in values))
+    from refpo_warp.studies.reports.intervals import mean_estimate
+
+    return mean_estimate(values)
 
 
 def estimate(values, digits: int = 0) -> str:

@@ -20,7 +20,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, seeds_text
-from refpo_warp.studies.reports.intervals import aggregate, improvement
+from refpo_warp.studies.reports.intervals import aggregate, improvement, mean_estimate
 from refpo_warp.studies.reports.results_page import page_main
 
 HERE = Path(__file__).resolve().parent
@@ -94,9 +94,7 @@ def table(returns: dict[str, dict[str, dict[int, float]]], setting: str) -> str:
             continue
         cells = []
         for task in TASKS:
-            scores = np.array(list(runs[task].values()), dtype=float)[:, None]
-            mean = aggregate({"m": scores})["m"]["mean"]
-            cells.append(mean.text())
+            cells.append(mean_estimate(runs[task].values()).text())
         seeds = sorted(set.intersection(*(set(runs[t]) for t in TASKS)))
         lines.append(f"| {NAMES[label]} | {seeds_text(seeds)} | " + " | ".join(cells) + " |")
     return "\n".join(lines)

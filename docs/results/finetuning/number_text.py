@@ -7,7 +7,7 @@ import functools
 
 import numpy as np
 
-from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
+from refpo_warp.studies.reports.intervals import Estimate, improvement, mean_estimate
 
 # ------------------------------------------------------------------------------------------------ formatting
 
@@ -35,12 +35,6 @@ def seconds(value: float) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ intervals
-@functools.cache
-def mean_estimate(values: tuple[float, ...]) -> Estimate:
-    """The mean over seeds with its 95 % stratified-bootstrap interval (each score set bootstrapped once)."""
-    return aggregate({"x": np.asarray(values, float).reshape(-1, 1)})["x"]["mean"]
-
-
 @functools.cache
 def improvement_estimate(x: tuple[float, ...], y: tuple[float, ...]) -> Estimate:
     """P(a run of x ends above a run of y) with its 95 % interval."""

@@ -12,7 +12,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.grid.spec import computed_part
-from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
+from refpo_warp.studies.reports.intervals import Estimate, improvement, mean_estimate
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
@@ -129,18 +129,9 @@ def common_matrix(runs: dict[str, dict[int, float]]) -> np.ndarray | None:
 
 
 # ------------------------------------------------------------------------------------------------ intervals
-_CELLS: dict[tuple, str] = {}
-
-
 def cell(values: dict[int, float]) -> str:
-    """The mean over seeds (in seed order) with its 95 % interval; each score set is bootstrapped once."""
-    if not values:
-        return "--"
-    key = tuple(values.values())
-    if key not in _CELLS:
-        e = aggregate({"m": np.array(key)[:, None]})["m"]["mean"]
-        _CELLS[key] = e.text()
-    return _CELLS[key]
+    """The mean over seeds (in seed order) with its 95 % interval."""
+    return mean_estimate(values.values()).text() if values else "--"
 
 
 def num(x: float) -> str:

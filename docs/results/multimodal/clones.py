@@ -80,9 +80,9 @@ def pct(k: int, n: int) -> str:
 
 
 def mean_return(returns: list[float]) -> str:
-    from refpo_warp.studies.reports.intervals import aggregate
+    from refpo_warp.studies.reports.intervals import mean_estimate
 
-    return aggregate({"r": np.array(returns, dtype=float)[:, None]})["r"]["mean"].text(0)
+    return mean_estimate(returns).text(0)
 
 
 # ------------------------------------------------------------------------------------------------ the page

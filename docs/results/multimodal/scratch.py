@@ -23,7 +23,6 @@ from two_way_runs import (
     TwoWayRuns,
     comparison_table,
     curves_figure,
-    interval,
     method_table,
     page_arguments,
     per_run_table,
@@ -33,6 +32,7 @@ from two_way_runs import (
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import seeds_text
+from refpo_warp.studies.reports.intervals import mean_estimate
 from refpo_warp.studies.reports.phrases import and_list
 from refpo_warp.studies.reports.results_page import write_page
 
@@ -69,7 +69,8 @@ def against_finetuning() -> str:
         if not scratch or not tuned:
             continue
         success = [
-            percent(interval([p["success"] for p in runs.numbers_at(label, 10).values()])) for runs in (RUNS, FINETUNED)
+            percent(mean_estimate([p["success"] for p in runs.numbers_at(label, 10).values()]))
+            for runs in (RUNS, FINETUNED)
         ]
         lines.append(
             f"- **{method['name']}**: success {success[0]} from scratch (seeds {seeds_text(scratch)}, "

@@ -19,7 +19,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, read_jsonl, read_rows, seeds_text
-from refpo_warp.studies.reports.intervals import Estimate, aggregate, improvement
+from refpo_warp.studies.reports.intervals import Estimate, improvement, mean_estimate
 from refpo_warp.studies.reports.results_page import main_args
 from refpo_warp.utils.atomic_files import save_figure
 
@@ -64,10 +64,6 @@ def outcome(n: dict[str, float]) -> str:
 
 def percent(e: Estimate, digits: int = 0) -> str:
     return f"{100 * e.point:.{digits}f} % [{100 * e.low:.{digits}f}, {100 * e.high:.{digits}f}]"
-
-
-def interval(values: list[float]) -> Estimate:
-    return aggregate({"m": np.asarray(values, dtype=float)[:, None]})["m"]["mean"]
 
 
 # ------------------------------------------------------------------------------------------------ a sweep's runs
@@ -156,8 +152,8 @@ def method_table(runs: TwoWayRuns, n: int, below: Callable[[str, str], str] | No
             continue
         per = list(runs.numbers_at(label, n).values())
         kinds = [outcome(p) for p in per]
-        cells = [percent(interval([p[k] for p in per])) for k in ("success", "left", "right", "rarer")]
-        ret = interval([p["return"] for p in per]).text()
+        cells = [percent(mean_estimate([p[k] for p in per])) for k in ("success", "left", "right", "rarer")]
+        ret = mean_estimate([p["return"] for p in per]).text()
         counts = " / ".join(str(kinds.count(k)) for k in ("both ways", "one way", "lost"))
         lines.append(f"| {method['name']} | {seeds_text(results)} | {' | '.join(cells)} | {ret} | {counts} |")
         if below is not None:
@@ -221,7 +217,7 @@ def summary(runs: TwoWayRuns) -> str:
         lines.append(
             f"- **{method['name']}**: of its {len(per)} runs, {kinds.count('both ways')} kept both ways, "
             f"{kinds.count('one way')} one way and {kinds.count('lost')} lost the task; success "
-            f"{percent(interval([p['success'] for p in per]))}."
+            f"{percent(mean_estimate([p['success'] for p in per]))}."
         )
     return "\n".join(lines)
 

@@ -71,7 +71,7 @@ class Fresh:
 
 
 def fresh_analysis() -> Fresh | None:
-    from refpo_warp.studies.reports.intervals import aggregate, improvement
+    from refpo_warp.studies.reports.intervals import aggregate, improvement, mean_estimate
 
     fresh_csv = FRESH / "runs.csv"
     if not fresh_csv.exists():
@@ -84,9 +84,7 @@ def fresh_analysis() -> Fresh | None:
                 continue
             seeds = sorted(set.intersection(*(set(runs.returns[t]) for t in TASKS)))
             left = [f"{short(t)}/{name}/seed{s}" for t in TASKS for s in sorted(runs.returns[t]) if s not in seeds]
-            per_task = [
-                aggregate({"x": np.array([[runs.returns[t][s][0]] for s in seeds])})["x"]["mean"] for t in TASKS
-            ]
+            per_task = [mean_estimate(runs.returns[t][s][0] for s in seeds) for t in TASKS]
             rows[f"{label}/{kind}"] = Row(label, kind, runs, seeds, left, per_task)
     ppo = rows["ppo/paper"]
     scale = {t: statistics.mean(v for _, v, _, _ in ppo.values(t)) for t in TASKS}

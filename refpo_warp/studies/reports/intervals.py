@@ -6,6 +6,7 @@ another's on a task."""
 from __future__ import annotations
 
 import contextlib
+import functools
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -108,8 +109,14 @@ def aggregate(scores: dict[str, np.ndarray], seed: int = 0, reps: int = REPS) ->
 
 
 def mean_estimate(values) -> Estimate:
-    """The mean of one task's runs with its 95 % bootstrap interval: ``aggregate`` of a (runs x 1) matrix."""
-    return aggregate({"m": np.asarray(list(values), dtype=float)[:, None]})["m"]["mean"]
+    """The mean of one task's runs with its 95 % bootstrap interval: ``aggregate`` of a (runs x 1) matrix (each score
+    set bootstrapped once: pages ask for the same cell many times)."""
+    return _mean_estimate(tuple(float(v) for v in values))
+
+
+@functools.cache
+def _mean_estimate(values: tuple[float, ...]) -> Estimate:
+    return aggregate({"m": np.asarray(values)[:, None]})["m"]["mean"]
 
 
 def _iqm_slice(size: int) -> tuple[int, int]:
