@@ -205,6 +205,11 @@ class OnPolicyAlgorithm(RslPPO):
         super().process_env_step(obs, rewards * self.reward_scale, dones, extras)
 
     # ------------------------------------------------------------------------------------------------ subclass API
+    @property
+    def method_name(self) -> str:
+        """The method as a user configured it, for messages (a subclass names its special cases)."""
+        return type(self).__name__
+
     def check_actor(self, actor: nn.Module) -> None:
         """Refuse an actor this algorithm cannot train (a ``TypeError`` naming the actor class to set); called by the
         constructor after the options are checked, before anything is built."""
@@ -282,7 +287,7 @@ class OnPolicyAlgorithm(RslPPO):
             self._restore(restore_point)
             first = minibatch_stats[values.index(0.0)]
             raise NonFiniteLossError(
-                f"Non-finite {type(self).__name__} loss ("
+                f"Non-finite {self.method_name} loss ("
                 + ", ".join(f"{k}={float(v):.4g}" for k, v in first.items())
                 + "); the update was stopped before applying it."
             )

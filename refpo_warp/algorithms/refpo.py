@@ -209,6 +209,13 @@ class ReFPO(OnPolicyAlgorithm):
         self.diagnostic_generator = torch.Generator().manual_seed(torch.initial_seed() + DIAGNOSTIC_SEED_OFFSET)
         self.one_step: dict[str, float] = {}
 
+    @property
+    def method_name(self) -> str:
+        """FPO where the Reflow term stays off (``configs/algo/fpo.yaml``: ReFPO with a fixed reflow_coef of 0)."""
+        if type(self) is ReFPO and self.coef_schedule.mode == "fixed" and self.reflow_coef == 0:
+            return "FPO"
+        return super().method_name
+
     @classmethod
     def construct_algorithm(cls, obs: TensorDict, env, cfg: dict, device: str) -> ReFPO:
         """rsl_rl's construction; the one-step diagnostic measures actions as the env applies them."""

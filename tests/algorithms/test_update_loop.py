@@ -55,8 +55,9 @@ def test_an_update_reads_the_device_once_whatever_its_minibatch_count(minibatche
     assert set(stats) >= {"surrogate", "reflow", "Flow/ratio_max"}
 
 
-def test_a_non_finite_loss_in_a_later_minibatch_stops_the_update_and_undoes_it():
-    alg, _ = make_refpo(num_mini_batches=3, num_learning_epochs=2)
+@pytest.mark.parametrize("reflow_coef,method", [(0.04, "ReFPO"), (0.0, "FPO")])  # FPO: ReFPO with no Reflow term
+def test_a_non_finite_loss_in_a_later_minibatch_stops_the_update_and_undoes_it(reflow_coef, method):
+    alg, _ = make_refpo(num_mini_batches=3, num_learning_epochs=2, reflow_coef=reflow_coef)
     fill_storage(alg, advantages=None)
     alg.update()  # the optimizer has state (Adam's moments) to keep
     fill_storage(alg, advantages=None)
@@ -79,7 +80,7 @@ def test_a_non_finite_loss_in_a_later_minibatch_stops_the_update_and_undoes_it()
     alg.policy_loss = nan_in_the_fourth
     with pytest.raises(
         NonFiniteLossError,
-        match=r"Non-finite ReFPO loss \(surrogate=nan, .*the update was stopped "
+        match=rf"Non-finite {method} loss \(surrogate=nan, .*the update was stopped "
         r"before applying it",
     ):
         alg.update()
