@@ -4,7 +4,7 @@ with more runs, and the probability of improvement of separated and of identical
 import numpy as np
 import pytest
 
-from refpo_warp.studies.reports.intervals import aggregate, improvement
+from refpo_warp.studies.reports.intervals import aggregate, improvement, mean_estimate
 
 
 def test_point_estimates_by_hand_and_intervals_around_them():
@@ -45,6 +45,14 @@ def test_one_run_on_a_side_compares_nothing():
     two = improvement(np.array([[2.0, 3.0], [4.0, 5.0]]), np.array([[1.0, 1.0], [0.0, 0.0]]))
     assert two.compared and two.side == 1 and two.text(2) == "1.00 [1.00, 1.00]"
     assert improvement(np.zeros((2, 1)), np.ones((3, 1))).side == -1
+
+
+def test_a_mean_of_one_seed_has_no_interval_and_of_more_the_bootstraps():
+    assert mean_estimate([631.0]).text() == "631 (one seed, no interval)"
+    two = mean_estimate([600.0, 700.0])
+    assert two.compared and (two.point, two.low, two.high) == (650.0, 600.0, 700.0)  # two runs: ends at the runs
+    three, expected = mean_estimate((1.0, 2.0, 6.0)), aggregate({"m": np.array([[1.0], [2.0], [6.0]])})["m"]["mean"]
+    assert (three.point, three.low, three.high, three.fewest_runs) == (expected.point, expected.low, expected.high, 3)
 
 
 def test_intervals_are_reproducible_and_leave_numpys_generator_alone():

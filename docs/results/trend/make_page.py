@@ -115,7 +115,7 @@ def mean_cell(values: dict[int, float]) -> str:
     if not values:
         return "--"
     estimate = mean_estimate(values.values())
-    return f"{estimate.text()} ({len(values)})"
+    return f"{estimate.text()} ({len(values)})" if estimate.compared else estimate.text()
 
 
 def returns_table(rows: list[dict], setting: str) -> str:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import contextlib
 import functools
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -20,12 +20,12 @@ class Estimate:
     point: float
     low: float
     high: float
-    fewest_runs: int | None = None  # a probability of improvement's: the fewer runs (seeds) of its two sides
+    fewest_runs: int | None = None  # the runs (seeds) it rests on; a probability of improvement: its smaller side
 
     @property
     def compared(self) -> bool:
-        """False for a probability of improvement with one run on a side: the bootstrap has nothing to resample
-        there, so its interval is the point itself, whatever the runs are."""
+        """False where it rests on one run (a mean of one seed, or one run on a side of a probability of
+        improvement): the bootstrap has nothing to resample there, so its interval is the point itself."""
         return self.fewest_runs is None or self.fewest_runs > 1
 
     def text(self, digits: int = 0) -> str:
@@ -116,7 +116,7 @@ def mean_estimate(values) -> Estimate:
 
 @functools.cache
 def _mean_estimate(values: tuple[float, ...]) -> Estimate:
-    return aggregate({"m": np.asarray(values)[:, None]})["m"]["mean"]
+    return replace(aggregate({"m": np.asarray(values)[:, None]})["m"]["mean"], fewest_runs=len(values))
 
 
 def _iqm_slice(size: int) -> tuple[int, int]:
