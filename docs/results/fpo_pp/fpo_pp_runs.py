@@ -18,6 +18,8 @@ HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
 ROOT = RESULTS.parents[1]
 REPORT = HERE / "report" / "runs.csv"
+# Where the runs made before eval.json recorded its machine ran: the sessions' machines, one torch thread a run
+UNRECORDED_MACHINE = "machines the runs did not record (2-core CPUs, one torch thread a run: `../history.md`)"
 RUNS = HERE / "runs"
 PROFILE = HERE / "report_task_profile" / "runs.csv"
 TUNED = RESULTS / "tuning" / "fresh" / "runs.csv"

@@ -15,10 +15,12 @@ from fpo_pp_runs import (
     DMC_PROFILE,
     GPU,
     REPORT,
+    ROOT,
     SETTINGS,
     SMALL,
     TASKS,
     TUNED_KEY,
+    UNRECORDED_MACHINE,
     Method,
     cell,
     flat,
@@ -33,8 +35,8 @@ from fpo_pp_runs import (
 )
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.studies.reports.committed_runs import read_jsonl, seeds_text
-from refpo_warp.studies.reports.phrases import and_list
+from refpo_warp.studies.reports.committed_runs import read_jsonl, run_machine, seeds_text
+from refpo_warp.studies.reports.phrases import and_list, machine_text, value_range
 from refpo_warp.utils.errors import DataFileError
 
 
@@ -215,6 +217,20 @@ def what_ran() -> tuple[str, str]:
         )
     missing = [f"`{m['label']}`" for m in spec["methods"] if not any(r["label"] == m["label"] for r in rows)]
     return "; ".join(parts), (", ".join(missing) if missing else "none")
+
+
+def run_times() -> str:
+    """Per label of report/runs.csv: its runs' wall times by the machine each recorded."""
+    rows = read_rows(REPORT)
+    by_machine: dict[str, dict[str, list[float]]] = {}
+    for m in sweep_spec()["methods"]:
+        for r in (r for r in rows if r["label"] == m["label"]):
+            where = machine_text(run_machine(ROOT / r["run_dir"]), UNRECORDED_MACHINE)
+            by_machine.setdefault(where, {}).setdefault(m["label"], []).append(float(r["minutes"]))
+    return "; ".join(
+        f"on {where}, " + ", ".join(f"`{label}` {value_range(minutes, '.0f')} min" for label, minutes in labels.items())
+        for where, labels in by_machine.items()
+    )
 
 
 def gpu_values() -> dict[str, str]:

@@ -65,6 +65,7 @@ from fpo_pp_text import (
     lr_text,
     poi_rows,
     poi_table,
+    run_times,
     settings_table,
     small_verdicts,
     sweep_text,
@@ -231,6 +232,7 @@ def values() -> dict[str, object]:
     ran, missing_labels = what_ran()
     v["what_ran"] = ran
     v["not_run"] = missing_labels
+    v["run_times"] = run_times()
     # The first grid: its ablation against its own FPO++, seed by seed.
     prof = []
     pm = "dmc_point_mass"

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import functools
 import itertools
-import json
 from pathlib import Path
 
 import matplotlib
@@ -24,9 +23,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
-from refpo_warp.studies.reports.committed_runs import append_runs, read_jsonl, read_rows, seeds_text
+from refpo_warp.studies.reports.committed_runs import append_runs, read_jsonl, read_rows, run_machine, seeds_text
 from refpo_warp.studies.reports.intervals import Estimate, improvement, mean_estimate
-from refpo_warp.studies.reports.phrases import and_list, value_range
+from refpo_warp.studies.reports.phrases import and_list, machine_text, value_range
 from refpo_warp.studies.reports.results_page import page_main
 from refpo_warp.utils.atomic_files import save_figure
 
@@ -73,7 +72,7 @@ def committed() -> list[dict]:
         run = ROOT / row["run_dir"]
         row["evals"] = read_jsonl(run / "progress_eval.jsonl") if (run / "progress_eval.jsonl").exists() else []
         row["train"] = read_jsonl(run / "progress_train.jsonl") if (run / "progress_train.jsonl").exists() else []
-        row["machine"] = json.loads((run / "eval.json").read_text()).get("machine") if row["status"] == "ok" else None
+        row["machine"] = run_machine(run) if row["status"] == "ok" else None
         rows.append(row)
     return rows
 
@@ -362,23 +361,12 @@ def still_to_run(rows: list[dict]) -> str:
     return and_list(missing) if missing else "none"
 
 
-def machine_text(machine: dict | None) -> str:
-    if machine is None:
-        return UNRECORDED_MACHINE
-    threads = machine["torch_threads"]
-    return (
-        f"a {machine['cpu_count']}-core {machine['cpu']} ({machine['cpu_capability']}), "
-        + ("one torch thread" if threads == 1 else f"{threads} torch threads")
-        + " a run"
-    )
-
-
 def run_minutes(rows: list[dict]) -> str:
     """The finished runs' wall times, by the machine that trained them."""
     by_machine: dict[str, list[float]] = {}
     for r in rows:
         if r.get("minutes"):
-            by_machine.setdefault(machine_text(r["machine"]), []).append(float(r["minutes"]))
+            by_machine.setdefault(machine_text(r["machine"], UNRECORDED_MACHINE), []).append(float(r["minutes"]))
     if not by_machine:
         return "No committed run has its wall time yet"
     return "The committed runs took " + "; ".join(

@@ -53,6 +53,13 @@ def read_jsonl(path: Path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
 
 
+def run_machine(run: Path) -> dict | None:
+    """The machine a committed run recorded in its ``eval.json``; None for a failed run or one made before runs
+    recorded it."""
+    path = run / "eval.json"
+    return json.loads(path.read_text()).get("machine") if path.exists() else None
+
+
 def copy_run(run: Path, dst: Path) -> None:
     """A run's small files into ``dst``: config.yaml, eval.json, and from its progress.jsonl the periodic evaluations
     (progress_eval.jsonl) and every iteration's training statistics (progress_train.jsonl)."""

@@ -1,6 +1,6 @@
 """Words the results pages put around their numbers, shared by the page scripts under docs/results/."""
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 
 
 def and_list(items: Iterable[str]) -> str:
@@ -17,3 +17,16 @@ def value_range(values: Iterable[float], fmt: str, sep: str = "-") -> str:
     listed = list(values)
     lo, hi = format(min(listed), fmt), format(max(listed), fmt)
     return lo if lo == hi else f"{lo}{sep}{hi}"
+
+
+def machine_text(machine: Mapping | None, unrecorded: str) -> str:
+    """Where a run trained, from its ``eval.json`` record (``refpo_warp/utils/machine.py``): cores, CPU, its widest
+    vector instructions and torch threads; ``unrecorded`` for a run made before runs recorded it."""
+    if machine is None:
+        return unrecorded
+    threads = machine["torch_threads"]
+    return (
+        f"a {machine['cpu_count']}-core {machine['cpu']} ({machine['cpu_capability']}), "
+        + ("one torch thread" if threads == 1 else f"{threads} torch threads")
+        + " a run"
+    )
