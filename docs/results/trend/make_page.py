@@ -144,11 +144,14 @@ def paired(rows: list[dict], label: str, multiple: int) -> tuple[np.ndarray, np.
     )
 
 
+def leader(p: Estimate, name: str) -> str:
+    """Who P(the flow at N = 10 beats PPO) says leads (``name``: the flow's)."""
+    return {1: f"{name} ahead", -1: "PPO ahead", 0: "not separated"}[p.side]
+
+
 def gap_text(p: Estimate, name: str) -> str:
-    """P(the flow at N = 10 beats PPO), its interval and who it says leads (``name``: the flow's)."""
-    if not p.compared:
-        return p.text(2)
-    return f"{p.text(2)}: " + {1: f"{name} ahead", -1: "PPO ahead", 0: "not separated"}[p.side]
+    """P(the flow at N = 10 beats PPO), its interval and who it says leads."""
+    return f"{p.text(2)}: {leader(p, name)}" if p.compared else p.text(2)
 
 
 def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Estimate]]]:
@@ -257,10 +260,9 @@ def movement(g0: Estimate, g1: Estimate) -> str:
         moved = f"{s0}'s lead {'narrows' if abs(p1 - 0.5) < abs(p0 - 0.5) else 'widens'}"
     if not (g0.compared and g1.compared):
         return f"by the point estimates {moved}; one seed separates nothing"
-    both = g0.separates and g1.separates
-    return (
-        f"by the point estimates {moved}; {'both intervals leave out' if both else 'not both intervals leave out'} 0.5"
-    )
+    if g0.high >= g1.low and g1.high >= g0.low:
+        return f"by the point estimates {moved}; the two intervals overlap, so the seeds do not show the change"
+    return f"by the point estimates {moved}, and the two intervals do not overlap"
 
 
 def answer(found: dict[str, dict[int, Estimate]]) -> str:
@@ -278,8 +280,12 @@ def answer(found: dict[str, dict[int, Estimate]]) -> str:
             lines.append(f"- **{METHODS[label]}**: only {first}x reached so far: {gap_text(g0, 'it')}.")
             continue
         lines.append(
-            f"- **{METHODS[label]}** against PPO: P(improvement) {gap_text(g0, METHODS[label])} at {first}x, "
-            f"{gap_text(g1, METHODS[label])} at {last}x: {movement(g0, g1)}."
+            f"- **{METHODS[label]}** against PPO: P(improvement) "
+            + ", ".join(
+                f"{g.text(2)} at {m}x" + (f" ({leader(g, METHODS[label])})" if g.compared else "")
+                for m, g in ((first, g0), (last, g1))
+            )
+            + f"; {movement(g0, g1)}."
         )
     return "\n".join(lines)
 
