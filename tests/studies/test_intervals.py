@@ -4,7 +4,7 @@ with more runs, and the probability of improvement of separated and of identical
 import numpy as np
 import pytest
 
-from refpo_warp.studies.reports.intervals import aggregate, improvement, mean_estimate
+from refpo_warp.studies.reports.intervals import aggregate, improvement, improvement_of, mean_estimate
 
 
 def test_point_estimates_by_hand_and_intervals_around_them():
@@ -53,6 +53,12 @@ def test_a_mean_of_one_seed_has_no_interval_and_of_more_the_bootstraps():
     assert two.compared and (two.point, two.low, two.high) == (650.0, 600.0, 700.0)  # two runs: ends at the runs
     three, expected = mean_estimate((1.0, 2.0, 6.0)), aggregate({"m": np.array([[1.0], [2.0], [6.0]])})["m"]["mean"]
     assert (three.point, three.low, three.high, three.fewest_runs) == (expected.point, expected.low, expected.high, 3)
+
+
+def test_one_tasks_improvement_from_score_lists_is_the_matrix_ones():
+    x, y = [3.0, 0.0, 4.0], (1.0, 5.0)  # x wins 2 of the 6 pairs: 3 and 4 beat 1, nothing beats 5
+    got, expected = improvement_of(x, y), improvement(np.array([[3.0], [0.0], [4.0]]), np.array([[1.0], [5.0]]))
+    assert got == expected and got.point == pytest.approx(2 / 6) and got.fewest_runs == 2
 
 
 def test_intervals_are_reproducible_and_leave_numpys_generator_alone():

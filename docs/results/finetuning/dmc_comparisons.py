@@ -9,7 +9,6 @@ from pathlib import Path
 from dmc_runs import Run, final_returns, first_reaching, group, load_run, n10, return_targets, run_groups
 from half_return_checkpoint import nearest_up_to_crossing
 from number_text import (
-    improvement_estimate,
     interval_cell,
     ksteps,
     mean_estimate,
@@ -21,7 +20,7 @@ from number_text import (
 from study_layout import DMC_KEPT, DMC_TASKS, FLOWS_HELD, HERE, NAMES, SCRATCH_KEPT, prose, read_json, read_yaml
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
-from refpo_warp.studies.reports.intervals import Estimate
+from refpo_warp.studies.reports.intervals import Estimate, improvement_of
 from refpo_warp.studies.reports.phrases import and_list
 
 
@@ -149,7 +148,7 @@ def chosen_and_fresh(task: str) -> tuple[tuple[int, ...], tuple[int, ...]]:
 
 def versus_scratch(task: str, label: str) -> tuple[tuple[Run, ...], tuple[Run, ...], Estimate]:
     fine, scratch = group(DMC_KEPT, task, label), group(SCRATCH_KEPT, task, label)
-    return fine, scratch, improvement_estimate(tuple(n10(fine)), tuple(n10(scratch)))
+    return fine, scratch, improvement_of(n10(fine), n10(scratch))
 
 
 def verdict(p: Estimate, better: str, worse: str) -> str:
@@ -239,7 +238,7 @@ def ppo_values() -> dict:
                 if not runs:
                     continue
                 ppo_runs = [r for r in ppo if seeds is None or r.seed in seeds]
-                p = improvement_estimate(tuple(n10(runs)), tuple(n10(ppo_runs)))
+                p = improvement_of(n10(runs), n10(ppo_runs))
                 lines.append(
                     f"| {task} | {NAMES[label]} | {seeds_text(r.seed for r in runs)} | {interval_cell(n10(runs))} | "
                     + ("" if label == "ppo" else f"{p.text(2)} | {verdict(p, 'method', 'PPO')}")
@@ -254,7 +253,7 @@ def ppo_values() -> dict:
     above: list[str] = []
     for label in FLOWS_HELD:
         values = n10(group(DMC_KEPT, task, label), fresh)
-        p = improvement_estimate(tuple(values), tuple(ppo_fresh))
+        p = improvement_of(values, ppo_fresh)
         item = f"{prose(label)} ({span(values)})"
         (beaten if max(values) < min(ppo_fresh) else above if p.side > 0 else split).append(item)
     text = (
@@ -273,7 +272,7 @@ def ppo_values() -> dict:
     for label in FLOWS_HELD:
         reacher_runs = group(DMC_KEPT, task, label)
         if reacher_runs:
-            p = improvement_estimate(tuple(n10(reacher_runs)), tuple(reacher_ppo))
+            p = improvement_of(n10(reacher_runs), reacher_ppo)
             rest.append((prose(label), p))
     none = all(not p.separates for _, p in rest)
     sentences.append(

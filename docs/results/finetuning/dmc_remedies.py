@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dmc_comparisons import chosen_and_fresh, verdict
 from dmc_runs import Run, final_returns, group, n10
-from number_text import improvement_estimate, interval_cell, slashed, span
+from number_text import interval_cell, slashed, span
 from study_layout import (
     DMC_KEPT,
     DMC_METHODS,
@@ -21,7 +21,7 @@ from study_layout import (
 )
 
 from refpo_warp.studies.reports.committed_runs import seeds_text
-from refpo_warp.studies.reports.intervals import Estimate
+from refpo_warp.studies.reports.intervals import Estimate, improvement_of
 from refpo_warp.studies.reports.phrases import and_list
 
 
@@ -119,7 +119,7 @@ def held_values() -> dict:
             updated = group(UPDATED_KEPT, task, label)
             seeds = {r.seed for r in updated}
             held = [r for r in group(DMC_KEPT, task, label) if r.seed in seeds]
-            p = improvement_estimate(tuple(n10(held)), tuple(n10(updated)))
+            p = improvement_of(n10(held), n10(updated))
             lines.append(
                 f"| {task} | {NAMES[label]} | {interval_cell(n10(held))} | {interval_cell(n10(updated))} | "
                 f"{p.text(2)} | {verdict(p, 'held', 'updated')} |"
@@ -210,12 +210,12 @@ def adaptive_values() -> dict:
     aspo = n10(group(DMC_KEPT, task, "refpo_aspo"), fresh)
     plain = n10(group(DMC_KEPT, task, "refpo"), fresh)
     ppo = n10(group(DMC_KEPT, task, "ppo"), fresh)
-    p_plain = improvement_estimate(tuple(adaptive), tuple(plain))
-    p_ppo = improvement_estimate(tuple(adaptive), tuple(ppo))
-    p_aspo_ppo = improvement_estimate(tuple(aspo), tuple(ppo))
+    p_plain = improvement_of(adaptive, plain)
+    p_ppo = improvement_of(adaptive, ppo)
+    p_aspo_ppo = improvement_of(aspo, ppo)
     reacher = n10(group(DMC_KEPT, "dmc_reacher_easy", "refpo_adaptive"))
     reacher_plain = n10(group(DMC_KEPT, "dmc_reacher_easy", "refpo"))
-    p_reacher = improvement_estimate(tuple(reacher), tuple(reacher_plain))
+    p_reacher = improvement_of(reacher, reacher_plain)
 
     def separated(p: Estimate) -> str:
         return "the interval separates them" if p.separates else "the interval holds one half: not separated"

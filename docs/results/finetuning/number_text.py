@@ -1,13 +1,9 @@
-"""How the fine-tuning page writes numbers: lists, ranges, env steps, and means and probabilities of improvement with
-their 95 % intervals (refpo_warp/studies/reports/intervals.py)."""
+"""How the fine-tuning page writes numbers: lists, ranges, env steps, and means with their 95 % intervals
+(refpo_warp/studies/reports/intervals.py)."""
 
 from __future__ import annotations
 
-import functools
-
-import numpy as np
-
-from refpo_warp.studies.reports.intervals import Estimate, improvement, mean_estimate
+from refpo_warp.studies.reports.intervals import mean_estimate
 
 # ------------------------------------------------------------------------------------------------ formatting
 
@@ -35,12 +31,6 @@ def seconds(value: float) -> str:
 
 
 # ------------------------------------------------------------------------------------------------ intervals
-@functools.cache
-def improvement_estimate(x: tuple[float, ...], y: tuple[float, ...]) -> Estimate:
-    """P(a run of x ends above a run of y) with its 95 % interval."""
-    return improvement(np.asarray(x, float).reshape(-1, 1), np.asarray(y, float).reshape(-1, 1))
-
-
 def interval_cell(values: list[float]) -> str:
     """Mean [95 % interval] (each seed's value)."""
     return f"{mean_estimate(tuple(values)).text()} ({', '.join(f'{v:.0f}' for v in values)})"

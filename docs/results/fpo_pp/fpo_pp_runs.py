@@ -12,7 +12,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.grid.spec import computed_part
-from refpo_warp.studies.reports.intervals import Estimate, improvement, mean_estimate
+from refpo_warp.studies.reports.intervals import Estimate, improvement, improvement_of, mean_estimate
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
@@ -157,7 +157,7 @@ def poi(x: dict[str, dict[int, float]], y: dict[str, dict[int, float]], task: st
         return improvement(mx, my)
     if not x[task] or not y[task]:
         return None
-    return improvement(np.array(list(x[task].values()))[:, None], np.array(list(y[task].values()))[:, None])
+    return improvement_of(x[task].values(), y[task].values())
 
 
 # ------------------------------------------------------------------------------------------------ configs and sizes

@@ -19,7 +19,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, read_jsonl, read_rows, seeds_text
-from refpo_warp.studies.reports.intervals import Estimate, improvement, mean_estimate
+from refpo_warp.studies.reports.intervals import Estimate, improvement_of, mean_estimate
 from refpo_warp.studies.reports.results_page import main_args
 from refpo_warp.utils.atomic_files import save_figure
 
@@ -191,9 +191,9 @@ def comparison_table(runs: TwoWayRuns) -> str:
             continue
         name = method["name"].split(" from")[0]
         for key, statistic in (("success", "success"), ("rarer", "rarer way among the passes")):
-            x = np.array([[p[key]] for p in runs.numbers_at(label, 10).values()])
-            y = np.array([[p[key]] for p in runs.numbers_at("ppo", 10).values()])
-            p = improvement(x, y)
+            x = [p[key] for p in runs.numbers_at(label, 10).values()]
+            y = [p[key] for p in runs.numbers_at("ppo", 10).values()]
+            p = improvement_of(x, y)
             if p.side > 0:
                 says = f"{name} higher: the interval lies above 0.5"
             elif p.side < 0:

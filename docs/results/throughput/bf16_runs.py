@@ -12,7 +12,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, read_rows, seeds_text
-from refpo_warp.studies.reports.intervals import improvement, mean_estimate
+from refpo_warp.studies.reports.intervals import improvement_of, mean_estimate
 
 HERE = Path(__file__).resolve().parent / "bf16_native"
 ROOT = HERE.parents[3]
@@ -78,9 +78,7 @@ def section() -> str:
                 f"{min(r['minutes'] for r in g):.1f}-{max(r['minutes'] for r in g):.1f} |"
             )
         if group[False] and group[True]:
-            p = improvement(
-                np.array([[r["return"]] for r in group[True]]), np.array([[r["return"]] for r in group[False]])
-            )
+            p = improvement_of([r["return"] for r in group[True]], [r["return"] for r in group[False]])
             verdict = {1: "bfloat16's runs end higher", -1: "float32's runs end higher", 0: "not separated"}[p.side]
             speed = np.mean([r["steps_per_s"] for r in group[True]]) / np.mean([r["steps_per_s"] for r in group[False]])
             said.append(

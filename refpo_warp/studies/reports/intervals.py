@@ -167,3 +167,14 @@ def improvement(x: np.ndarray, y: np.ndarray, seed: int = 0, reps: int = REPS) -
     xs, ys = x[x_rows, columns], y[y_rows, columns]
     low, high = _percentile_interval(_improvements(xs, ys)[:, None])
     return Estimate(probability_of_improvement(x, y), float(low[0]), float(high[0]), min(len(x), len(y)))
+
+
+def improvement_of(x_values, y_values) -> Estimate:
+    """``improvement`` on one task: P(a run of x beats a run of y) from each side's list of run scores (each pair of
+    score sets bootstrapped once: pages ask for the same comparison many times)."""
+    return _improvement_of(tuple(float(v) for v in x_values), tuple(float(v) for v in y_values))
+
+
+@functools.cache
+def _improvement_of(x: tuple[float, ...], y: tuple[float, ...]) -> Estimate:
+    return improvement(np.asarray(x)[:, None], np.asarray(y)[:, None])
