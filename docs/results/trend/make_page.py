@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import itertools
+import json
 from pathlib import Path
 
 import matplotlib
@@ -73,6 +74,7 @@ def committed() -> list[dict]:
         row["evals"] = read_jsonl(run / "progress_eval.jsonl") if (run / "progress_eval.jsonl").exists() else []
         row["train"] = read_jsonl(run / "progress_train.jsonl") if (run / "progress_train.jsonl").exists() else []
         row["machine"] = run_machine(run) if row["status"] == "ok" else None
+        row["final"] = json.loads((run / "eval.json").read_text()) if (run / "eval.json").exists() else None
         rows.append(row)
     return rows
 
@@ -101,6 +103,18 @@ def scores(rows: list[dict], label: str, task: str, multiple: int, setting: str)
             if value is not None:
                 out[int(row["seed"])] = value
     return out
+
+
+def final_scores(rows: list[dict], label: str, task: str) -> dict[int, float]:
+    """seed -> the N = 10 return (PPO: its mean action) of the run's final evaluation (``eval.json``), for the runs
+    whose final checkpoint is the largest budget's."""
+    last = multiples()[-1] * profile_iterations() - 1
+    setting = "mean_action" if label == "ppo" else "N=10"
+    return {
+        int(r["seed"]): float(r["final"]["results"][setting]["return_mean"])
+        for r in rows
+        if r["label"] == label and r["task"] == task and r["final"] and r["final"]["checkpoint_iteration"] == last
+    }
 
 
 def window(row: dict, after: int, upto: int) -> list[dict]:
@@ -175,6 +189,64 @@ def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Estimate]]]:
     if not found:
         return "(no flow method has a seed in common with PPO on both tasks yet)", found
     return "\n".join(lines), found
+
+
+def two_evaluations(rows: list[dict]) -> tuple[str, str]:
+    """Each run's last checkpoint evaluated twice, by its periodic evaluation and by its final one (``eval.json``,
+    other episodes): the means over seeds side by side with the largest difference of one run, and the gap to PPO at
+    the largest budget from each evaluation and from their average."""
+    largest = multiples()[-1]
+    header = ["task", "method", "seeds", "periodic", "final (`eval.json`)", "largest difference of a run"]
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    by_source: dict[str, dict[tuple[str, str], dict[int, float]]] = {"periodic": {}, "final": {}, "averaged": {}}
+    for task, label in itertools.product(TASKS, METHODS):
+        final = final_scores(rows, label, task)
+        periodic = {s: v for s, v in scores(rows, label, task, largest, "10").items() if s in final}
+        if not final:
+            continue
+        by_source["periodic"][task, label], by_source["final"][task, label] = periodic, final
+        by_source["averaged"][task, label] = {s: (periodic[s] + final[s]) / 2 for s in final}
+        differences = [abs(periodic[s] - final[s]) for s in final]
+        lines.append(
+            f"| `{task}` | {METHODS[label]} | {seeds_text(sorted(final))} | {mean_cell(periodic)} | "
+            f"{mean_cell(final)} | {max(differences):.0f} |"
+        )
+    sources = {"periodic": "periodic", "final": "final", "averaged": "the two averaged"}
+    gap_lines = [
+        "| method | seeds | " + " | ".join(sources.values()) + " |",
+        "|" + "|".join("---" for _ in range(2 + len(sources))) + "|",
+    ]
+    for label in FLOWS:
+        seeds = sorted(
+            set.intersection(
+                *(
+                    set(by_source["final"].get((t, label), {})) & set(by_source["final"].get((t, "ppo"), {}))
+                    for t in TASKS
+                )
+            )
+        )
+        if not seeds:
+            continue
+        cells = []
+        for source in sources:
+            found = by_source[source]
+            flow = np.array([[found[t, label][s] for t in TASKS] for s in seeds])
+            ppo = np.array([[found[t, "ppo"][s] for t in TASKS] for s in seeds])
+            cells.append(gap_text(improvement(flow, ppo), "flow"))
+        gap_lines.append(f"| {METHODS[label]} | {seeds_text(seeds)} | " + " | ".join(cells) + " |")
+    if len(lines) == 2:
+        return "(no committed run has its final evaluation at the largest budget yet)", ""
+    gaps = "\n".join(gap_lines) if len(gap_lines) > 2 else "(no flow method shares a seed with PPO on both tasks)"
+    return "\n".join(lines), gaps
+
+
+def eval_episodes(rows: list[dict]) -> str:
+    """How many episodes the periodic and the final evaluations each ran (one env an episode)."""
+    periodic = int(SWEEP["overrides"]["eval"]["interval_num_envs"])
+    final = sorted({int(r["final"]["eval_envs"]) for r in rows if r["final"]})
+    if final == [periodic]:
+        return f"{periodic} episodes each"
+    return f"{periodic} episodes and {and_list(str(n) for n in final)} episodes"
 
 
 def health_table(rows: list[dict]) -> str:
@@ -384,6 +456,7 @@ def run_minutes(rows: list[dict]) -> str:
 def values() -> dict[str, object]:
     rows = committed()
     gap, found = gap_table(rows)
+    twice, twice_gaps = two_evaluations(rows)
     if rows:
         curves(rows, HERE / "trend_curves.png")
     return {
@@ -399,6 +472,9 @@ def values() -> dict[str, object]:
         "gap_table": gap,
         "answer": answer(found),
         "degradation": degradation(rows),
+        "two_evaluations": twice,
+        "two_evaluations_gap": twice_gaps,
+        "eval_episodes": eval_episodes(rows),
         "health_table": health_table(rows),
         "health_verdicts": health_verdicts(rows),
         "failures": failures(rows),
