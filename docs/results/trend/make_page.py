@@ -25,7 +25,7 @@ import numpy as np
 
 from refpo_warp.config.yaml_files import load_yaml
 from refpo_warp.studies.reports.committed_runs import append_runs, read_jsonl, read_rows, run_machine, seeds_text
-from refpo_warp.studies.reports.intervals import Estimate, improvement, mean_estimate
+from refpo_warp.studies.reports.intervals import Estimate, improvement, improvement_of, mean_estimate
 from refpo_warp.studies.reports.phrases import and_list, machine_text, value_range
 from refpo_warp.studies.reports.results_page import page_main
 from refpo_warp.utils.atomic_files import save_figure
@@ -390,7 +390,25 @@ def degradation(rows: list[dict]) -> str:
             f"- {METHODS[label]} on `{task}` (N = 10): the mean {mean_cell(means[first])} at {first}x, "
             f"{mean_cell(means[last])} at {last}x; {'; '.join(by_seed)}."
         )
+    lines += [line for task in TASKS if (line := straightness(rows, task))]
     return "\n".join(lines) if lines else "- Not enough committed runs yet."
+
+
+def straightness(rows: list[dict], task: str) -> str | None:
+    """The flows' straightness error at each run's last logged iteration (a failed run: the last before its stop),
+    and P(an FPO run's above a ReFPO run's): does FPO's flow bend where ReFPO's stays straight?"""
+    last = {
+        label: [r["train"][-1]["Flow/straightness_error"] for r in rows if (r["task"], r["label"]) == (task, label)]
+        for label in FLOWS
+    }
+    if not last["fpo"] or not last["refpo"]:
+        return None
+    ranges = and_list(f"{METHODS[label]} {value_range(v, '.3g')}" for label, v in last.items() if v)
+    p = improvement_of(last["fpo"], last["refpo"])
+    return (
+        f"- The straightness error on `{task}` at each run's last logged iteration (a stopped run's: before its stop): "
+        f"{ranges}. P(an FPO run's error above a {METHODS['refpo']} run's) {p.text(2)}."
+    )
 
 
 # ------------------------------------------------------------------------------------------------ figure
@@ -426,6 +444,15 @@ def curves(rows: list[dict], path: Path) -> None:
 
 
 # ------------------------------------------------------------------------------------------------ the page
+def committed_text(rows: list[dict]) -> str:
+    """How much of the grid is committed, and what is still to run."""
+    total = len(TASKS) * len(METHODS) * len(SWEEP["seeds"])
+    if len(rows) == total:
+        return f"All {total} runs of the grid are committed"
+    verb = "is" if len(rows) == 1 else "are"
+    return f"{len(rows)} of the grid's {total} runs {verb} committed; still to run: {still_to_run(rows)}"
+
+
 def still_to_run(rows: list[dict]) -> str:
     have = {(r["task"], r["label"], int(r["seed"])) for r in rows}
     missing = []
@@ -460,9 +487,7 @@ def values() -> dict[str, object]:
     if rows:
         curves(rows, HERE / "trend_curves.png")
     return {
-        "committed": f"{len(rows)} of the grid's {len(TASKS) * len(METHODS) * len(SWEEP['seeds'])} runs "
-        + ("is" if len(rows) == 1 else "are"),
-        "still_to_run": still_to_run(rows),
+        "committed": committed_text(rows),
         "run_minutes": run_minutes(rows),
         "budget": f"{env_steps_per_profile():,} env steps ({profile_iterations()} iterations)",
         "largest": f"{multiples()[-1]}x",
