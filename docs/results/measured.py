@@ -9,6 +9,9 @@ Rewrites each block of README.md between ``<!-- measured: NAME ... -->`` and ``<
   (``tuning/fresh/runs.csv``: each method's per-task interval against tuned PPO's and its probability of
   improvement) and its budget runs (``tuning/budget/``: each run's last periodic return against its peak, by the fall
   share of ``tuning/criteria.yaml``, whose one-step share also judges the fine-tuned runs below);
+- ``trend``: the trend to 8x the CPU profile's env steps (``trend/runs.csv`` and its runs, read by the trend page's
+  own functions): ReFPO against PPO and against FPO at the smallest and the largest budget, the flows' straightness
+  error at each run's end and the runs stopped on a non-finite loss;
 - ``demonstrations``: the fine-tuning study's GridWorld clones (``finetuning/gridworld/*/eval.json``) and DMC runs
   (``finetuning/dmc/``, ``finetuning/scratch/``: each run's eval.json);
 - ``table``: what the methods learn at the shipped CPU profiles, from
@@ -57,7 +60,8 @@ from results_reading import (
 )
 
 from refpo_warp.studies.reports.committed_runs import read_jsonl, seeds_text
-from refpo_warp.studies.reports.phrases import and_list
+from refpo_warp.studies.reports.intervals import improvement_of
+from refpo_warp.studies.reports.phrases import and_list, value_range
 
 if TYPE_CHECKING:  # imported where used: numpy's import is the cost of a page that needs no interval
     from refpo_warp.studies.reports.intervals import Estimate
@@ -407,6 +411,50 @@ def budget() -> str:
     return where + verdict + budget_text + advice
 
 
+# ------------------------------------------------------------------------------------------------ trend
+def trend() -> str:
+    """The trend to 8x the CPU profile's env steps at the paper's values (trend/runs.csv, the trend page's own
+    reading): ReFPO against PPO at the smallest and the largest budget, whether any flow method leads PPO at any
+    budget, and ReFPO against FPO in returns, straightness and non-finite stops."""
+    page = page_script("trend", "make_page")
+    rows = page.committed()
+    _, found = page.gap_table(rows)
+    if "refpo" not in found or "fpo" not in found:
+        return "the trend's ReFPO, FPO and PPO runs are not committed yet (`docs/results/trend/`)"
+    refpo = found["refpo"]
+    first, last = min(refpo), max(refpo)
+    seeds = sorted({int(r["seed"]) for r in rows})
+    averaged = page.last_checkpoint_gaps(page.last_checkpoint(rows)).get("refpo")
+    text = (
+        f"Measured on a CPU, seeds {seeds_text(seeds)} of `{relative(page.RUNS_CSV)}`: P(a ReFPO run beats a PPO run "
+        f"at N = 10) {refpo[first].text(2)} at {first}×, {refpo[last].text(2)} at {last}×"
+    )
+    if averaged is not None:
+        text += f" (from each run's two evaluations of its last checkpoint averaged, {averaged[1]['averaged'].text(2)})"
+    ahead = [f"{page.METHODS[label]} at {m}×" for label, by in found.items() for m, g in by.items() if g.side > 0]
+    text += f", and {and_list(ahead)} ahead of PPO" if ahead else ", and no flow method is ahead of PPO at any budget"
+    over_fpo = page.refpo_over_fpo(rows)
+    bends = {task: page.final_straightness(rows, task) for task in page.TASKS}
+    bent = all(improvement_of(b["fpo"], b["refpo"]).side > 0 for b in bends.values())
+    stopped = {label: sum(r["status"] == "failed" for r in rows if r["label"] == label) for label in ("fpo", "refpo")}
+    runs = {label: sum(r["label"] == label for r in rows) for label in ("fpo", "refpo")}
+    fpo_errors = [e for b in bends.values() for e in b["fpo"]]
+    refpo_errors = [e for b in bends.values() for e in b["refpo"]]
+    text += (
+        f"; P(a ReFPO run beats an FPO run) {over_fpo[first][0].text(2)} at {first}× and "
+        f"{over_fpo[last][0].text(2)} at {last}×, "
+        f"the flow's straightness error at each run's end {value_range(refpo_errors, '.3g')} for ReFPO and "
+        f"{value_range(fpo_errors, '.3g')} for FPO"
+        + (" (every FPO run above every ReFPO run on each task)" if bent else "")
+        + f", and {stopped['fpo']} of {runs['fpo']} FPO runs stopped on a non-finite loss, "
+        f"{stopped['refpo']} of {runs['refpo']} ReFPO runs"
+    )
+    if bent and stopped["refpo"] <= stopped["fpo"] and over_fpo[first][0].side > 0 and not ahead:
+        text += ": for runs past the CPU budget pick ReFPO over FPO; "
+        text += f"up to {last}× the budget, no flow method overtakes PPO"
+    return text
+
+
 # ------------------------------------------------------------------------------------------------ demonstrations
 
 
@@ -479,21 +527,26 @@ def demonstrations() -> str:
     return grid + dmc
 
 
-def multimodal_page(script: str = "finetuning"):
-    """A two-way task page's script (multimodal/<script>.py: finetuning or scratch), its functions read, not run; its
-    folder goes on the path for the scripts it imports (two_way_runs.py and the rest)."""
+def page_script(folder: str, script: str):
+    """A results page's script (``<folder>/<script>.py``), its functions read, not run; its folder goes on the path
+    for the scripts it imports (multimodal/two_way_runs.py and the rest)."""
     import importlib.util
 
-    folder = str(RESULTS / "multimodal")
-    if folder not in sys.path:
-        sys.path.append(folder)
-    path = RESULTS / "multimodal" / f"{script}.py"
-    spec = importlib.util.spec_from_file_location(f"multimodal_{script}", path)
+    where = str(RESULTS / folder)
+    if where not in sys.path:
+        sys.path.append(where)
+    path = RESULTS / folder / f"{script}.py"
+    spec = importlib.util.spec_from_file_location(f"{folder}_{script}", path)
     if spec is None or spec.loader is None:
         raise SystemExit(f"{path}: not a Python script")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def multimodal_page(script: str = "finetuning"):
+    """A two-way task page's script: multimodal/finetuning.py or multimodal/scratch.py."""
+    return page_script("multimodal", script)
 
 
 def multimodal_scratch() -> tuple[str, int, int]:
@@ -575,6 +628,7 @@ BLOCKS = {
     "gif": gif,
     "humanoid_gif": humanoid_gif,
     "budget": budget,
+    "trend": trend,
     "demonstrations": demonstrations,
     "multimodal": multimodal,
     "table": table,

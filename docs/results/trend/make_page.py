@@ -144,23 +144,36 @@ def returns_table(rows: list[dict], setting: str) -> str:
     return "\n".join(lines)
 
 
-def paired(rows: list[dict], label: str, multiple: int) -> tuple[np.ndarray, np.ndarray, list[int]] | None:
-    """(seeds x tasks) of the flow at N = 10 and of PPO, over the seeds both have on every task; None if none."""
-    flow = {t: scores(rows, label, t, multiple, "10") for t in TASKS}
-    ppo = {t: scores(rows, "ppo", t, multiple, "10") for t in TASKS}
-    seeds = sorted(set.intersection(*(set(flow[t]) & set(ppo[t]) for t in TASKS)))
+def paired(
+    rows: list[dict], label: str, multiple: int, other: str = "ppo"
+) -> tuple[np.ndarray, np.ndarray, list[int]] | None:
+    """(seeds x tasks) of ``label`` and of ``other`` (PPO unless named) at N = 10, over the seeds both have on every
+    task; None if none."""
+    x = {t: scores(rows, label, t, multiple, "10") for t in TASKS}
+    y = {t: scores(rows, other, t, multiple, "10") for t in TASKS}
+    seeds = sorted(set.intersection(*(set(x[t]) & set(y[t]) for t in TASKS)))
     if not seeds:
         return None
     return (
-        np.array([[flow[t][s] for t in TASKS] for s in seeds]),
-        np.array([[ppo[t][s] for t in TASKS] for s in seeds]),
+        np.array([[x[t][s] for t in TASKS] for s in seeds]),
+        np.array([[y[t][s] for t in TASKS] for s in seeds]),
         seeds,
     )
 
 
-def leader(p: Estimate, name: str) -> str:
-    """Who P(the flow at N = 10 beats PPO) says leads (``name``: the flow's)."""
-    return {1: f"{name} ahead", -1: "PPO ahead", 0: "not separated"}[p.side]
+def refpo_over_fpo(rows: list[dict]) -> dict[int, tuple[Estimate, list[int]]]:
+    """budget -> P(a ReFPO run at N = 10 beats an FPO run) over both tasks, and the seeds it pairs."""
+    out = {}
+    for m in multiples():
+        pair = paired(rows, "refpo", m, other="fpo")
+        if pair is not None:
+            out[m] = (improvement(pair[0], pair[1]), pair[2])
+    return out
+
+
+def leader(p: Estimate, name: str, other: str = "PPO") -> str:
+    """Who P(the flow at N = 10 beats ``other``) says leads (``name``: the flow's)."""
+    return {1: f"{name} ahead", -1: f"{other} ahead", 0: "not separated"}[p.side]
 
 
 def gap_text(p: Estimate, name: str) -> str:
@@ -191,53 +204,72 @@ def gap_table(rows: list[dict]) -> tuple[str, dict[str, dict[int, Estimate]]]:
     return "\n".join(lines), found
 
 
-def two_evaluations(rows: list[dict]) -> tuple[str, str]:
-    """Each run's last checkpoint evaluated twice, by its periodic evaluation and by its final one (``eval.json``,
-    other episodes): the means over seeds side by side with the largest difference of one run, and the gap to PPO at
-    the largest budget from each evaluation and from their average."""
-    largest = multiples()[-1]
-    header = ["task", "method", "seeds", "periodic", "final (`eval.json`)", "largest difference of a run"]
-    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    by_source: dict[str, dict[tuple[str, str], dict[int, float]]] = {"periodic": {}, "final": {}, "averaged": {}}
+SOURCES = {"periodic": "periodic", "final": "final", "averaged": "the two averaged"}
+
+
+def last_checkpoint(rows: list[dict]) -> dict[str, dict[tuple[str, str], dict[int, float]]]:
+    """Each finished run's last checkpoint scored by its periodic evaluation, by its final one (``eval.json``) and by
+    the two averaged: source -> (task, label) -> seed -> N = 10 return (PPO: its mean action)."""
+    out: dict[str, dict[tuple[str, str], dict[int, float]]] = {source: {} for source in SOURCES}
     for task, label in itertools.product(TASKS, METHODS):
         final = final_scores(rows, label, task)
-        periodic = {s: v for s, v in scores(rows, label, task, largest, "10").items() if s in final}
-        if not final:
-            continue
-        by_source["periodic"][task, label], by_source["final"][task, label] = periodic, final
-        by_source["averaged"][task, label] = {s: (periodic[s] + final[s]) / 2 for s in final}
+        if final:
+            periodic = {s: v for s, v in scores(rows, label, task, multiples()[-1], "10").items() if s in final}
+            out["periodic"][task, label], out["final"][task, label] = periodic, final
+            out["averaged"][task, label] = {s: (periodic[s] + final[s]) / 2 for s in final}
+    return out
+
+
+def last_checkpoint_gaps(
+    by_source: dict[str, dict[tuple[str, str], dict[int, float]]],
+) -> dict[str, tuple[list[int], dict[str, Estimate]]]:
+    """Per flow method: the seeds it shares with PPO on both tasks and, from each source, P(its run beats PPO's)."""
+    out = {}
+    for label in FLOWS:
+        final = by_source["final"]
+        seeds = sorted(
+            set.intersection(*(set(final.get((t, label), {})) & set(final.get((t, "ppo"), {})) for t in TASKS))
+        )
+        if seeds:
+            out[label] = (
+                seeds,
+                {
+                    source: improvement(
+                        np.array([[found[t, label][s] for t in TASKS] for s in seeds]),
+                        np.array([[found[t, "ppo"][s] for t in TASKS] for s in seeds]),
+                    )
+                    for source, found in by_source.items()
+                },
+            )
+    return out
+
+
+def two_evaluations(rows: list[dict]) -> tuple[str, str]:
+    """The two evaluations' means over seeds side by side with the largest difference of one run, and the gap to PPO
+    at the largest budget from each evaluation and from their average."""
+    by_source = last_checkpoint(rows)
+    if not by_source["final"]:
+        return "(no committed run has its final evaluation at the largest budget yet)", ""
+    header = ["task", "method", "seeds", "periodic", "final (`eval.json`)", "largest difference of a run"]
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    for (task, label), final in by_source["final"].items():
+        periodic = by_source["periodic"][task, label]
         differences = [abs(periodic[s] - final[s]) for s in final]
         lines.append(
             f"| `{task}` | {METHODS[label]} | {seeds_text(sorted(final))} | {mean_cell(periodic)} | "
             f"{mean_cell(final)} | {max(differences):.0f} |"
         )
-    sources = {"periodic": "periodic", "final": "final", "averaged": "the two averaged"}
+    gaps = last_checkpoint_gaps(by_source)
+    if not gaps:
+        return "\n".join(lines), "(no flow method shares a seed with PPO on both tasks)"
     gap_lines = [
-        "| method | seeds | " + " | ".join(sources.values()) + " |",
-        "|" + "|".join("---" for _ in range(2 + len(sources))) + "|",
+        "| method | seeds | " + " | ".join(SOURCES.values()) + " |",
+        "|" + "|".join("---" for _ in range(2 + len(SOURCES))) + "|",
     ]
-    for label in FLOWS:
-        seeds = sorted(
-            set.intersection(
-                *(
-                    set(by_source["final"].get((t, label), {})) & set(by_source["final"].get((t, "ppo"), {}))
-                    for t in TASKS
-                )
-            )
-        )
-        if not seeds:
-            continue
-        cells = []
-        for source in sources:
-            found = by_source[source]
-            flow = np.array([[found[t, label][s] for t in TASKS] for s in seeds])
-            ppo = np.array([[found[t, "ppo"][s] for t in TASKS] for s in seeds])
-            cells.append(gap_text(improvement(flow, ppo), "flow"))
+    for label, (seeds, by) in gaps.items():
+        cells = [gap_text(by[source], "flow") for source in SOURCES]
         gap_lines.append(f"| {METHODS[label]} | {seeds_text(seeds)} | " + " | ".join(cells) + " |")
-    if len(lines) == 2:
-        return "(no committed run has its final evaluation at the largest budget yet)", ""
-    gaps = "\n".join(gap_lines) if len(gap_lines) > 2 else "(no flow method shares a seed with PPO on both tasks)"
-    return "\n".join(lines), gaps
+    return "\n".join(lines), "\n".join(gap_lines)
 
 
 def eval_episodes(rows: list[dict]) -> str:
@@ -390,17 +422,31 @@ def degradation(rows: list[dict]) -> str:
             f"- {METHODS[label]} on `{task}` (N = 10): the mean {mean_cell(means[first])} at {first}x, "
             f"{mean_cell(means[last])} at {last}x; {'; '.join(by_seed)}."
         )
+    gaps = refpo_over_fpo(rows)
+    if gaps:
+        seeds = sorted(set().union(*(set(g[1]) for g in gaps.values())))
+        lines.append(
+            f"- P(a {METHODS['refpo']} run at N = 10 scores above an FPO run), over both tasks, seeds "
+            f"{seeds_text(seeds)}: "
+            + "; ".join(f"{g.text(2)} at {m}x ({leader(g, METHODS['refpo'], 'FPO')})" for m, (g, _) in gaps.items())
+            + "."
+        )
     lines += [line for task in TASKS if (line := straightness(rows, task))]
     return "\n".join(lines) if lines else "- Not enough committed runs yet."
+
+
+def final_straightness(rows: list[dict], task: str) -> dict[str, list[float]]:
+    """flow label -> the straightness error at each of its runs' last logged iteration on ``task``."""
+    return {
+        label: [r["train"][-1]["Flow/straightness_error"] for r in rows if (r["task"], r["label"]) == (task, label)]
+        for label in FLOWS
+    }
 
 
 def straightness(rows: list[dict], task: str) -> str | None:
     """The flows' straightness error at each run's last logged iteration (a failed run: the last before its stop),
     and P(an FPO run's above a ReFPO run's): does FPO's flow bend where ReFPO's stays straight?"""
-    last = {
-        label: [r["train"][-1]["Flow/straightness_error"] for r in rows if (r["task"], r["label"]) == (task, label)]
-        for label in FLOWS
-    }
+    last = final_straightness(rows, task)
     if not last["fpo"] or not last["refpo"]:
         return None
     ranges = and_list(f"{METHODS[label]} {value_range(v, '.3g')}" for label, v in last.items() if v)
