@@ -144,20 +144,27 @@ def returns_table(rows: list[dict], setting: str) -> str:
     return "\n".join(lines)
 
 
-def paired(
-    rows: list[dict], label: str, multiple: int, other: str = "ppo"
+def seed_matrices(
+    x: dict[str, dict[int, float]], y: dict[str, dict[int, float]]
 ) -> tuple[np.ndarray, np.ndarray, list[int]] | None:
-    """(seeds x tasks) of ``label`` and of ``other`` (PPO unless named) at N = 10, over the seeds both have on every
-    task; None if none."""
-    x = {t: scores(rows, label, t, multiple, "10") for t in TASKS}
-    y = {t: scores(rows, other, t, multiple, "10") for t in TASKS}
-    seeds = sorted(set.intersection(*(set(x[t]) & set(y[t]) for t in TASKS)))
+    """(seeds x tasks) of two methods' task -> seed -> score, over the seeds both have on every task; None if none."""
+    seeds = sorted(set.intersection(*(set(x.get(t, {})) & set(y.get(t, {})) for t in TASKS)))
     if not seeds:
         return None
     return (
         np.array([[x[t][s] for t in TASKS] for s in seeds]),
         np.array([[y[t][s] for t in TASKS] for s in seeds]),
         seeds,
+    )
+
+
+def paired(
+    rows: list[dict], label: str, multiple: int, other: str = "ppo"
+) -> tuple[np.ndarray, np.ndarray, list[int]] | None:
+    """``seed_matrices`` of ``label`` and of ``other`` (PPO unless named) at N = 10 at ``multiple``."""
+    return seed_matrices(
+        {t: scores(rows, label, t, multiple, "10") for t in TASKS},
+        {t: scores(rows, other, t, multiple, "10") for t in TASKS},
     )
 
 
@@ -226,20 +233,17 @@ def last_checkpoint_gaps(
     """Per flow method: the seeds it shares with PPO on both tasks and, from each source, P(its run beats PPO's)."""
     out = {}
     for label in FLOWS:
-        final = by_source["final"]
-        seeds = sorted(
-            set.intersection(*(set(final.get((t, label), {})) & set(final.get((t, "ppo"), {})) for t in TASKS))
-        )
-        if seeds:
+        per_source = {
+            source: seed_matrices(
+                {t: found[t, label] for t in TASKS if (t, label) in found},
+                {t: found[t, "ppo"] for t in TASKS if (t, "ppo") in found},
+            )
+            for source, found in by_source.items()
+        }
+        if per_source["final"] is not None:
             out[label] = (
-                seeds,
-                {
-                    source: improvement(
-                        np.array([[found[t, label][s] for t in TASKS] for s in seeds]),
-                        np.array([[found[t, "ppo"][s] for t in TASKS] for s in seeds]),
-                    )
-                    for source, found in by_source.items()
-                },
+                per_source["final"][2],
+                {source: improvement(m[0], m[1]) for source, m in per_source.items() if m is not None},
             )
     return out
 
